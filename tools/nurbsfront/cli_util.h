@@ -1,0 +1,18 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#pragma once
+// Small helpers shared by the subcommands: progress display on stderr.
+#include <string>
+#include <string_view>
+
+#include "nurbsfront/core/progress.h"
+
+namespace nurbsfront::cli {
+
+//! A ProgressCallback that draws "stage: 42%" on stderr when it is a terminal,
+//! or prints one line per stage otherwise. Never cancels.
+ProgressCallback terminal_progress(bool quiet = false);
+
+//! Prints "nurbsfront: error: <message>" on stderr.
+void print_error(std::string_view message);
+
+}  // namespace nurbsfront::cli

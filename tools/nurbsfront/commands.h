@@ -1,0 +1,16 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#pragma once
+// Each subcommand lives in cmd_<name>.cpp and registers itself on the app here.
+// Add one line per command; keep the order of the pipeline.
+#include <CLI/CLI.hpp>
+
+namespace nurbsfront::cli {
+
+void add_version_command(CLI::App& app);
+
+//! Registers every subcommand (called once by main).
+inline void add_all_commands(CLI::App& app) {
+  add_version_command(app);
+}
+
+}  // namespace nurbsfront::cli
