@@ -1,0 +1,147 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Border curves between patches (and along the input's boundary), their corners, and
+// the smoothing of the zig-zag curves that marching cubes leaves.
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "nurbsfront/core/error.h"
+#include "nurbsfront/segment/segment_internal.h"
+
+namespace nurbsfront {
+
+void BorderSmoothingOptions::validate() const {
+  auto fail = [](const std::string& what) { throw InvalidInput("BorderSmoothingOptions: " + what); };
+  if (iterations < 0) fail("iterations must be >= 0, got " + std::to_string(iterations));
+  if (!(lambda > 0.0 && lambda <= 1.0)) fail("lambda must be in (0, 1], got " + std::to_string(lambda));
+  if (!(mu >= -1.0 && mu <= 0.0)) fail("mu must be in [-1, 0], got " + std::to_string(mu));
+  if (!(max_displacement >= 0.0 && std::isfinite(max_displacement)))
+    fail("max_displacement must be finite and >= 0, got " + std::to_string(max_displacement));
+}
+
+std::vector<Eigen::Vector3d> smooth_polyline(const std::vector<Eigen::Vector3d>& points, bool is_closed,
+                                             const BorderSmoothingOptions& options) {
+  options.validate();
+  const auto n = static_cast<int>(points.size());
+  if (n < 3 || options.iterations == 0) return points;
+  double length = 0.0;
+  const int n_segments = is_closed ? n : n - 1;
+  for (int i = 0; i < n_segments; ++i) length += (points[(i + 1) % n] - points[i]).norm();
+  const double bound = options.max_displacement * length / n_segments;
+  const int first = is_closed ? 0 : 1;
+  const int last = is_closed ? n : n - 1;  // exclusive
+  std::vector<Eigen::Vector3d> current = points, next = points;
+  auto step = [&](double factor) {
+    for (int i = first; i < last; ++i) {
+      const Eigen::Vector3d& prev = current[(i + n - 1) % n];
+      const Eigen::Vector3d& succ = current[(i + 1) % n];
+      Eigen::Vector3d p = current[i] + factor * (0.5 * (prev + succ) - current[i]);
+      const Eigen::Vector3d moved = p - points[i];
+      const double distance = moved.norm();
+      if (distance > bound) p = points[i] + moved * (bound / distance);
+      next[i] = p;
+    }
+    std::swap(current, next);
+  };
+  for (int it = 0; it < options.iterations; ++it) {
+    step(options.lambda);
+    if (options.mu != 0.0) step(options.mu);
+  }
+  return current;
+}
+
+namespace segment_detail {
+
+Borders extract_borders(const TriMesh& mesh, const std::vector<int>& face_patch,
+                        const BorderSmoothingOptions& options) {
+  const auto n_vertices = static_cast<int>(mesh.n_vertices());
+  const auto n_edges = static_cast<int>(mesh.n_edges());
+  auto patch_of = [&](OpenMesh::HalfedgeHandle h) {
+    const auto f = mesh.face_handle(h);
+    return f.is_valid() ? face_patch[f.idx()] : -1;
+  };
+  auto sides = [&](OpenMesh::EdgeHandle e) {
+    const int a = patch_of(mesh.halfedge_handle(e, 0)), b = patch_of(mesh.halfedge_handle(e, 1));
+    return std::pair{std::min(a, b), std::max(a, b)};
+  };
+  std::vector<std::uint8_t> is_border(n_edges, 0), visited(n_edges, 0);
+  std::vector<int> degree(n_vertices, 0);
+  std::vector<std::pair<int, int>> first_sides(n_vertices, {-2, -2});
+  std::vector<std::uint8_t> is_corner(n_vertices, 0);
+  for (const auto e : mesh.edges()) {
+    const auto s = sides(e);
+    if (s.first == s.second) continue;
+    is_border[e.idx()] = 1;
+    for (int k = 0; k < 2; ++k) {
+      const int v = mesh.to_vertex_handle(mesh.halfedge_handle(e, k)).idx();
+      ++degree[v];
+      if (first_sides[v].first == -2) first_sides[v] = s;
+      else if (first_sides[v] != s) is_corner[v] = 1;  // two different patch pairs meet
+    }
+  }
+  Borders borders;
+  for (int v = 0; v < n_vertices; ++v) {
+    if (degree[v] > 0 && degree[v] != 2) is_corner[v] = 1;
+    if (is_corner[v] != 0) borders.corners.push_back(v);
+  }
+
+  // Walks from halfedge h until a corner or back at the start vertex.
+  auto trace = [&](OpenMesh::HalfedgeHandle h) {
+    BorderCurve curve;
+    const int start = mesh.from_vertex_handle(h).idx();
+    curve.vertices.push_back(start);
+    curve.patch_left = patch_of(h);
+    curve.patch_right = patch_of(mesh.opposite_halfedge_handle(h));
+    while (true) {
+      const auto e = mesh.edge_handle(h);
+      visited[e.idx()] = 1;
+      curve.edges.push_back(e.idx());
+      const auto v = mesh.to_vertex_handle(h);
+      if (v.idx() == start && is_corner[start] == 0) {
+        curve.is_closed = true;
+        break;
+      }
+      curve.vertices.push_back(v.idx());
+      if (is_corner[v.idx()] != 0) break;
+      OpenMesh::HalfedgeHandle next;
+      for (const auto out : mesh.voh_range(v)) {
+        const auto oe = mesh.edge_handle(out);
+        if (is_border[oe.idx()] != 0 && visited[oe.idx()] == 0) {
+          next = out;
+          break;
+        }
+      }
+      NURBSFRONT_ASSERT(next.is_valid());
+      NURBSFRONT_ASSERT(patch_of(next) == curve.patch_left);
+      h = next;
+    }
+    // Normal form: the left side is a patch, the smaller one when both are patches.
+    if (curve.patch_left == -1 || (curve.patch_right != -1 && curve.patch_left > curve.patch_right)) {
+      std::swap(curve.patch_left, curve.patch_right);
+      std::reverse(curve.edges.begin(), curve.edges.end());
+      if (curve.is_closed) std::reverse(curve.vertices.begin() + 1, curve.vertices.end());
+      else std::reverse(curve.vertices.begin(), curve.vertices.end());
+    }
+    std::vector<Eigen::Vector3d> positions;
+    positions.reserve(curve.vertices.size());
+    for (int w : curve.vertices) positions.push_back(to_eigen(mesh.point(mesh.vertex_handle(w))));
+    curve.smoothed = smooth_polyline(positions, curve.is_closed, options);
+    return curve;
+  };
+
+  for (int c : borders.corners) {
+    for (const auto out : mesh.voh_range(mesh.vertex_handle(c))) {
+      const auto e = mesh.edge_handle(out);
+      if (is_border[e.idx()] != 0 && visited[e.idx()] == 0) borders.curves.push_back(trace(out));
+    }
+  }
+  for (int e = 0; e < n_edges; ++e) {
+    if (is_border[e] != 0 && visited[e] == 0)
+      borders.curves.push_back(trace(mesh.halfedge_handle(mesh.edge_handle(e), 0)));
+  }
+  return borders;
+}
+
+}  // namespace segment_detail
+}  // namespace nurbsfront

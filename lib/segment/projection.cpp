@@ -1,0 +1,208 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// The height-field check of a patch (its projected border must be simple polygons with a
+// single outer loop) and the split of a patch that fails it.
+
+#include <algorithm>
+#include <cmath>
+
+#include "nurbsfront/core/error.h"
+#include "nurbsfront/segment/segment_internal.h"
+
+namespace nurbsfront::segment_detail {
+namespace {
+
+double orient(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& c) {
+  return (b.x() - a.x()) * (c.y() - a.y()) - (b.y() - a.y()) * (c.x() - a.x());
+}
+
+// c lies in the bounding box of segment ab (used when the three points are collinear).
+bool in_box(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& c) {
+  return std::min(a.x(), b.x()) <= c.x() && c.x() <= std::max(a.x(), b.x()) &&
+         std::min(a.y(), b.y()) <= c.y() && c.y() <= std::max(a.y(), b.y());
+}
+
+// Closed segments ab and cd meet (crossing, touching or overlapping).
+bool segments_meet(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& c,
+                   const Eigen::Vector2d& d) {
+  const double d1 = orient(c, d, a), d2 = orient(c, d, b), d3 = orient(a, b, c), d4 = orient(a, b, d);
+  if (((d1 > 0 && d2 < 0) || (d1 < 0 && d2 > 0)) && ((d3 > 0 && d4 < 0) || (d3 < 0 && d4 > 0))) return true;
+  return (d1 == 0 && in_box(c, d, a)) || (d2 == 0 && in_box(c, d, b)) || (d3 == 0 && in_box(a, b, c)) ||
+         (d4 == 0 && in_box(a, b, d));
+}
+
+struct Segment {
+  int a = -1, b = -1;
+};
+
+// Extra outer loops up to this many edges are reported as local trouble.
+constexpr std::size_t kMaxTroubleLoopEdges = 24;
+
+// Two segments that share no vertex but meet (as indices), or (-1, -1); a uniform grid
+// keeps the search near linear.
+std::pair<int, int> find_crossing(const std::vector<Segment>& segments, const std::vector<Eigen::Vector2d>& xy) {
+  const auto n = static_cast<int>(segments.size());
+  Eigen::Vector2d lo = xy[segments[0].a], hi = lo;
+  for (const Segment& s : segments) {
+    lo = lo.cwiseMin(xy[s.a]);
+    hi = hi.cwiseMax(xy[s.a]);
+  }
+  const int cells = std::max(1, static_cast<int>(std::sqrt(static_cast<double>(n))));
+  const Eigen::Vector2d extent = hi - lo;
+  const double width_x = extent.x() > 0 ? extent.x() / cells : 1.0;
+  const double width_y = extent.y() > 0 ? extent.y() / cells : 1.0;
+  auto cell_of = [&](double value, double origin, double width) {
+    return std::clamp(static_cast<int>((value - origin) / width), 0, cells - 1);
+  };
+  std::vector<std::pair<int, int>> entries;  // (cell, segment)
+  entries.reserve(static_cast<std::size_t>(n) * 2);
+  for (int i = 0; i < n; ++i) {
+    const Eigen::Vector2d& p = xy[segments[i].a];
+    const Eigen::Vector2d& q = xy[segments[i].b];
+    const int x0 = cell_of(std::min(p.x(), q.x()), lo.x(), width_x);
+    const int x1 = cell_of(std::max(p.x(), q.x()), lo.x(), width_x);
+    const int y0 = cell_of(std::min(p.y(), q.y()), lo.y(), width_y);
+    const int y1 = cell_of(std::max(p.y(), q.y()), lo.y(), width_y);
+    for (int y = y0; y <= y1; ++y)
+      for (int x = x0; x <= x1; ++x) entries.emplace_back(y * cells + x, i);
+  }
+  std::sort(entries.begin(), entries.end());
+  for (std::size_t begin = 0; begin < entries.size();) {
+    std::size_t end = begin;
+    while (end < entries.size() && entries[end].first == entries[begin].first) ++end;
+    for (std::size_t i = begin; i < end; ++i) {
+      const Segment& s = segments[entries[i].second];
+      for (std::size_t j = i + 1; j < end; ++j) {
+        const Segment& t = segments[entries[j].second];
+        if (s.a == t.a || s.a == t.b || s.b == t.a || s.b == t.b) continue;
+        if (segments_meet(xy[s.a], xy[s.b], xy[t.a], xy[t.b])) return {entries[i].second, entries[j].second};
+      }
+    }
+    begin = end;
+  }
+  return {-1, -1};
+}
+
+// Breadth-first search inside the patch from `sources`; every reached face gets the index
+// of the source it was reached from in scratch.face_owner. Returns the last face reached.
+int breadth_first(const FaceGraph& graph, const std::vector<int>& sources, const std::vector<int>& face_patch,
+                  Scratch& scratch) {
+  const int patch = face_patch[sources[0]];
+  const int epoch = ++scratch.face_epoch;
+  std::vector<int> queue;
+  for (std::size_t k = 0; k < sources.size(); ++k) {
+    scratch.face_stamp[sources[k]] = epoch;
+    scratch.face_owner[sources[k]] = static_cast<int>(k);
+    queue.push_back(sources[k]);
+  }
+  for (std::size_t head = 0; head < queue.size(); ++head) {
+    const int f = queue[head];
+    for (int i = 0; i < 3; ++i) {
+      const int g = graph.neighbours[f][i];
+      if (g < 0 || face_patch[g] != patch || scratch.face_stamp[g] == epoch) continue;
+      scratch.face_stamp[g] = epoch;
+      scratch.face_owner[g] = scratch.face_owner[f];
+      queue.push_back(g);
+    }
+  }
+  return queue.back();
+}
+
+}  // namespace
+
+std::pair<Eigen::Vector3d, Eigen::Vector3d> plane_frame(const Eigen::Vector3d& axis) {
+  Eigen::Index smallest = 0;
+  axis.cwiseAbs().minCoeff(&smallest);
+  const Eigen::Vector3d helper = Eigen::Vector3d::Unit(smallest);
+  const Eigen::Vector3d e1 = (helper - helper.dot(axis) * axis).normalized();
+  return {e1, axis.cross(e1)};
+}
+
+ProjectionCheck check_projection(const FaceGraph& graph, const std::vector<int>& faces,
+                                 const std::vector<int>& face_patch, const Eigen::Vector3d& axis, Scratch& scratch) {
+  if (faces.size() <= 1) return {true, {}};
+  const TriMesh& mesh = *graph.mesh;
+  const int patch = face_patch[faces[0]];
+  const int epoch = ++scratch.vertex_epoch;
+  const auto [e1, e2] = plane_frame(axis);
+  auto in_patch = [&](OpenMesh::HalfedgeHandle h) {
+    const auto f = mesh.face_handle(h);
+    return f.is_valid() && face_patch[f.idx()] == patch;
+  };
+  std::vector<Segment> segments;
+  std::vector<OpenMesh::HalfedgeHandle> border;
+  for (int f : faces) {
+    for (const auto h : mesh.fh_range(mesh.face_handle(f))) {
+      if (in_patch(mesh.opposite_halfedge_handle(h))) continue;
+      const int a = mesh.from_vertex_handle(h).idx(), b = mesh.to_vertex_handle(h).idx();
+      for (int v : {a, b}) {
+        if (scratch.vertex_stamp[v] == epoch) continue;
+        scratch.vertex_stamp[v] = epoch;
+        const Eigen::Vector3d& p = graph.points[v];
+        scratch.xy[v] = Eigen::Vector2d(p.dot(e1), p.dot(e2));
+      }
+      segments.push_back({a, b});
+      border.push_back(h);
+    }
+  }
+  if (segments.empty()) return {false, {}};  // a closed surface is never a height field
+  // Loops, traced through the patch's own faces around each vertex, so a loop passing a
+  // vertex twice (where the patch touches itself) stays apart from the other. At most one
+  // loop may be counter-clockwise (the outer loop); two would mean a region covered twice.
+  int n_outer = 0;
+  OpenMesh::HalfedgeHandle smallest_outer;
+  std::size_t smallest_size = 0;
+  for (const auto start : border) {
+    if (scratch.halfedge_stamp[start.idx()] == epoch) continue;
+    const Eigen::Vector2d origin = scratch.xy[mesh.from_vertex_handle(start).idx()];
+    double twice_area = 0.0;
+    auto h = start;
+    std::size_t steps = 0;
+    do {
+      scratch.halfedge_stamp[h.idx()] = epoch;
+      twice_area += orient(origin, scratch.xy[mesh.from_vertex_handle(h).idx()], scratch.xy[mesh.to_vertex_handle(h).idx()]);
+      auto next = mesh.next_halfedge_handle(h);
+      while (in_patch(mesh.opposite_halfedge_handle(next))) next = mesh.next_halfedge_handle(mesh.opposite_halfedge_handle(next));
+      h = next;
+      NURBSFRONT_ASSERT(++steps <= segments.size());
+    } while (h != start);
+    if (twice_area > 0) {
+      ++n_outer;
+      if (!smallest_outer.is_valid() || steps < smallest_size) {
+        smallest_outer = start;
+        smallest_size = steps;
+      }
+    }
+  }
+  if (n_outer > 1) {
+    ProjectionCheck check{false, {}};
+    if (smallest_size > kMaxTroubleLoopEdges) return check;
+    auto h = smallest_outer;
+    do {
+      check.trouble.push_back(mesh.from_vertex_handle(h).idx());
+      auto next = mesh.next_halfedge_handle(h);
+      while (in_patch(mesh.opposite_halfedge_handle(next))) next = mesh.next_halfedge_handle(mesh.opposite_halfedge_handle(next));
+      h = next;
+    } while (h != smallest_outer);
+    return check;
+  }
+  const auto [i, j] = find_crossing(segments, scratch.xy);
+  if (i < 0) return {true, {}};
+  return {false, {segments[i].a, segments[i].b, segments[j].a, segments[j].b}};
+}
+
+std::pair<std::vector<int>, std::vector<int>> bisect_patch(const FaceGraph& graph, const std::vector<int>& faces,
+                                                           const std::vector<int>& face_patch, Scratch& scratch) {
+  NURBSFRONT_ASSERT(faces.size() >= 2);
+  const int far = breadth_first(graph, {faces[0]}, face_patch, scratch);
+  const int farther = breadth_first(graph, {far}, face_patch, scratch);
+  NURBSFRONT_ASSERT(far != farther);
+  (void)breadth_first(graph, {far, farther}, face_patch, scratch);
+  std::pair<std::vector<int>, std::vector<int>> parts;
+  for (int f : faces) {
+    NURBSFRONT_ASSERT(scratch.face_stamp[f] == scratch.face_epoch);  // the patch is connected
+    (scratch.face_owner[f] == 0 ? parts.first : parts.second).push_back(f);
+  }
+  return parts;
+}
+
+}  // namespace nurbsfront::segment_detail

@@ -1,0 +1,623 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Slope-bounded patch segmentation: region growing on smoothed normals, merging of tiny
+// patches, height-field check with splitting, then border extraction (borders.cpp).
+
+#include "nurbsfront/segment/segment.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <numbers>
+#include <string>
+
+#include "nurbsfront/core/error.h"
+#include "nurbsfront/core/soup.h"
+#include "nurbsfront/core/tolerances.h"
+#include "nurbsfront/segment/segment_internal.h"
+
+namespace nurbsfront {
+
+void SegmentOptions::validate() const {
+  auto fail = [](const std::string& what) { throw InvalidInput("SegmentOptions: " + what); };
+  if (!(max_slope_deg > 0.0 && max_slope_deg < 90.0))
+    fail("max_slope_deg must be in (0, 90), got " + std::to_string(max_slope_deg));
+  if (!(crease_angle_deg > 0.0 && crease_angle_deg <= 180.0))
+    fail("crease_angle_deg must be in (0, 180], got " + std::to_string(crease_angle_deg));
+  if (normal_smoothing_rings < 0)
+    fail("normal_smoothing_rings must be >= 0, got " + std::to_string(normal_smoothing_rings));
+  border_smoothing.validate();
+}
+
+namespace {
+
+using segment_detail::FaceGraph;
+using segment_detail::Scratch;
+
+// Regions grow within this fraction of max_slope around their seed's axis, which leaves
+// room for the merge step to re-centre the cones: growing to the full bound leaves slivers
+// between full caps that fit no neighbour.
+constexpr double kGrowthConeFraction = 0.75;
+// Passes of clean_borders() (each moves every ear it finds; ears rarely chain further).
+constexpr int kBorderCleanupPasses = 3;
+// A local fold (a short extra outer loop, or two crossing border segments) is cut out
+// with this many rings of faces around it.
+constexpr int kCarveRings = 2;
+// Keeps a seed axis strictly inside the feasible range instead of on its edge (rad).
+constexpr double kAngleMarginRad = 1e-6;
+
+double radians(double degrees) { return degrees * std::numbers::pi / 180.0; }
+
+struct FaceNormals {
+  std::vector<Eigen::Vector3d> raw, smooth;  // unit, or zero when undefined
+  std::vector<double> area;
+  std::vector<std::uint8_t> degenerate, exception;
+};
+
+FaceGraph build_graph(const TriMesh& mesh) {
+  FaceGraph graph;
+  graph.mesh = &mesh;
+  const auto n = static_cast<int>(mesh.n_faces());
+  graph.vertices.resize(n);
+  graph.neighbours.resize(n);
+  graph.crease.assign(n, 0);
+  graph.points.reserve(mesh.n_vertices());
+  for (const auto v : mesh.all_vertices()) graph.points.push_back(to_eigen(mesh.point(v)));
+  for (int f = 0; f < n; ++f) {
+    auto h = mesh.halfedge_handle(mesh.face_handle(f));
+    for (int i = 0; i < 3; ++i) {
+      graph.vertices[f][i] = mesh.from_vertex_handle(h).idx();
+      const auto g = mesh.face_handle(mesh.opposite_halfedge_handle(h));
+      graph.neighbours[f][i] = g.is_valid() ? g.idx() : -1;
+      h = mesh.next_halfedge_handle(h);
+    }
+  }
+  return graph;
+}
+
+FaceNormals face_normals(const FaceGraph& graph, double diagonal) {
+  const int n = graph.n_faces();
+  FaceNormals normals;
+  normals.raw.assign(n, Eigen::Vector3d::Zero());
+  normals.area.assign(n, 0.0);
+  normals.degenerate.assign(n, 0);
+  normals.exception.assign(n, 0);
+  const double min_area = tolerance::kDegenerateAreaRelative * diagonal * diagonal;
+  for (int f = 0; f < n; ++f) {
+    const auto& v = graph.vertices[f];
+    const Eigen::Vector3d cross =
+        (graph.points[v[1]] - graph.points[v[0]]).cross(graph.points[v[2]] - graph.points[v[0]]);
+    const double area = 0.5 * cross.norm();
+    if (!(area > min_area)) {
+      normals.degenerate[f] = 1;
+      continue;
+    }
+    normals.raw[f] = cross / (2.0 * area);
+    normals.area[f] = area;
+  }
+  return normals;
+}
+
+void mark_creases(FaceGraph& graph, const FaceNormals& normals, double cos_crease) {
+  for (int f = 0; f < graph.n_faces(); ++f) {
+    for (int i = 0; i < 3; ++i) {
+      const int g = graph.neighbours[f][i];
+      if (g < 0 || normals.degenerate[f] != 0 || normals.degenerate[g] != 0) continue;
+      if (normals.raw[f].dot(normals.raw[g]) < cos_crease) graph.crease[f] |= static_cast<std::uint8_t>(1U << i);
+    }
+  }
+}
+
+// Jacobi iterations of area-weighted averaging over edge-adjacent faces, not across creases.
+std::vector<Eigen::Vector3d> smooth_normals(const FaceGraph& graph, const FaceNormals& normals, int rings) {
+  const int n = graph.n_faces();
+  std::vector<Eigen::Vector3d> current = normals.raw, next(n);
+  for (int it = 0; it < rings; ++it) {
+    for (int f = 0; f < n; ++f) {
+      Eigen::Vector3d sum = normals.area[f] * current[f];
+      for (int i = 0; i < 3; ++i) {
+        const int g = graph.neighbours[f][i];
+        if (g >= 0 && !graph.is_crease(f, i)) sum += normals.area[g] * current[g];
+      }
+      const double length = sum.norm();
+      next[f] = length > 0.0 ? Eigen::Vector3d(sum / length) : current[f];
+    }
+    std::swap(current, next);
+  }
+  return current;
+}
+
+// Everything the growing, merging and splitting steps share.
+struct Grouping {
+  const FaceGraph& graph;
+  const FaceNormals& normals;
+  double cos_slope;
+  double max_slope;  // rad
+  double cos_grow;   // the narrower cone used while growing
+
+  // The face's normals meet the bounds for `axis` (smoothed normal within the cone of
+  // cosine cos_limit).
+  [[nodiscard]] bool fits(int f, const Eigen::Vector3d& axis, double cos_limit) const {
+    if (normals.degenerate[f] != 0) return true;
+    if (normals.raw[f].dot(axis) < kSegmentMinRawNormalDot) return false;
+    return normals.exception[f] != 0 || normals.smooth[f].dot(axis) >= cos_limit;
+  }
+  [[nodiscard]] bool fits(int f, const Eigen::Vector3d& axis) const { return fits(f, axis, cos_slope); }
+
+  // The axis a patch grown from `seed` uses: its smoothed normal, tilted towards its raw
+  // normal just enough that both bounds hold.
+  [[nodiscard]] Eigen::Vector3d seed_axis(int seed) const {
+    const Eigen::Vector3d& smooth = normals.smooth[seed];
+    if (normals.degenerate[seed] != 0) return smooth.squaredNorm() > 0.0 ? smooth : Eigen::Vector3d::UnitZ();
+    const Eigen::Vector3d& raw = normals.raw[seed];
+    if (normals.exception[seed] != 0) return raw;
+    if (raw.dot(smooth) >= kSegmentMinRawNormalDot) return smooth;
+    const double theta = std::acos(std::clamp(raw.dot(smooth), -1.0, 1.0));
+    const double lowest = theta - std::acos(kSegmentMinRawNormalDot);
+    const double phi = 0.5 * (lowest + max_slope);
+    const Eigen::Vector3d tangent = (raw - raw.dot(smooth) * smooth).normalized();
+    return (std::cos(phi) * smooth + std::sin(phi) * tangent).normalized();
+  }
+};
+
+struct Patches {
+  std::vector<int> face_patch;
+  std::vector<std::vector<int>> faces;
+  std::vector<Eigen::Vector3d> axes;
+};
+
+Patches grow_regions(const Grouping& grouping) {
+  const FaceGraph& graph = grouping.graph;
+  const int n = graph.n_faces();
+  Patches patches;
+  patches.face_patch.assign(n, -1);
+  for (int seed = 0; seed < n; ++seed) {
+    if (patches.face_patch[seed] != -1) continue;
+    const int p = static_cast<int>(patches.axes.size());
+    const Eigen::Vector3d axis = grouping.seed_axis(seed);
+    NURBSFRONT_ASSERT(grouping.fits(seed, axis));
+    patches.axes.push_back(axis);
+    std::vector<int> region{seed};
+    patches.face_patch[seed] = p;
+    for (std::size_t head = 0; head < region.size(); ++head) {
+      const int f = region[head];
+      for (int i = 0; i < 3; ++i) {
+        const int g = graph.neighbours[f][i];
+        if (g < 0 || graph.is_crease(f, i) || patches.face_patch[g] != -1 ||
+            !grouping.fits(g, axis, grouping.cos_grow))
+          continue;
+        bool creased = false;  // a crease must never end up inside a patch
+        for (int k = 0; k < 3 && !creased; ++k) {
+          const int h = graph.neighbours[g][k];
+          creased = h >= 0 && graph.is_crease(g, k) && patches.face_patch[h] == p;
+        }
+        if (creased) continue;
+        patches.face_patch[g] = p;
+        region.push_back(g);
+      }
+    }
+    patches.faces.push_back(std::move(region));
+  }
+  return patches;
+}
+
+// A cone of unit directions: every direction is within `radius` (rad) of `axis`.
+struct Cone {
+  Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();
+  double radius = -1.0;  // < 0: empty
+};
+
+double angle_between(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  return std::acos(std::clamp(a.dot(b), -1.0, 1.0));
+}
+
+// The smallest cone containing two cones (exact for cones, O(1)).
+Cone cone_union(const Cone& a, const Cone& b) {
+  if (a.radius < 0) return b;
+  if (b.radius < 0) return a;
+  const double theta = angle_between(a.axis, b.axis);
+  if (theta + b.radius <= a.radius) return a;
+  if (theta + a.radius <= b.radius) return b;
+  const double radius = 0.5 * (a.radius + b.radius + theta);
+  const Eigen::Vector3d towards = b.axis - std::cos(theta) * a.axis;
+  if (radius >= std::numbers::pi || !(towards.norm() > 0.0)) return {a.axis, std::numbers::pi};
+  const double turn = radius - a.radius;
+  return {(std::cos(turn) * a.axis + std::sin(turn) * towards.normalized()).normalized(), radius};
+}
+
+// Bounding cones of a patch's smoothed normals (exceptions left out) and raw normals.
+struct PatchCones {
+  Cone smooth, raw;
+};
+
+PatchCones patch_cones(const Grouping& grouping, const std::vector<int>& faces, const Eigen::Vector3d& axis) {
+  PatchCones cones{{axis, -1.0}, {axis, -1.0}};
+  for (int f : faces) {
+    if (grouping.normals.degenerate[f] != 0) continue;
+    cones.raw.radius = std::max(cones.raw.radius, angle_between(grouping.normals.raw[f], axis));
+    if (grouping.normals.exception[f] == 0)
+      cones.smooth.radius = std::max(cones.smooth.radius, angle_between(grouping.normals.smooth[f], axis));
+  }
+  return cones;
+}
+
+// Hands the faces of patch p one by one to edge-adjacent patches whose axis bounds them
+// (each joins through an edge, so the receivers stay connected; never across or beside a
+// crease to the receiver). All or nothing: returns the moves (face, receiver), or nothing
+// (p restored) if a face is left.
+std::vector<std::pair<int, int>> dissolve(const Grouping& grouping, int p, Patches& patches) {
+  const FaceGraph& graph = grouping.graph;
+  std::vector<std::pair<int, int>> moved;  // (face, receiving patch)
+  bool progress = true;
+  while (progress && moved.size() < patches.faces[p].size()) {
+    progress = false;
+    for (int f : patches.faces[p]) {
+      if (patches.face_patch[f] != p) continue;
+      for (int i = 0; i < 3; ++i) {
+        const int g = graph.neighbours[f][i];
+        if (g < 0 || graph.is_crease(f, i)) continue;
+        const int q = patches.face_patch[g];
+        if (q == p || !grouping.fits(f, patches.axes[q])) continue;
+        bool creased = false;
+        for (int k = 0; k < 3 && !creased; ++k) {
+          const int h = graph.neighbours[f][k];
+          creased = h >= 0 && graph.is_crease(f, k) && patches.face_patch[h] == q;
+        }
+        if (creased) continue;
+        patches.face_patch[f] = q;
+        moved.emplace_back(f, q);
+        progress = true;
+        break;
+      }
+    }
+  }
+  if (moved.size() < patches.faces[p].size()) {
+    for (const auto& [f, q] : moved) patches.face_patch[f] = p;
+    return {};
+  }
+  for (const auto& [f, q] : moved) patches.faces[q].push_back(f);
+  patches.faces[p].clear();
+  return moved;
+}
+
+// Merges each patch, smallest first, into an edge-adjacent neighbour (longest shared
+// border first, then the smaller id) when one axis bounds both (union of bounding cones).
+// A patch below min_faces may also join a neighbour whose current axis bounds its faces,
+// or be dissolved into several neighbours. Never across a crease.
+// With `scratch` set (after the fold splits), only small patches are merged, without
+// dissolving, and a merge is kept only if the merged patch passes the projection check.
+void merge_patches(const Grouping& grouping, std::size_t min_faces, Patches& patches, Scratch* scratch) {
+  const FaceGraph& graph = grouping.graph;
+  const auto n_patches = static_cast<int>(patches.faces.size());
+  std::vector<int> order(n_patches);
+  for (int p = 0; p < n_patches; ++p) order[p] = p;
+  std::stable_sort(order.begin(), order.end(),
+                   [&](int a, int b) { return patches.faces[a].size() < patches.faces[b].size(); });
+  struct Neighbour {
+    int patch = -1, shared = 0;
+    bool blocked = false;
+  };
+  std::vector<PatchCones> cones(n_patches);
+  for (int p = 0; p < n_patches; ++p) cones[p] = patch_cones(grouping, patches.faces[p], patches.axes[p]);
+  const double max_smooth = grouping.max_slope - kAngleMarginRad;
+  const double max_raw = std::acos(kSegmentMinRawNormalDot) - kAngleMarginRad;
+  bool changed = true;
+  while (changed) {
+    changed = false;
+    for (int p : order) {
+      const std::size_t size = patches.faces[p].size();
+      if (size == 0) continue;
+      const bool is_small = size < min_faces;
+      if (scratch != nullptr && !is_small) continue;
+      std::vector<Neighbour> neighbours;
+      for (int f : patches.faces[p]) {
+        for (int i = 0; i < 3; ++i) {
+          const int g = graph.neighbours[f][i];
+          if (g < 0 || patches.face_patch[g] == p) continue;
+          const int q = patches.face_patch[g];
+          auto it = std::find_if(neighbours.begin(), neighbours.end(), [q](const Neighbour& x) { return x.patch == q; });
+          if (it == neighbours.end()) it = neighbours.insert(neighbours.end(), Neighbour{q, 0, false});
+          ++it->shared;
+          it->blocked = it->blocked || graph.is_crease(f, i);
+        }
+      }
+      std::sort(neighbours.begin(), neighbours.end(), [](const Neighbour& a, const Neighbour& b) {
+        return a.shared != b.shared ? a.shared > b.shared : a.patch < b.patch;
+      });
+      bool merged = false;
+      for (const Neighbour& q : neighbours) {
+        if (q.blocked) continue;
+        const PatchCones old_cones = cones[q.patch];
+        const Eigen::Vector3d old_axis = patches.axes[q.patch];
+        // First the union of the bounding cones: its axis may bound both patches.
+        const Cone smooth = cone_union(cones[q.patch].smooth, cones[p].smooth);
+        const Cone raw = cone_union(cones[q.patch].raw, cones[p].raw);
+        if (smooth.radius <= max_smooth && angle_between(smooth.axis, raw.axis) + raw.radius <= max_raw &&
+            smooth.radius >= 0) {
+          patches.axes[q.patch] = smooth.axis;
+          cones[q.patch].smooth = smooth;
+          cones[q.patch].raw = {smooth.axis, angle_between(smooth.axis, raw.axis) + raw.radius};
+        } else {
+          if (!is_small) continue;
+          const Eigen::Vector3d& axis = patches.axes[q.patch];
+          const bool ok = std::all_of(patches.faces[p].begin(), patches.faces[p].end(),
+                                      [&](int f) { return grouping.fits(f, axis); });
+          if (!ok) continue;
+          cones[q.patch].smooth = cone_union(cones[q.patch].smooth, cones[p].smooth);
+          cones[q.patch].raw = cone_union(cones[q.patch].raw, cones[p].raw);
+        }
+        for (int f : patches.faces[p]) patches.face_patch[f] = q.patch;
+        auto& target = patches.faces[q.patch];
+        target.insert(target.end(), patches.faces[p].begin(), patches.faces[p].end());
+        if (scratch != nullptr &&
+            !segment_detail::check_projection(graph, target, patches.face_patch, patches.axes[q.patch], *scratch)
+                 .is_simple) {
+          target.resize(target.size() - patches.faces[p].size());
+          for (int f : patches.faces[p]) patches.face_patch[f] = p;
+          cones[q.patch] = old_cones;
+          patches.axes[q.patch] = old_axis;
+          continue;
+        }
+        patches.faces[p].clear();
+        merged = true;
+        break;
+      }
+      if (!merged && is_small && scratch == nullptr) {
+        for (const auto& [f, q] : dissolve(grouping, p, patches)) {
+          merged = true;
+          if (grouping.normals.degenerate[f] != 0) continue;
+          cones[q].raw = cone_union(cones[q].raw, {grouping.normals.raw[f], 0.0});
+          if (grouping.normals.exception[f] == 0)
+            cones[q].smooth = cone_union(cones[q].smooth, {grouping.normals.smooth[f], 0.0});
+        }
+      }
+      changed = changed || merged;
+    }
+  }
+}
+
+// Moves border "ears" (a face with two or more edges on one neighbouring patch) into that
+// neighbour when its axis bounds the face and no crease is in the way: smoother borders,
+// fewer vertices where a patch touches itself. The face is a leaf of its own patch, so
+// both patches stay connected.
+void clean_borders(const Grouping& grouping, Patches& patches) {
+  const FaceGraph& graph = grouping.graph;
+  std::vector<std::size_t> size(patches.faces.size());
+  for (std::size_t p = 0; p < size.size(); ++p) size[p] = patches.faces[p].size();
+  bool changed = false;
+  for (int pass = 0; pass < kBorderCleanupPasses; ++pass) {
+    bool moved_any = false;
+    for (int f = 0; f < graph.n_faces(); ++f) {
+      const int p = patches.face_patch[f];
+      std::array<int, 3> side{};
+      int n_own = 0;
+      for (int i = 0; i < 3; ++i) {
+        const int g = graph.neighbours[f][i];
+        side[i] = g < 0 ? -1 : patches.face_patch[g];
+        n_own += side[i] == p ? 1 : 0;
+      }
+      if (n_own > 1 || (n_own == 0 && size[p] > 1)) continue;
+      for (int i = 0; i < 3; ++i) {
+        const int q = side[i];
+        if (q < 0 || q == p) continue;
+        int n_shared = 0;
+        bool creased = false;
+        for (int k = 0; k < 3; ++k) {
+          if (side[k] != q) continue;
+          ++n_shared;
+          creased = creased || graph.is_crease(f, k);
+        }
+        if (n_shared < 2 || creased || !grouping.fits(f, patches.axes[q])) continue;
+        patches.face_patch[f] = q;
+        --size[p];
+        ++size[q];
+        moved_any = changed = true;
+        break;
+      }
+    }
+    if (!moved_any) break;
+  }
+  if (!changed) return;
+  for (auto& faces : patches.faces) faces.clear();
+  for (int f = 0; f < graph.n_faces(); ++f) patches.faces[patches.face_patch[f]].push_back(f);
+}
+
+// Drops empty patches and numbers the rest by their smallest face id; sorts face lists.
+void renumber(Patches& patches) {
+  std::vector<int> order;
+  for (int p = 0; p < static_cast<int>(patches.faces.size()); ++p) {
+    auto& faces = patches.faces[p];
+    if (faces.empty()) continue;
+    std::sort(faces.begin(), faces.end());
+    order.push_back(p);
+  }
+  std::sort(order.begin(), order.end(), [&](int a, int b) { return patches.faces[a][0] < patches.faces[b][0]; });
+  Patches result;
+  result.face_patch.assign(patches.face_patch.size(), -1);
+  for (int p : order) {
+    const int id = static_cast<int>(result.faces.size());
+    for (int f : patches.faces[p]) result.face_patch[f] = id;
+    result.faces.push_back(std::move(patches.faces[p]));
+    result.axes.push_back(patches.axes[p]);
+  }
+  patches = std::move(result);
+}
+
+// The axis becomes the area-weighted mean raw normal where every face fits it.
+void refine_axes(const Grouping& grouping, Patches& patches) {
+  for (std::size_t p = 0; p < patches.faces.size(); ++p) {
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    for (int f : patches.faces[p]) sum += grouping.normals.area[f] * grouping.normals.raw[f];
+    if (!(sum.norm() > 0.0)) continue;
+    const Eigen::Vector3d mean = sum.normalized();
+    if (std::all_of(patches.faces[p].begin(), patches.faces[p].end(), [&](int f) { return grouping.fits(f, mean); }))
+      patches.axes[p] = mean;
+  }
+}
+
+// Splits `faces` (one patch) into the connected components of the carved faces and of
+// the others (scratch.face_owner: 1 carved, 0 not); returns the components.
+std::vector<std::vector<int>> carve_components(const FaceGraph& graph, const std::vector<int>& faces,
+                                               const std::vector<int>& face_patch, Scratch& scratch) {
+  const int patch = face_patch[faces[0]];
+  const int epoch = ++scratch.face_epoch;
+  std::vector<std::vector<int>> components;
+  for (int seed : faces) {
+    if (scratch.face_stamp[seed] == epoch) continue;
+    std::vector<int> component{seed};
+    scratch.face_stamp[seed] = epoch;
+    for (std::size_t head = 0; head < component.size(); ++head) {
+      const int f = component[head];
+      for (int i = 0; i < 3; ++i) {
+        const int g = graph.neighbours[f][i];
+        if (g < 0 || face_patch[g] != patch || scratch.face_stamp[g] == epoch ||
+            scratch.face_owner[g] != scratch.face_owner[f])
+          continue;
+        scratch.face_stamp[g] = epoch;
+        component.push_back(g);
+      }
+    }
+    components.push_back(std::move(component));
+  }
+  return components;
+}
+
+// Splits every patch whose projection is not a set of simple loops; returns the count.
+// A local fold (a short extra outer loop around a flipped face, or two crossing border
+// segments at a steep border face, typical of terraced inputs) is cut out with a few rings
+// of faces around it; anything else is bisected. Parts are checked again until every patch passes.
+std::size_t split_folds(const Grouping& grouping, Scratch& scratch, Patches& patches) {
+  const FaceGraph& graph = grouping.graph;
+  const TriMesh& mesh = *graph.mesh;
+  std::size_t n_splits = 0;
+  std::vector<int> work;
+  for (int p = static_cast<int>(patches.faces.size()) - 1; p >= 0; --p) work.push_back(p);
+  while (!work.empty()) {
+    const int p = work.back();
+    work.pop_back();
+    const segment_detail::ProjectionCheck check =
+        segment_detail::check_projection(graph, patches.faces[p], patches.face_patch, patches.axes[p], scratch);
+    if (check.is_simple) continue;
+    ++n_splits;
+    std::vector<std::vector<int>> parts;
+    if (!check.trouble.empty()) {
+      for (int f : patches.faces[p]) scratch.face_owner[f] = 0;
+      std::vector<int> carved;
+      for (int v : check.trouble) {
+        for (const auto f : mesh.vf_range(mesh.vertex_handle(v))) {
+          if (patches.face_patch[f.idx()] != p || scratch.face_owner[f.idx()] != 0) continue;
+          scratch.face_owner[f.idx()] = 1;
+          carved.push_back(f.idx());
+        }
+      }
+      for (int ring = 1; ring < kCarveRings; ++ring) {
+        const std::size_t n_carved = carved.size();
+        for (std::size_t k = 0; k < n_carved; ++k) {
+          for (int i = 0; i < 3; ++i) {
+            const int g = graph.neighbours[carved[k]][i];
+            if (g < 0 || patches.face_patch[g] != p || scratch.face_owner[g] != 0) continue;
+            scratch.face_owner[g] = 1;
+            carved.push_back(g);
+          }
+        }
+      }
+      if (carved.size() < patches.faces[p].size()) parts = carve_components(graph, patches.faces[p], patches.face_patch, scratch);
+    }
+    if (parts.size() < 2) {
+      auto [first, second] = segment_detail::bisect_patch(graph, patches.faces[p], patches.face_patch, scratch);
+      parts.clear();
+      parts.push_back(std::move(first));
+      parts.push_back(std::move(second));
+    }
+    const Eigen::Vector3d axis = patches.axes[p];
+    patches.faces[p] = std::move(parts[0]);
+    work.push_back(p);
+    for (std::size_t k = 1; k < parts.size(); ++k) {
+      const int q = static_cast<int>(patches.faces.size());
+      for (int f : parts[k]) patches.face_patch[f] = q;
+      patches.faces.push_back(std::move(parts[k]));
+      patches.axes.push_back(axis);
+      work.push_back(q);
+    }
+  }
+  return n_splits;
+}
+
+void validate_mesh(const TriMesh& mesh) {
+  for (const auto f : mesh.all_faces())
+    if (mesh.status(f).deleted())
+      throw InvalidInput("segment: the mesh has deleted faces; call garbage_collection() first");
+  for (const auto v : mesh.all_vertices()) {
+    if (mesh.status(v).deleted())
+      throw InvalidInput("segment: the mesh has deleted vertices; call garbage_collection() first");
+    const auto& p = mesh.point(v);
+    if (!(std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2])))
+      throw InvalidInput("segment: vertex " + std::to_string(v.idx()) + " has a non-finite coordinate");
+  }
+  for (const auto e : mesh.all_edges())
+    if (mesh.status(e).deleted())
+      throw InvalidInput("segment: the mesh has deleted edges; call garbage_collection() first");
+}
+
+}  // namespace
+
+Segmentation segment(const TriMesh& mesh, const SegmentOptions& options) {
+  options.validate();
+  validate_mesh(mesh);
+  Segmentation result;
+  if (mesh.n_faces() == 0) return result;
+  constexpr std::string_view kStage = "segment";
+  report_progress(options.progress, kStage, 0.0);
+
+  FaceGraph graph = build_graph(mesh);
+  FaceNormals normals = face_normals(graph, bounding_box(mesh).diagonal());
+  mark_creases(graph, normals, std::cos(radians(options.crease_angle_deg)));
+  normals.smooth = smooth_normals(graph, normals, options.normal_smoothing_rings);
+  const double max_slope = radians(options.max_slope_deg);
+  // A face whose raw and smoothed normals are further apart than this admits no axis.
+  const double max_spread = max_slope + std::acos(kSegmentMinRawNormalDot) - kAngleMarginRad;
+  for (int f = 0; f < graph.n_faces(); ++f) {
+    if (normals.degenerate[f] != 0) continue;
+    const double spread = std::acos(std::clamp(normals.raw[f].dot(normals.smooth[f]), -1.0, 1.0));
+    normals.exception[f] = spread > max_spread ? 1 : 0;
+  }
+  report_progress(options.progress, kStage, 0.3);
+
+  const Grouping grouping{graph, normals, std::cos(max_slope), max_slope,
+                          std::cos(kGrowthConeFraction * max_slope)};
+  Patches patches = grow_regions(grouping);
+  report_progress(options.progress, kStage, 0.5);
+  merge_patches(grouping, options.min_patch_faces, patches, nullptr);
+  clean_borders(grouping, patches);
+  renumber(patches);
+  refine_axes(grouping, patches);
+  Scratch scratch(mesh);
+  result.n_fold_splits = split_folds(grouping, scratch, patches);
+  if (result.n_fold_splits > 0) merge_patches(grouping, options.min_patch_faces, patches, &scratch);
+  renumber(patches);
+  report_progress(options.progress, kStage, 0.7);
+
+  segment_detail::Borders borders = segment_detail::extract_borders(mesh, patches.face_patch, options.border_smoothing);
+  result.face_patch = std::move(patches.face_patch);
+  result.patches.resize(patches.faces.size());
+  for (std::size_t p = 0; p < patches.faces.size(); ++p) {
+    result.patches[p].faces = std::move(patches.faces[p]);
+    result.patches[p].axis = patches.axes[p];
+  }
+  for (std::size_t c = 0; c < borders.curves.size(); ++c) {
+    const BorderCurve& curve = borders.curves[c];
+    result.patches[curve.patch_left].curves.push_back(static_cast<int>(c));
+    if (curve.patch_right >= 0) result.patches[curve.patch_right].curves.push_back(static_cast<int>(c));
+  }
+  result.curves = std::move(borders.curves);
+  result.corners = std::move(borders.corners);
+  for (int f = 0; f < graph.n_faces(); ++f) {
+    for (int i = 0; i < 3; ++i)
+      if (graph.is_crease(f, i) && graph.vertices[f][i] < graph.vertices[f][(i + 1) % 3]) ++result.n_crease_edges;
+    result.n_degenerate_faces += normals.degenerate[f];
+    result.n_slope_exceptions += normals.exception[f];
+  }
+  report_progress(options.progress, kStage, 1.0);
+  return result;
+}
+
+}  // namespace nurbsfront

@@ -1,0 +1,172 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#pragma once
+//! \file
+//! Slope-bounded patch segmentation of a triangle mesh: the first stage of the
+//! remeshing pipeline (DESIGN.md, "Contracts: Segmentation").
+//!
+//! Every patch is a height field over the plane orthogonal to its axis, so the next
+//! stages can fit z = f(x, y) per patch and mesh it in 2D.
+
+#include <cstddef>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "nurbsfront/core/mesh_types.h"
+#include "nurbsfront/core/progress.h"
+
+namespace nurbsfront {
+
+//! Smallest allowed dot product between a (non-degenerate) face's raw unit normal and its
+//! patch axis: every face keeps at least this share of its area in projection, so the
+//! projected triangles are positively oriented and not needles (about 84 deg at most).
+inline constexpr double kSegmentMinRawNormalDot = 0.1;
+
+//! How the zig-zag border curves are smoothed (Taubin lambda|mu steps, corners fixed).
+struct BorderSmoothingOptions {
+  //! Number of lambda|mu step pairs. 0 keeps the input positions. Default 10.
+  int iterations = 10;
+  //! Shrinking step factor lambda, in (0, 1]. Default 0.5.
+  double lambda = 0.5;
+  //! Inflating step factor mu, in [-1, 0]; mu < -lambda avoids shrinking closed curves,
+  //! 0 gives plain Laplacian smoothing. Default -0.53 (Taubin 1995).
+  double mu = -0.53;
+  //! Bound on how far a point may move from its input position, as a multiple of the
+  //! curve's mean edge length (dimensionless, >= 0). Default 1.0.
+  double max_displacement = 1.0;
+  //! Throws InvalidInput if a field is out of range.
+  void validate() const;
+};
+
+//! Options of segment().
+struct SegmentOptions {
+  //! Maximal angle (deg) between a face's smoothed normal and its patch axis, in (0, 90).
+  //! Default 60: the height-field metric I + grad f grad f^T then stretches lengths at
+  //! most by 2.
+  double max_slope_deg = 60.0;
+  //! Dihedral angle (deg, between the raw normals of two edge-adjacent faces) above which
+  //! the edge is a crease and becomes a patch border, in (0, 180]; 180 disables creases.
+  //! Default 80: above the 45, 54.7, 60 and 70.5 deg dihedrals that marching cubes on an
+  //! occupancy (0/1) grid produces between its 26 normal directions on smooth parts, and
+  //! below the 90 deg of box-like features. Blocky (cuberille) inputs with 90 deg steps
+  //! need a value above 90.
+  double crease_angle_deg = 80.0;
+  //! Iterations of area-weighted normal averaging over edge-adjacent faces (never across
+  //! a crease) that give the smoothed normals used for grouping (>= 0). Each iteration
+  //! widens the averaging by one ring of faces. Default 6: enough to average the
+  //! terraces of cell-based inputs (DESIGN.md, Pitfalls).
+  int normal_smoothing_rings = 6;
+  //! Patches with fewer faces are merged into an edge-adjacent neighbour when the merged
+  //! patch still meets the slope bound and no crease separates them (0 disables).
+  //! Default 50.
+  std::size_t min_patch_faces = 50;
+  //! How border curves are smoothed.
+  BorderSmoothingOptions border_smoothing;
+  //! Optional progress callback (stage "segment"); returning false cancels.
+  ProgressCallback progress;
+  //! Throws InvalidInput if a field is out of range.
+  void validate() const;
+};
+
+//! One patch: a connected set of faces that is a height field over its plane.
+struct Patch {
+  std::vector<int> faces;  //!< input face ids, ascending
+  //! Unit height-field direction: the area-weighted mean raw normal when it meets the
+  //! bounds for every face, else the axis the patch was grown or merged with.
+  Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();
+  std::vector<int> curves;  //!< ids of the border curves bounding this patch, ascending
+};
+
+//! A border curve: a chain of input edges between two patches, or between a patch and
+//! the input's own boundary.
+struct BorderCurve {
+  //! Input vertex ids along the curve. An open curve runs from corner to corner (both
+  //! may be the same vertex); a closed curve does not repeat its first vertex.
+  std::vector<int> vertices;
+  //! Input edge ids: edges[i] joins vertices[i] and vertices[i + 1] (cyclically if closed).
+  std::vector<int> edges;
+  //! The patch on the left when walking along the curve (seen from the side the face
+  //! normals point to); never -1.
+  int patch_left = -1;
+  //! The patch on the right, or -1 when the curve is on the input's boundary. When both
+  //! are patches, patch_left < patch_right.
+  int patch_right = -1;
+  bool is_closed = false;  //!< true for a loop without corners
+  //! Smoothed positions, one per vertex; the ends of an open curve are exactly the input
+  //! positions, every point stays within the displacement bound of its input position.
+  std::vector<Eigen::Vector3d> smoothed;
+};
+
+//! The result of segment().
+struct Segmentation {
+  std::vector<int> face_patch;       //!< patch id of every input face
+  std::vector<Patch> patches;        //!< patches, ordered by their smallest face id
+  std::vector<BorderCurve> curves;   //!< every border edge lies on exactly one curve
+  //! Vertices where three or more sides meet (patches, or patches and the input's
+  //! boundary): the ends of the open curves. Ascending.
+  std::vector<int> corners;
+  std::size_t n_crease_edges = 0;     //!< edges above the crease angle
+  std::size_t n_degenerate_faces = 0; //!< faces without a normal (zero area)
+  //! Faces whose raw and smoothed normals are so far apart (over 90 deg + max_slope,
+  //! a flipped face) that no axis satisfies both bounds: only the raw bound holds.
+  std::size_t n_slope_exceptions = 0;
+  std::size_t n_fold_splits = 0;      //!< splits made because a projection folded
+};
+
+//! Splits the faces of `mesh` into slope-bounded patches and extracts their borders.
+//!
+//! Algorithm (details and measurements in docs/segment.md):
+//! 1. Raw unit face normals and areas; crease edges (dihedral > crease_angle_deg).
+//! 2. Smoothed normals: `normal_smoothing_rings` Jacobi iterations of area-weighted
+//!    averaging over edge-adjacent faces, not across creases.
+//! 3. Region growing, seeds in face-id order, breadth first through non-crease edges:
+//!    a face joins when its smoothed normal is within 0.75 max_slope_deg of the seed's
+//!    axis, its raw normal has dot >= kSegmentMinRawNormalDot with it, and no crease
+//!    separates it from a face already in the region.
+//! 4. Merging, smallest patch first, into a neighbour when one axis bounds both (union of
+//!    bounding cones of the normals); patches below min_patch_faces may also join a
+//!    neighbour whose axis bounds them or be dissolved into several neighbours.
+//! 5. Border "ears" move to the neighbour they mostly touch where its axis allows.
+//! 6. Axes are set to the mean raw normal where the bounds allow it.
+//! 7. Each patch is projected onto its plane; where border segments cross, or a second
+//!    outer loop appears (a region covered twice), the fold is cut out locally (two rings
+//!    of faces) or the patch is bisected by a two-seed breadth-first partition; parts are
+//!    checked again, then small parts are re-merged where the merged patch passes.
+//! 8. Border edges are chained into curves between corners (or closed loops), and each
+//!    curve is smoothed by Taubin steps with its ends fixed and a bounded displacement.
+//!
+//! Guarantees: every face is in exactly one patch; each patch is connected through
+//! edges; no crease edge has the same patch on both sides; for every non-degenerate face
+//! n_raw . axis >= kSegmentMinRawNormalDot (its projection is positively oriented) and,
+//! except the n_slope_exceptions faces, n_smoothed . axis >= cos(max_slope_deg); the
+//! projected border of each patch is a set of loops whose segments neither cross nor
+//! touch, except that loops may share a vertex where the patch touches itself (always a
+//! corner), with one outer (counter-clockwise) loop: the patch is a graph over its plane
+//! (floating-point predicates). Every border edge is on exactly one curve. Patches
+//! smaller than min_patch_faces remain where no neighbour can take them. Degenerate
+//! (zero-area) faces join a neighbouring patch and are exempt from the normal bounds:
+//! weld and drop them first (io module). The result depends only on the mesh and the
+//! options (no hashing, no threads).
+//!
+//! \param mesh     a 2-manifold triangle mesh without deleted elements (open or closed)
+//! \param options  see SegmentOptions
+//! \return         the segmentation; empty for an empty mesh
+//! \throw InvalidInput for invalid options, deleted elements or non-finite points.
+//! \throw Cancelled if the progress callback returns false.
+[[nodiscard]] Segmentation segment(const TriMesh& mesh, const SegmentOptions& options = {});
+
+//! Smooths a polyline by Taubin lambda|mu steps with uniform weights.
+//!
+//! The ends of an open polyline stay fixed; a closed one (last point joined to the first)
+//! has no fixed point. After each step a point further than
+//! options.max_displacement * (mean segment length) from its input position is pulled
+//! back onto that sphere.
+//! \param points    the input points (any count; fewer than 3 are returned unchanged)
+//! \param is_closed whether the last point is joined to the first
+//! \param options   see BorderSmoothingOptions
+//! \throw InvalidInput for invalid options.
+[[nodiscard]] std::vector<Eigen::Vector3d> smooth_polyline(const std::vector<Eigen::Vector3d>& points,
+                                                           bool is_closed,
+                                                           const BorderSmoothingOptions& options = {});
+
+}  // namespace nurbsfront

@@ -1,0 +1,75 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#pragma once
+// Internal to the segment module: flat face adjacency shared by its .cpp files.
+
+#include <array>
+#include <cstdint>
+#include <utility>
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include "nurbsfront/core/mesh_types.h"
+#include "nurbsfront/segment/segment.h"
+
+namespace nurbsfront::segment_detail {
+
+//! Faces as flat arrays: edge i of face f joins vertices[f][i] -> vertices[f][(i + 1) % 3]
+//! (counter-clockwise), neighbours[f][i] is the face across it (-1 on the boundary).
+struct FaceGraph {
+  std::vector<std::array<int, 3>> vertices;
+  std::vector<std::array<int, 3>> neighbours;
+  std::vector<std::uint8_t> crease;  // bit i set: edge i of the face is a crease
+  std::vector<Eigen::Vector3d> points;
+  const TriMesh* mesh = nullptr;  // the input, for halfedge walks
+  [[nodiscard]] bool is_crease(int f, int i) const { return ((crease[f] >> i) & 1U) != 0; }
+  [[nodiscard]] int n_faces() const { return static_cast<int>(vertices.size()); }
+};
+
+//! Reusable per-call buffers (sized once per segment() call; no global state).
+struct Scratch {
+  std::vector<int> vertex_stamp, halfedge_stamp;
+  std::vector<Eigen::Vector2d> xy;
+  std::vector<int> face_stamp, face_owner;
+  int vertex_epoch = 0;
+  int face_epoch = 0;
+  explicit Scratch(const TriMesh& mesh)
+      : vertex_stamp(mesh.n_vertices(), -1), halfedge_stamp(mesh.n_halfedges(), -1), xy(mesh.n_vertices()),
+        face_stamp(mesh.n_faces(), -1), face_owner(mesh.n_faces(), -1) {}
+};
+
+//! The result of check_projection().
+struct ProjectionCheck {
+  bool is_simple = true;
+  //! Where it fails, when that is local: the vertices of a short extra outer loop, or of
+  //! two crossing border segments. Empty when the failure is not local.
+  std::vector<int> trouble;
+};
+
+//! Whether a patch (its `faces`, with face_patch giving every face's patch) projects onto
+//! the plane orthogonal to `axis` as border loops whose segments never cross or touch
+//! except at shared vertices, with at most one counter-clockwise (outer) loop.
+[[nodiscard]] ProjectionCheck check_projection(const FaceGraph& graph, const std::vector<int>& faces,
+                                               const std::vector<int>& face_patch, const Eigen::Vector3d& axis,
+                                               Scratch& scratch);
+
+//! Splits a connected patch of at least two faces in two connected parts: breadth-first
+//! regions around two faces far apart (the farthest face from the farthest face of
+//! faces[0]).
+[[nodiscard]] std::pair<std::vector<int>, std::vector<int>> bisect_patch(
+    const FaceGraph& graph, const std::vector<int>& faces, const std::vector<int>& face_patch,
+    Scratch& scratch);
+
+//! A unit frame (e1, e2) with e1 x e2 = axis.
+[[nodiscard]] std::pair<Eigen::Vector3d, Eigen::Vector3d> plane_frame(const Eigen::Vector3d& axis);
+
+//! Border curves and corners of a finished face -> patch map.
+struct Borders {
+  std::vector<BorderCurve> curves;
+  std::vector<int> corners;
+};
+[[nodiscard]] Borders extract_borders(const TriMesh& mesh, const std::vector<int>& face_patch,
+                                      const BorderSmoothingOptions& options);
+
+}  // namespace nurbsfront::segment_detail

@@ -1,0 +1,282 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Segmentation of procedural meshes: contracts (contracts.h) and exact small cases.
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <set>
+#include <string>
+
+#include <Eigen/Geometry>
+
+#include "fixtures/shapes.h"
+#include "nurbsfront/core/error.h"
+#include "nurbsfront/core/soup.h"
+#include "nurbsfront/segment/segment.h"
+#include "segment/contracts.h"
+
+namespace nurbsfront {
+namespace {
+
+using segment_test::kPi;
+using segment_test::radians;
+using segment_test::run;
+
+// The grid patch folded along x = 0.5 into a roof: faces tilted +-tilt_deg about y.
+TriangleSoup roof(int n, double tilt_deg) {
+  TriangleSoup s = test::grid_patch(n, n);
+  for (auto& p : s.points) p.z() = -std::abs(p.x() - 0.5) * std::tan(radians(tilt_deg));
+  return s;
+}
+
+// A helicoidal ramp: r in [1, 2], turning `turns` times at a small pitch. Every normal
+// is near +z, yet its projection overlaps itself after one turn.
+TriangleSoup ramp(double turns, int n_around, int n_radial) {
+  TriangleSoup s;
+  const int n_theta = static_cast<int>(turns * n_around);
+  for (int i = 0; i <= n_theta; ++i) {
+    const double theta = 2 * kPi * i / n_around;
+    for (int j = 0; j <= n_radial; ++j) {
+      const double r = 1.0 + static_cast<double>(j) / n_radial;
+      s.points.emplace_back(r * std::cos(theta), r * std::sin(theta), 0.05 * theta);
+    }
+  }
+  auto id = [&](int i, int j) { return static_cast<std::uint32_t>(i * (n_radial + 1) + j); };
+  for (int i = 0; i < n_theta; ++i) {
+    for (int j = 0; j < n_radial; ++j) {
+      s.triangles.push_back({id(i, j), id(i + 1, j), id(i + 1, j + 1)});
+      s.triangles.push_back({id(i, j), id(i + 1, j + 1), id(i, j + 1)});
+    }
+  }
+  return s;
+}
+
+// A terraced ramp z ~ 0.7 x: heights rounded to steps of two cells' height, so the raw
+// normals alternate between flat (0 deg) and risers (63 deg).
+TriangleSoup terraced_ramp(int n) {
+  TriangleSoup s = test::grid_patch(n, n);
+  const double step = 2.0 / n;
+  for (auto& p : s.points) p.z() = std::round(0.7 * p.x() / step) * step;
+  return s;
+}
+
+TEST(Segment, CubeHasSixPatchesTwelveCurvesEightCorners) {
+  const TriMesh mesh = to_trimesh(test::cube());
+  const SegmentOptions options;
+  const Segmentation seg = run(mesh, options, 0.0);
+  ASSERT_EQ(seg.patches.size(), 6u);
+  EXPECT_EQ(seg.n_crease_edges, 12u);
+  EXPECT_EQ(seg.curves.size(), 12u);
+  EXPECT_EQ(seg.corners, (std::vector<int>{0, 1, 2, 3, 4, 5, 6, 7}));
+  std::set<std::array<int, 3>> axes;
+  for (const Patch& p : seg.patches) {
+    EXPECT_EQ(p.faces.size(), 2u);
+    EXPECT_EQ(p.curves.size(), 4u);
+    EXPECT_NEAR(p.axis.cwiseAbs().maxCoeff(), 1.0, 1e-12);
+    axes.insert({static_cast<int>(std::lround(p.axis.x())), static_cast<int>(std::lround(p.axis.y())),
+                 static_cast<int>(std::lround(p.axis.z()))});
+  }
+  EXPECT_EQ(axes.size(), 6u);
+  for (const BorderCurve& c : seg.curves) {
+    EXPECT_FALSE(c.is_closed);
+    EXPECT_EQ(c.vertices.size(), 2u);
+    EXPECT_GE(c.patch_right, 0);
+  }
+}
+
+TEST(Segment, FlatGridIsOnePatchWithOneClosedBoundaryCurve) {
+  const TriMesh mesh = to_trimesh(test::grid_patch(12, 9));
+  const SegmentOptions options;
+  const Segmentation seg = run(mesh, options, 0.0);
+  ASSERT_EQ(seg.patches.size(), 1u);
+  EXPECT_NEAR(seg.patches[0].axis.z(), 1.0, 1e-12);
+  ASSERT_EQ(seg.curves.size(), 1u);
+  EXPECT_TRUE(seg.curves[0].is_closed);
+  EXPECT_EQ(seg.curves[0].patch_left, 0);
+  EXPECT_EQ(seg.curves[0].patch_right, -1);
+  EXPECT_EQ(seg.curves[0].vertices.size(), 2u * (12 + 9));
+  EXPECT_TRUE(seg.corners.empty());
+  EXPECT_EQ(seg.n_crease_edges, 0u);
+}
+
+TEST(Segment, RoofBelowTheCreaseAngleIsOnePatchAboveItTwo) {
+  const SegmentOptions options;
+  {
+    const TriMesh mesh = to_trimesh(roof(16, 20.0));  // 40 deg dihedral
+    const Segmentation seg = run(mesh, options, 0.0);
+    EXPECT_EQ(seg.patches.size(), 1u);
+    EXPECT_EQ(seg.n_crease_edges, 0u);
+  }
+  {
+    const TriMesh mesh = to_trimesh(roof(16, 50.0));  // 100 deg dihedral: a crease
+    const Segmentation seg = run(mesh, options, 0.0);
+    ASSERT_EQ(seg.patches.size(), 2u);
+    EXPECT_EQ(seg.n_crease_edges, 16u);
+    // The ridge is one curve between the two corners where it meets the boundary.
+    EXPECT_EQ(seg.corners.size(), 2u);
+    int n_ridge = 0;
+    for (const BorderCurve& c : seg.curves) {
+      if (c.patch_right < 0) continue;
+      ++n_ridge;
+      EXPECT_EQ(c.vertices.size(), 17u);
+      for (int v : c.vertices) EXPECT_NEAR(mesh.point(mesh.vertex_handle(v))[0], 0.5, 1e-12);
+    }
+    EXPECT_EQ(n_ridge, 1);
+    EXPECT_EQ(seg.curves.size(), 3u);  // the ridge and one boundary curve per side
+  }
+}
+
+TEST(Segment, SphereGivesFewLargePatches) {
+  const TriMesh mesh = to_trimesh(test::icosphere(3));
+  SegmentOptions options;
+  options.min_patch_faces = 20;
+  const Segmentation seg = run(mesh, options, 5.0);
+  // A cap of normals within 60 deg covers a quarter of the sphere: at least 4 patches.
+  EXPECT_GE(seg.patches.size(), 4u);
+  EXPECT_LE(seg.patches.size(), 30u);
+  for (const Patch& p : seg.patches) EXPECT_GE(p.faces.size(), options.min_patch_faces);
+  EXPECT_EQ(seg.n_fold_splits, 0u);
+  // Closed surface: every curve is between two patches.
+  for (const BorderCurve& c : seg.curves) EXPECT_GE(c.patch_right, 0);
+}
+
+TEST(Segment, SlopeBoundIsRespectedForSmallerAngles) {
+  const TriMesh mesh = to_trimesh(test::icosphere(3));
+  SegmentOptions options;
+  options.max_slope_deg = 30.0;
+  const Segmentation narrow = run(mesh, options, 5.0);
+  options.max_slope_deg = 60.0;
+  const Segmentation wide = segment(mesh, options);
+  EXPECT_GT(narrow.patches.size(), wide.patches.size());
+}
+
+TEST(Segment, TorusSegmentsIntoHeightFields) {
+  const TriMesh mesh = to_trimesh(test::torus(48, 24));
+  const SegmentOptions options;
+  const Segmentation seg = run(mesh, options, 10.0);
+  EXPECT_LE(seg.patches.size(), 60u);
+  for (const BorderCurve& c : seg.curves) EXPECT_GE(c.patch_right, 0);
+}
+
+TEST(Segment, SelfOverlappingRampIsSplit) {
+  const TriMesh mesh = to_trimesh(ramp(2.5, 48, 4));
+  const SegmentOptions options;
+  const Segmentation seg = run(mesh, options, 0.0);
+  EXPECT_GE(seg.n_fold_splits, 1u);
+  // Two and a half turns cannot be a height field in fewer than three patches.
+  EXPECT_GE(seg.patches.size(), 3u);
+}
+
+TEST(Segment, SmoothedNormalsKeepATerracedRampInOnePiece) {
+  const TriMesh mesh = to_trimesh(terraced_ramp(40));
+  SegmentOptions options;
+  options.max_slope_deg = 30.0;  // below half the 63 deg between treads and risers
+  const Segmentation smoothed = run(mesh, options, 35.0);
+  options.normal_smoothing_rings = 0;
+  options.min_patch_faces = 0;
+  const Segmentation raw = run(mesh, options, 0.0);
+  EXPECT_LE(smoothed.patches.size(), 2u);
+  EXPECT_GT(raw.patches.size(), 4 * smoothed.patches.size());
+}
+
+TEST(Segment, IsDeterministic) {
+  const TriMesh mesh = to_trimesh(test::torus(32, 16));
+  const Segmentation a = segment(mesh);
+  const Segmentation b = segment(mesh);
+  EXPECT_EQ(a.face_patch, b.face_patch);
+  EXPECT_EQ(a.corners, b.corners);
+  ASSERT_EQ(a.curves.size(), b.curves.size());
+  for (std::size_t c = 0; c < a.curves.size(); ++c) EXPECT_EQ(a.curves[c].vertices, b.curves[c].vertices);
+}
+
+TEST(Segment, EmptyMeshGivesEmptySegmentation) {
+  const Segmentation seg = segment(TriMesh{});
+  EXPECT_TRUE(seg.patches.empty());
+  EXPECT_TRUE(seg.face_patch.empty());
+  EXPECT_TRUE(seg.curves.empty());
+}
+
+TEST(Segment, InvalidOptionsAndMeshesThrow) {
+  const TriMesh mesh = to_trimesh(test::cube());
+  auto with = [](auto change) {
+    SegmentOptions o;
+    change(o);
+    return o;
+  };
+  EXPECT_THROW((void)segment(mesh, with([](SegmentOptions& o) { o.max_slope_deg = 90.0; })), InvalidInput);
+  EXPECT_THROW((void)segment(mesh, with([](SegmentOptions& o) { o.max_slope_deg = 0.0; })), InvalidInput);
+  EXPECT_THROW((void)segment(mesh, with([](SegmentOptions& o) { o.crease_angle_deg = 181.0; })), InvalidInput);
+  EXPECT_THROW((void)segment(mesh, with([](SegmentOptions& o) { o.normal_smoothing_rings = -1; })), InvalidInput);
+  EXPECT_THROW((void)segment(mesh, with([](SegmentOptions& o) { o.border_smoothing.lambda = 0.0; })), InvalidInput);
+  EXPECT_THROW((void)segment(mesh, with([](SegmentOptions& o) { o.border_smoothing.mu = 0.5; })), InvalidInput);
+  EXPECT_THROW((void)segment(mesh, with([](SegmentOptions& o) { o.border_smoothing.iterations = -2; })), InvalidInput);
+  TriMesh broken = mesh;
+  broken.delete_face(broken.face_handle(0), false);
+  EXPECT_THROW((void)segment(broken), InvalidInput);
+  TriMesh nan = mesh;
+  nan.set_point(nan.vertex_handle(0), Point3(std::nan(""), 0, 0));
+  EXPECT_THROW((void)segment(nan), InvalidInput);
+}
+
+TEST(Segment, ProgressIsReportedAndCancels) {
+  const TriMesh mesh = to_trimesh(test::icosphere(2));
+  SegmentOptions options;
+  double last = -1.0;
+  options.progress = [&](std::string_view stage, double fraction) {
+    EXPECT_EQ(stage, "segment");
+    EXPECT_GE(fraction, last);
+    last = fraction;
+    return true;
+  };
+  (void)segment(mesh, options);
+  EXPECT_EQ(last, 1.0);
+  options.progress = [](std::string_view, double fraction) { return fraction < 0.5; };
+  EXPECT_THROW((void)segment(mesh, options), Cancelled);
+}
+
+TEST(SmoothPolyline, ZigZagFlattensWithFixedEndsAndBoundedMoves) {
+  std::vector<Eigen::Vector3d> points;
+  for (int i = 0; i <= 20; ++i) points.emplace_back(i, (i % 2) * 0.5, 0.0);
+  BorderSmoothingOptions options;
+  const auto smoothed = smooth_polyline(points, false, options);
+  ASSERT_EQ(smoothed.size(), points.size());
+  EXPECT_EQ(smoothed.front(), points.front());
+  EXPECT_EQ(smoothed.back(), points.back());
+  const double mean_length = std::sqrt(1.0 + 0.25);
+  double input_spread = 0.0, output_spread = 0.0, middle_spread = 0.0;
+  for (std::size_t i = 1; i + 1 < points.size(); ++i) {
+    EXPECT_LE((smoothed[i] - points[i]).norm(), options.max_displacement * mean_length * (1 + 1e-12));
+    EXPECT_NEAR(smoothed[i].z(), 0.0, 1e-15);
+    input_spread = std::max(input_spread, std::abs(points[i].y() - 0.25));
+    output_spread = std::max(output_spread, std::abs(smoothed[i].y() - 0.25));
+    if (i >= 5 && i <= 15) middle_spread = std::max(middle_spread, std::abs(smoothed[i].y() - 0.25));
+  }
+  EXPECT_LT(output_spread, 0.5 * input_spread);   // near the fixed ends
+  EXPECT_LT(middle_spread, 0.05 * input_spread);  // away from them the zig-zag is gone
+  // A zero bound keeps every point.
+  options.max_displacement = 0.0;
+  EXPECT_EQ(smooth_polyline(points, false, options), points);
+}
+
+TEST(SmoothPolyline, ClosedNoisyCircleKeepsItsRadius) {
+  std::vector<Eigen::Vector3d> points;
+  const int n = 64;
+  for (int i = 0; i < n; ++i) {
+    const double t = 2 * kPi * i / n;
+    const double r = 1.0 + ((i % 2) != 0 ? 0.03 : -0.03);
+    points.emplace_back(r * std::cos(t), r * std::sin(t), 0.0);
+  }
+  const auto smoothed = smooth_polyline(points, true, {});
+  double min_r = 1e9, max_r = 0.0;
+  for (const auto& p : smoothed) {
+    min_r = std::min(min_r, p.norm());
+    max_r = std::max(max_r, p.norm());
+  }
+  EXPECT_GT(min_r, 0.98);  // Taubin steps do not shrink the loop
+  EXPECT_LT(max_r, 1.02);  // and the zig-zag (+-0.03) is damped
+}
+
+}  // namespace
+}  // namespace nurbsfront
