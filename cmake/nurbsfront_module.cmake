@@ -50,11 +50,13 @@ function(nurbsfront_add_test name)
   target_link_libraries(${target} PRIVATE ${ARG_DEPS} nurbsfront_test_support GTest::gtest GTest::gtest_main)
   nurbsfront_target_defaults(${target})
   gtest_discover_tests(${target}
+    TEST_PREFIX "${name}."
     TEST_FILTER "-*Slow*.*"
     PROPERTIES LABELS "fast"
     WORKING_DIRECTORY "${PROJECT_SOURCE_DIR}"
     DISCOVERY_TIMEOUT 60)
   gtest_discover_tests(${target}
+    TEST_PREFIX "${name}."
     TEST_FILTER "*Slow*.*"
     PROPERTIES LABELS "slow"
     WORKING_DIRECTORY "${PROJECT_SOURCE_DIR}"

@@ -2,6 +2,9 @@
 #include "support/test_data.h"
 
 #include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <string>
 
 namespace nurbsfront::test {
 
@@ -18,7 +21,9 @@ std::optional<std::filesystem::path> shared_data(const std::filesystem::path& re
 }
 
 std::filesystem::path temp_dir(const std::string& name) {
-  auto path = std::filesystem::temp_directory_path() / ("nurbsfront_test_" + name);
+  // Unique per process: ctest runs tests of one runner in parallel processes.
+  auto path = std::filesystem::temp_directory_path() /
+              ("nurbsfront_test_" + name + "_" + std::to_string(::getpid()));
   std::filesystem::remove_all(path);
   std::filesystem::create_directories(path);
   return path;

@@ -12,7 +12,7 @@ namespace nurbsfront::test {
 std::filesystem::path test_data(const std::filesystem::path& relative);
 //! <repo>/../shared/data/<relative> if it exists.
 std::optional<std::filesystem::path> shared_data(const std::filesystem::path& relative);
-//! A fresh, empty temporary directory for a test's output files.
+//! A fresh, empty temporary directory for a test's output files, unique to this process.
 std::filesystem::path temp_dir(const std::string& name);
 
 }  // namespace nurbsfront::test
