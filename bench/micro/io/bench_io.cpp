@@ -1,0 +1,107 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Read/write throughput of the mesh formats and clean() on a generated torus of
+// 2 * n * n/2 triangles (argument n = 1000: 1M triangles, 500k vertices).
+#include <benchmark/benchmark.h>
+
+#include <cmath>
+#include <filesystem>
+#include <numbers>
+#include <string>
+
+#include "nurbsfront/io/mesh_io.h"
+
+namespace {
+
+using nurbsfront::TriangleSoup;
+
+TriangleSoup torus(int n_major, int n_minor) {
+  TriangleSoup s;
+  const double two_pi = 2.0 * std::numbers::pi;
+  for (int i = 0; i < n_major; ++i) {
+    for (int j = 0; j < n_minor; ++j) {
+      const double u = two_pi * i / n_major, v = two_pi * j / n_minor;
+      s.points.emplace_back((1.0 + 0.3 * std::cos(v)) * std::cos(u), (1.0 + 0.3 * std::cos(v)) * std::sin(u),
+                            0.3 * std::sin(v));
+    }
+  }
+  auto id = [&](int i, int j) { return static_cast<std::uint32_t>((i % n_major) * n_minor + (j % n_minor)); };
+  for (int i = 0; i < n_major; ++i) {
+    for (int j = 0; j < n_minor; ++j) {
+      s.triangles.push_back({id(i, j), id(i + 1, j), id(i + 1, j + 1)});
+      s.triangles.push_back({id(i, j), id(i + 1, j + 1), id(i, j + 1)});
+    }
+  }
+  return s;
+}
+
+std::filesystem::path bench_file(const std::string& name) {
+  const auto dir = std::filesystem::temp_directory_path() / "nurbsfront_bench_io";
+  std::filesystem::create_directories(dir);
+  return dir / name;
+}
+
+const TriangleSoup& shared_torus(int n) {
+  static const TriangleSoup soup = torus(n, n / 2);  // benchmark fixture, not library state
+  return soup;
+}
+
+void set_counters(benchmark::State& state, const TriangleSoup& s, const std::filesystem::path& path) {
+  state.counters["triangles"] = static_cast<double>(s.triangles.size());
+  state.counters["tri/s"] = benchmark::Counter(static_cast<double>(s.triangles.size()) * state.iterations(),
+                                               benchmark::Counter::kIsRate);
+  state.SetBytesProcessed(static_cast<std::int64_t>(std::filesystem::file_size(path)) * state.iterations());
+}
+
+void BM_Write(benchmark::State& state, const char* name, bool binary) {
+  const TriangleSoup& s = shared_torus(static_cast<int>(state.range(0)));
+  const auto path = bench_file(name);
+  nurbsfront::WriteOptions options;
+  options.binary = binary;
+  for (auto _ : state) {
+    std::filesystem::remove(path);  // a fresh file: rewriting in place makes ext4 flush it
+    nurbsfront::write_soup(s, path, options);
+  }
+  set_counters(state, s, path);
+}
+
+void BM_Read(benchmark::State& state, const char* name, bool binary) {
+  const TriangleSoup& s = shared_torus(static_cast<int>(state.range(0)));
+  const auto path = bench_file(std::string("r_") + name);
+  nurbsfront::WriteOptions options;
+  options.binary = binary;
+  nurbsfront::write_soup(s, path, options);
+  for (auto _ : state) {
+    TriangleSoup back = nurbsfront::read_soup(path);
+    benchmark::DoNotOptimize(back.points.data());
+  }
+  set_counters(state, s, path);
+}
+
+void BM_CleanStl(benchmark::State& state) {
+  // STL's three points per facet: clean() welds 3M points back to 500k.
+  const TriangleSoup& s = shared_torus(static_cast<int>(state.range(0)));
+  const auto path = bench_file("clean.stl");
+  nurbsfront::write_soup(s, path);
+  const TriangleSoup raw = nurbsfront::read_soup(path);
+  for (auto _ : state) {
+    nurbsfront::CleanResult r = nurbsfront::clean(raw);
+    benchmark::DoNotOptimize(r.soup.points.data());
+  }
+  state.counters["points_in"] = static_cast<double>(raw.points.size());
+  state.counters["tri/s"] = benchmark::Counter(static_cast<double>(raw.triangles.size()) * state.iterations(),
+                                               benchmark::Counter::kIsRate);
+}
+
+}  // namespace
+
+BENCHMARK_CAPTURE(BM_Write, ply_binary, "m.ply", true)->Arg(1000)->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_Read, ply_binary, "m.ply", true)->Arg(1000)->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_Write, stl_binary, "m.stl", true)->Arg(1000)->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_Read, stl_binary, "m.stl", true)->Arg(1000)->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_Write, obj, "m.obj", false)->Arg(1000)->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_Read, obj, "m.obj", false)->Arg(1000)->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_Write, vtk_binary, "m.vtk", true)->Arg(1000)->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_Read, vtk_binary, "m.vtk", true)->Arg(1000)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_CleanStl)->Arg(1000)->Unit(benchmark::kMillisecond);
+
+BENCHMARK_MAIN();

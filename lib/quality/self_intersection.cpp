@@ -1,0 +1,321 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "nurbsfront/quality/self_intersection.h"
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <numeric>
+#include <thread>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "nurbsfront/core/error.h"
+#include "nurbsfront/core/tolerances.h"
+#include "nurbsfront/quality/aabb_tree.h"
+#include "nurbsfront/quality/internal.h"
+#include "nurbsfront/quality/predicates.h"
+#include "nurbsfront/quality/report.h"
+
+namespace nurbsfront::quality_detail {
+namespace {
+
+using quality_detail::orient2d;
+using quality_detail::orient3d;
+
+// The coordinate axis to drop when projecting the plane of (p, q, r) to 2D: the one of
+// the largest normal component, so the projected triangle keeps a non-zero area.
+// Projection just drops a coordinate, so exact inputs stay exact.
+int drop_axis(const Eigen::Vector3d& p, const Eigen::Vector3d& q, const Eigen::Vector3d& r) {
+  const Eigen::Vector3d n = (q - p).cross(r - p).cwiseAbs();
+  int axis = 0;
+  n.maxCoeff(&axis);
+  return axis;
+}
+
+Eigen::Vector2d project(const Eigen::Vector3d& x, int axis) {
+  switch (axis) {
+    case 0: return {x.y(), x.z()};
+    case 1: return {x.z(), x.x()};
+    default: return {x.x(), x.y()};
+  }
+}
+
+bool mixed(int s1, int s2, int s3) {
+  return (s1 > 0 || s2 > 0 || s3 > 0) && (s1 < 0 || s2 < 0 || s3 < 0);
+}
+
+// Closed 2D point-in-triangle for a non-degenerate triangle.
+bool point_in_triangle_2d(const Eigen::Vector2d& x, const Eigen::Vector2d& p, const Eigen::Vector2d& q,
+                          const Eigen::Vector2d& r) {
+  return !mixed(orient2d(p, q, x), orient2d(q, r, x), orient2d(r, p, x));
+}
+
+bool on_collinear_segment(const Eigen::Vector2d& x, const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+  return std::min(a.x(), b.x()) <= x.x() && x.x() <= std::max(a.x(), b.x()) &&
+         std::min(a.y(), b.y()) <= x.y() && x.y() <= std::max(a.y(), b.y());
+}
+
+// Closed 2D segment-segment intersection.
+bool segments_meet_2d(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& c,
+                      const Eigen::Vector2d& d) {
+  const int o1 = orient2d(a, b, c), o2 = orient2d(a, b, d);
+  const int o3 = orient2d(c, d, a), o4 = orient2d(c, d, b);
+  if (o1 * o2 < 0 && o3 * o4 < 0) return true;
+  if (o1 == 0 && on_collinear_segment(c, a, b)) return true;
+  if (o2 == 0 && on_collinear_segment(d, a, b)) return true;
+  if (o3 == 0 && on_collinear_segment(a, c, d)) return true;
+  if (o4 == 0 && on_collinear_segment(b, c, d)) return true;
+  return false;
+}
+
+}  // namespace
+
+bool segment_meets_triangle(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& p,
+                            const Eigen::Vector3d& q, const Eigen::Vector3d& r) {
+  const int sa = orient3d(p, q, r, a), sb = orient3d(p, q, r, b);
+  if (sa * sb > 0) return false;
+  if (sa == 0 && sb == 0) {
+    const int axis = drop_axis(p, q, r);
+    const Eigen::Vector2d a2 = project(a, axis), b2 = project(b, axis);
+    const Eigen::Vector2d p2 = project(p, axis), q2 = project(q, axis), r2 = project(r, axis);
+    return point_in_triangle_2d(a2, p2, q2, r2) || point_in_triangle_2d(b2, p2, q2, r2) ||
+           segments_meet_2d(a2, b2, p2, q2) || segments_meet_2d(a2, b2, q2, r2) ||
+           segments_meet_2d(a2, b2, r2, p2);
+  }
+  // The segment meets the plane in exactly one point: it lies in the closed triangle iff
+  // the line (a, b) passes on the same side of all three edges (or on them).
+  return !mixed(orient3d(a, b, p, q), orient3d(a, b, q, r), orient3d(a, b, r, p));
+}
+
+bool triangles_intersect(const std::array<std::uint32_t, 3>& ids1, const std::array<Eigen::Vector3d, 3>& t1,
+                         const std::array<std::uint32_t, 3>& ids2, const std::array<Eigen::Vector3d, 3>& t2) {
+  // Which corners are shared (by id)?
+  int n_shared = 0;
+  int shared1[3] = {-1, -1, -1};  // shared1[i] = corner of t2 equal to corner i of t1
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) {
+      if (ids1[i] == ids2[j]) {
+        shared1[i] = j;
+        ++n_shared;
+      }
+    }
+  }
+  if (n_shared >= 3) return false;
+  if (n_shared == 0) {
+    // Two closed triangles meet iff an edge of one meets the other: the intersection is
+    // convex and its extreme points lie on edges of one of them.
+    for (int i = 0; i < 3; ++i) {
+      if (segment_meets_triangle(t1[i], t1[(i + 1) % 3], t2[0], t2[1], t2[2])) return true;
+      if (segment_meets_triangle(t2[i], t2[(i + 1) % 3], t1[0], t1[1], t1[2])) return true;
+    }
+    return false;
+  }
+  if (n_shared == 1) {
+    // Shared corner v: more than v in common iff the edge opposite v in one triangle meets
+    // the other (a ray from v inside both leaves one of them through its opposite edge).
+    int i1 = 0;
+    while (shared1[i1] < 0) ++i1;
+    const int i2 = shared1[i1];
+    return segment_meets_triangle(t1[(i1 + 1) % 3], t1[(i1 + 2) % 3], t2[0], t2[1], t2[2]) ||
+           segment_meets_triangle(t2[(i2 + 1) % 3], t2[(i2 + 2) % 3], t1[0], t1[1], t1[2]);
+  }
+  // Shared edge (u, w): non-coplanar triangles meet only on it; coplanar ones overlap iff
+  // their third corners lie on the same side of it (a fold-over).
+  int free1 = 0;
+  while (shared1[free1] >= 0) ++free1;
+  int free2 = 0;
+  while (free2 == shared1[0] || free2 == shared1[1] || free2 == shared1[2]) ++free2;
+  const Eigen::Vector3d& u = t1[(free1 + 1) % 3];
+  const Eigen::Vector3d& w = t1[(free1 + 2) % 3];
+  if (orient3d(u, w, t1[free1], t2[free2]) != 0) return false;
+  const int axis = drop_axis(u, w, t1[free1]);
+  const Eigen::Vector2d u2 = project(u, axis), w2 = project(w, axis);
+  return orient2d(u2, w2, project(t1[free1], axis)) * orient2d(u2, w2, project(t2[free2], axis)) > 0;
+}
+
+}  // namespace nurbsfront::quality_detail
+
+// ---------------------------------------------------------------------------------------
+// Whole-mesh self-intersection count.
+
+namespace nurbsfront {
+namespace {
+
+// Maps every point to the lowest index of a point at exactly the same position, so that
+// unwelded copies of a vertex count as shared corners and not as a touching contact.
+std::vector<std::uint32_t> canonical_ids(const TriangleSoup& soup) {
+  std::vector<std::uint32_t> order(soup.points.size());
+  std::iota(order.begin(), order.end(), 0u);
+  auto less = [&](std::uint32_t a, std::uint32_t b) {
+    const auto& p = soup.points[a];
+    const auto& q = soup.points[b];
+    if (p.x() != q.x()) return p.x() < q.x();
+    if (p.y() != q.y()) return p.y() < q.y();
+    if (p.z() != q.z()) return p.z() < q.z();
+    return a < b;
+  };
+  std::sort(order.begin(), order.end(), less);
+  std::vector<std::uint32_t> id(soup.points.size());
+  for (std::size_t i = 0; i < order.size(); ++i) {
+    id[order[i]] = (i > 0 && soup.points[order[i]] == soup.points[order[i - 1]]) ? id[order[i - 1]] : order[i];
+  }
+  return id;
+}
+
+struct NodePair {
+  std::uint32_t a;
+  std::uint32_t b;  // a == b: pairs inside one subtree
+};
+
+class SelfIntersectionCounter {
+ public:
+  SelfIntersectionCounter(const TriangleSoup& soup, const quality_detail::AabbTree& tree, const std::vector<std::uint32_t>& ids)
+      : soup_(soup), tree_(tree), ids_(ids) {}
+
+  std::size_t run(NodePair task) const {
+    std::size_t count = 0;
+    if (task.a == task.b) {
+      self(task.a, count);
+    } else {
+      pair(task.a, task.b, count);
+    }
+    return count;
+  }
+
+  // Splits the top of the traversal into independent tasks.
+  std::vector<NodePair> split(std::size_t target) const {
+    std::vector<NodePair> tasks{{0, 0}};
+    const auto& nodes = tree_.nodes();
+    for (int round = 0; round < 32 && tasks.size() < target; ++round) {
+      std::vector<NodePair> next;
+      bool changed = false;
+      for (const auto& t : tasks) {
+        const auto& a = nodes[t.a];
+        const auto& b = nodes[t.b];
+        if (t.a == t.b) {
+          if (a.is_leaf()) {
+            next.push_back(t);
+            continue;
+          }
+          next.push_back({a.left, a.left});
+          next.push_back({a.left + 1, a.left + 1});
+          next.push_back({a.left, a.left + 1});
+          changed = true;
+          continue;
+        }
+        if (!a.box.overlaps(b.box)) {
+          changed = true;
+          continue;
+        }
+        if (a.is_leaf() && b.is_leaf()) {
+          next.push_back(t);
+        } else if (b.is_leaf() || (!a.is_leaf() && (a.box.hi - a.box.lo).squaredNorm() >=
+                                                        (b.box.hi - b.box.lo).squaredNorm())) {
+          next.push_back({a.left, t.b});
+          next.push_back({a.left + 1, t.b});
+          changed = true;
+        } else {
+          next.push_back({t.a, b.left});
+          next.push_back({t.a, b.left + 1});
+          changed = true;
+        }
+      }
+      tasks = std::move(next);
+      if (!changed) break;
+    }
+    return tasks;
+  }
+
+ private:
+  void self(std::uint32_t n, std::size_t& count) const {
+    const auto& node = tree_.nodes()[n];
+    if (node.is_leaf()) {
+      for (std::uint32_t i = node.begin; i < node.begin + node.count; ++i) {
+        for (std::uint32_t j = i + 1; j < node.begin + node.count; ++j) test(i, j, count);
+      }
+      return;
+    }
+    self(node.left, count);
+    self(node.left + 1, count);
+    pair(node.left, node.left + 1, count);
+  }
+
+  void pair(std::uint32_t na, std::uint32_t nb, std::size_t& count) const {
+    const auto& a = tree_.nodes()[na];
+    const auto& b = tree_.nodes()[nb];
+    if (!a.box.overlaps(b.box)) return;
+    if (a.is_leaf() && b.is_leaf()) {
+      for (std::uint32_t i = a.begin; i < a.begin + a.count; ++i) {
+        for (std::uint32_t j = b.begin; j < b.begin + b.count; ++j) test(i, j, count);
+      }
+      return;
+    }
+    // Descend the inner node with the larger box (the non-leaf if one is a leaf).
+    const bool split_a = b.is_leaf() || (!a.is_leaf() && (a.box.hi - a.box.lo).squaredNorm() >=
+                                                             (b.box.hi - b.box.lo).squaredNorm());
+    if (split_a) {
+      pair(a.left, nb, count);
+      pair(a.left + 1, nb, count);
+    } else {
+      pair(na, b.left, count);
+      pair(na, b.left + 1, count);
+    }
+  }
+
+  void test(std::uint32_t i, std::uint32_t j, std::size_t& count) const {
+    if (!tree_.face_box(i).overlaps(tree_.face_box(j))) return;
+    const auto& fi = soup_.triangles[tree_.faces()[i]];
+    const auto& fj = soup_.triangles[tree_.faces()[j]];
+    const std::array<std::uint32_t, 3> ids_i{ids_[fi[0]], ids_[fi[1]], ids_[fi[2]]};
+    const std::array<std::uint32_t, 3> ids_j{ids_[fj[0]], ids_[fj[1]], ids_[fj[2]]};
+    const std::array<Eigen::Vector3d, 3> ti{soup_.points[fi[0]], soup_.points[fi[1]], soup_.points[fi[2]]};
+    const std::array<Eigen::Vector3d, 3> tj{soup_.points[fj[0]], soup_.points[fj[1]], soup_.points[fj[2]]};
+    if (quality_detail::triangles_intersect(ids_i, ti, ids_j, tj)) ++count;
+  }
+
+  const TriangleSoup& soup_;
+  const quality_detail::AabbTree& tree_;
+  const std::vector<std::uint32_t>& ids_;
+};
+
+}  // namespace
+
+std::size_t count_self_intersections(const TriangleSoup& soup, unsigned n_threads) {
+  quality_detail::validate_soup(soup, "count_self_intersections");
+  if (n_threads == 0) throw InvalidInput("nurbsfront: count_self_intersections needs at least one thread");
+  const std::vector<std::uint32_t> ids = canonical_ids(soup);
+  // Degenerate faces (repeated corner, or area at the degenerate tolerance) are counted
+  // elsewhere and skipped here: the predicates need a proper plane per triangle.
+  const double diagonal = bounding_box(soup).diagonal();
+  const double area_floor = tolerance::kDegenerateAreaRelative * diagonal * diagonal;
+  std::vector<std::uint32_t> faces;
+  faces.reserve(soup.triangles.size());
+  for (std::size_t f = 0; f < soup.triangles.size(); ++f) {
+    const auto& t = soup.triangles[f];
+    if (ids[t[0]] == ids[t[1]] || ids[t[1]] == ids[t[2]] || ids[t[2]] == ids[t[0]]) continue;
+    const double area =
+        0.5 * (soup.points[t[1]] - soup.points[t[0]]).cross(soup.points[t[2]] - soup.points[t[0]]).norm();
+    if (area <= area_floor) continue;
+    faces.push_back(static_cast<std::uint32_t>(f));
+  }
+  const quality_detail::AabbTree tree(soup, std::move(faces));
+  if (tree.empty()) return 0;
+  const SelfIntersectionCounter counter(soup, tree, ids);
+  if (n_threads == 1) return counter.run({0, 0});
+  // Independent subtree pairs, handed out dynamically; the total does not depend on
+  // which thread counted which pair.
+  const std::vector<NodePair> tasks = counter.split(256 * static_cast<std::size_t>(n_threads));
+  std::atomic<std::size_t> next{0};
+  std::vector<std::size_t> counts(n_threads, 0);
+  auto work = [&](unsigned thread) {
+    for (std::size_t k = next++; k < tasks.size(); k = next++) counts[thread] += counter.run(tasks[k]);
+  };
+  std::vector<std::thread> workers;
+  for (unsigned t = 1; t < n_threads; ++t) workers.emplace_back(work, t);
+  work(0);
+  for (auto& w : workers) w.join();
+  return std::accumulate(counts.begin(), counts.end(), std::size_t{0});
+}
+
+}  // namespace nurbsfront

@@ -1,0 +1,114 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "fixtures/shapes.h"
+#include "nurbsfront/core/error.h"
+#include "nurbsfront/quality/aabb_tree.h"
+#include "nurbsfront/quality/report.h"
+
+namespace nurbsfront {
+namespace {
+
+using V = Eigen::Vector3d;
+
+// Coarser than the default sampling: keeps the suite fast (also under ASan).
+DistanceOptions coarse(double spacing = 0.02) {
+  DistanceOptions options;
+  options.sample_spacing_relative = spacing;
+  return options;
+}
+
+TEST(QualityDistance, ClosestPointOnTriangle) {
+  const V a(0, 0, 0), b(1, 0, 0), c(0, 1, 0);
+  EXPECT_TRUE(quality_detail::closest_point_on_triangle(V(0.2, 0.3, 5), a, b, c).isApprox(V(0.2, 0.3, 0)));
+  EXPECT_TRUE(quality_detail::closest_point_on_triangle(V(-1, -1, 1), a, b, c).isApprox(a));
+  EXPECT_TRUE(quality_detail::closest_point_on_triangle(V(2, -1, 0), a, b, c).isApprox(b));
+  EXPECT_TRUE(quality_detail::closest_point_on_triangle(V(1, 1, 0), a, b, c).isApprox(V(0.5, 0.5, 0)));
+  EXPECT_TRUE(quality_detail::closest_point_on_triangle(V(0.5, -2, 0), a, b, c).isApprox(V(0.5, 0, 0)));
+}
+
+TEST(QualityDistance, TreeQueryMatchesBruteForce) {
+  const TriangleSoup s = test::torus(20, 10);
+  std::vector<std::uint32_t> faces(s.triangles.size());
+  for (std::uint32_t i = 0; i < faces.size(); ++i) faces[i] = i;
+  const quality_detail::AabbTree tree(s, faces);
+  for (int k = 0; k < 200; ++k) {
+    const V p(std::sin(k * 1.3) * 1.5, std::cos(k * 0.7) * 1.5, std::sin(k * 0.31) * 0.6);
+    double best = std::numeric_limits<double>::infinity();
+    for (const auto& t : s.triangles) {
+      const V q = quality_detail::closest_point_on_triangle(p, s.points[t[0]], s.points[t[1]], s.points[t[2]]);
+      best = std::min(best, (q - p).squaredNorm());
+    }
+    EXPECT_DOUBLE_EQ(tree.closest(p, std::numeric_limits<std::uint32_t>::max()).squared_distance, best);
+    EXPECT_DOUBLE_EQ(tree.closest(p, static_cast<std::uint32_t>(k)).squared_distance, best);
+  }
+}
+
+TEST(QualityDistance, MeshToItselfIsZero) {
+  const TriangleSoup s = test::icosphere(3);
+  const DistanceReport d = mesh_distance(s, s, coarse());
+  // Zero up to the rounding of the sample positions inside the triangles.
+  EXPECT_LE(d.hausdorff, 1e-14);
+  EXPECT_LE(d.mean, 1e-15);
+  EXPECT_GT(d.n_mesh_samples, s.points.size());
+  ASSERT_TRUE(d.relative_volume_change.has_value());
+  EXPECT_EQ(*d.relative_volume_change, 0.0);
+}
+
+TEST(QualityDistance, ConcentricSpheres) {
+  const TriangleSoup inner = test::icosphere(4, 1.0);
+  const TriangleSoup outer = test::icosphere(4, 1.1);
+  const DistanceReport d = mesh_distance(outer, inner, coarse(0.01));
+  EXPECT_NEAR(d.hausdorff, 0.1, 0.001);
+  EXPECT_NEAR(d.mesh_to_reference_max, 0.1, 0.001);
+  EXPECT_NEAR(d.reference_to_mesh_max, 0.1, 0.001);
+  EXPECT_LE(d.mean, d.hausdorff);
+  EXPECT_GT(d.mean, 0.098);
+  EXPECT_NEAR(d.reference_diagonal, bounding_box(inner).diagonal(), 1e-15);
+  EXPECT_NEAR(d.hausdorff_relative, d.hausdorff / d.reference_diagonal, 1e-15);
+  // Same vertex directions scaled by 1.1: the volume ratio is exactly 1.1^3.
+  ASSERT_TRUE(d.relative_volume_change.has_value());
+  EXPECT_NEAR(*d.relative_volume_change, 1.1 * 1.1 * 1.1 - 1.0, 1e-12);
+}
+
+TEST(QualityDistance, ScaledCubeVolumeChangeIsExact) {
+  TriangleSoup big = test::cube();
+  for (auto& p : big.points) p *= 2.0;
+  const DistanceReport d = mesh_distance(big, test::cube(), coarse());
+  ASSERT_TRUE(d.relative_volume_change.has_value());
+  EXPECT_EQ(*d.relative_volume_change, 7.0);
+  EXPECT_NEAR(d.hausdorff, std::sqrt(3.0), 1e-12);  // the corner (2, 2, 2) to (1, 1, 1)
+  // Open surfaces: no volume change.
+  const DistanceReport open = mesh_distance(test::grid_patch(4, 4), test::grid_patch(3, 3), coarse());
+  EXPECT_FALSE(open.relative_volume_change.has_value());
+  EXPECT_NEAR(open.hausdorff, 0.0, 1e-15);
+}
+
+TEST(QualityDistance, OffsetPlanesAndThreads) {
+  TriangleSoup lifted = test::grid_patch(7, 5);
+  for (auto& p : lifted.points) p.z() = 0.25;
+  const TriangleSoup base = test::grid_patch(3, 3);
+  DistanceOptions one = coarse(0.01);
+  one.n_threads = 1;
+  const DistanceReport d1 = mesh_distance(lifted, base, one);
+  const DistanceReport d2 = mesh_distance(lifted, base, coarse(0.01));
+  EXPECT_DOUBLE_EQ(d1.hausdorff, 0.25);
+  EXPECT_DOUBLE_EQ(d1.mean, 0.25);
+  EXPECT_EQ(d1.hausdorff, d2.hausdorff);
+  EXPECT_EQ(d1.mean, d2.mean);
+  EXPECT_EQ(d1.n_mesh_samples, d2.n_mesh_samples);
+}
+
+TEST(QualityDistance, ReportWithReference) {
+  ReportOptions options;
+  options.distance = coarse();
+  const MeshReport r = mesh_report(test::icosphere(2), test::icosphere(2), options);
+  ASSERT_TRUE(r.distance.has_value());
+  EXPECT_LE(r.distance->hausdorff, 1e-14);
+  EXPECT_THROW((void)mesh_distance(TriangleSoup{}, test::cube()), InvalidInput);
+}
+
+}  // namespace
+}  // namespace nurbsfront

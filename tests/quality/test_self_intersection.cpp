@@ -1,0 +1,146 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "fixtures/shapes.h"
+#include "nurbsfront/quality/predicates.h"
+#include "nurbsfront/quality/report.h"
+#include "nurbsfront/quality/self_intersection.h"
+
+namespace nurbsfront {
+namespace {
+
+using V = Eigen::Vector3d;
+using V2 = Eigen::Vector2d;
+using Tri = std::array<std::uint32_t, 3>;
+
+TEST(QualityPredicates, Orient3dSigns) {
+  const V a(0, 0, 0), b(1, 0, 0), c(0, 1, 0);
+  EXPECT_EQ(quality_detail::orient3d(a, b, c, V(0, 0, -1)), 1);  // below the ccw plane
+  EXPECT_EQ(quality_detail::orient3d(a, b, c, V(0, 0, 1)), -1);
+  EXPECT_EQ(quality_detail::orient3d(a, b, c, V(0.3, 0.3, 0)), 0);
+}
+
+TEST(QualityPredicates, NearlyDegenerateCasesAreExact) {
+  // Kettner et al.'s classroom example: p = (0.5 + i u, 0.5 + j u), u = 2^-53, against the
+  // line through (12, 12) and (24, 24). The exact sign is sign(p.y - p.x); the naive
+  // floating-point determinant gets many of these wrong.
+  const double u = std::ldexp(1.0, -53);
+  const V2 q(12, 12), r(24, 24);
+  const V q3(12, 12, 0), r3(24, 24, 0), s3(12, 12, 1);  // the plane x = y
+  const int side = quality_detail::orient3d(q3, r3, s3, V(0, 1, 0));
+  ASSERT_NE(side, 0);
+  for (int i = 0; i < 16; ++i) {
+    for (int j = 0; j < 16; ++j) {
+      const V2 p(0.5 + i * u, 0.5 + j * u);
+      const int expected = (j > i) - (j < i);
+      EXPECT_EQ(quality_detail::orient2d(p, q, r), expected) << i << ' ' << j;
+      EXPECT_EQ(quality_detail::orient3d(q3, r3, s3, V(p.x(), p.y(), 0.3)), expected * side) << i << ' ' << j;
+    }
+  }
+  // Large translation: differences are inexact in floating point.
+  const double big = 1e15;
+  EXPECT_EQ(quality_detail::orient3d(V(big, 0, 0), V(big + 1, 0, 0), V(big, 1, 0), V(big + 0.5, 0.25, 1e-300)), -1);
+  EXPECT_EQ(quality_detail::orient3d(V(big, 0, 0), V(big + 1, 0, 0), V(big, 1, 0), V(big + 0.5, 0.25, -1e-300)), 1);
+}
+
+TEST(QualityPredicates, SegmentTriangle) {
+  const V p(0, 0, 0), q(1, 0, 0), r(0, 1, 0);
+  EXPECT_TRUE(quality_detail::segment_meets_triangle(V(0.2, 0.2, -1), V(0.2, 0.2, 1), p, q, r));
+  EXPECT_FALSE(quality_detail::segment_meets_triangle(V(0.8, 0.8, -1), V(0.8, 0.8, 1), p, q, r));
+  EXPECT_TRUE(quality_detail::segment_meets_triangle(V(0.5, 0.5, -1), V(0.5, 0.5, 1), p, q, r));  // through an edge
+  EXPECT_TRUE(quality_detail::segment_meets_triangle(V(0.2, 0.2, 0), V(0.2, 0.2, 1), p, q, r));   // endpoint touches
+  EXPECT_FALSE(quality_detail::segment_meets_triangle(V(0.2, 0.2, 0.1), V(0.2, 0.2, 1), p, q, r));
+  // Coplanar: crossing, inside, outside.
+  EXPECT_TRUE(quality_detail::segment_meets_triangle(V(-1, 0.3, 0), V(2, 0.3, 0), p, q, r));
+  EXPECT_TRUE(quality_detail::segment_meets_triangle(V(0.1, 0.1, 0), V(0.2, 0.1, 0), p, q, r));
+  EXPECT_FALSE(quality_detail::segment_meets_triangle(V(1, 1, 0), V(2, 0.5, 0), p, q, r));
+}
+
+TEST(QualitySelfIntersection, CrossingTriangles) {
+  TriangleSoup s;
+  s.points = {V(0, 0, 0), V(2, 0, 0), V(0, 2, 0), V(0.5, 0.5, -1), V(0.5, 0.5, 1), V(3, 3, 0.2)};
+  s.triangles = {Tri{0, 1, 2}, Tri{3, 4, 5}};
+  EXPECT_EQ(count_self_intersections(s), 1u);
+  EXPECT_EQ(*mesh_report(s).topology.n_self_intersecting_pairs, 1u);
+  // Move the second one away: none.
+  for (std::size_t i = 3; i < 6; ++i) s.points[i].z() += 5.0;
+  EXPECT_EQ(count_self_intersections(s), 0u);
+}
+
+TEST(QualitySelfIntersection, TouchingAtAPointCounts) {
+  // Separate vertices (different positions) but a corner of one lies inside the other.
+  TriangleSoup s;
+  s.points = {V(0, 0, 0), V(2, 0, 0), V(0, 2, 0), V(0.5, 0.5, 0), V(0.5, 0.5, 1), V(1, 0.5, 1)};
+  s.triangles = {Tri{0, 1, 2}, Tri{3, 4, 5}};
+  EXPECT_EQ(count_self_intersections(s), 1u);
+}
+
+TEST(QualitySelfIntersection, FoldOverOfTrianglesSharingAnEdge) {
+  // Both triangles in z = 0 on the same side of their shared edge (0, 1).
+  TriangleSoup s;
+  s.points = {V(0, 0, 0), V(1, 0, 0), V(0, 1, 0), V(0.6, 0.3, 0)};
+  s.triangles = {Tri{0, 1, 2}, Tri{1, 0, 3}};
+  EXPECT_EQ(count_self_intersections(s), 1u);
+  // A proper (unfolded) neighbour does not count; nor does a bent, non-coplanar one.
+  s.points[3] = V(0.6, -0.3, 0);
+  EXPECT_EQ(count_self_intersections(s), 0u);
+  s.points[3] = V(0.6, 0.3, 0.01);
+  EXPECT_EQ(count_self_intersections(s), 0u);
+}
+
+TEST(QualitySelfIntersection, TrianglesSharingAVertex) {
+  TriangleSoup s;
+  s.points = {V(0, 0, 0), V(1, 0, 0), V(0, 1, 0), V(0.5, 0.5, -0.5), V(0.5, 0.5, 0.5)};
+  // Second triangle pierces the first through its edge opposite the shared vertex 0.
+  s.triangles = {Tri{0, 1, 2}, Tri{0, 3, 4}};
+  EXPECT_EQ(count_self_intersections(s), 1u);
+  // Coplanar, overlapping wedge at the shared vertex.
+  s.points[3] = V(1, 0.5, 0);
+  s.points[4] = V(0.5, 1, 0);
+  EXPECT_EQ(count_self_intersections(s), 1u);
+  // Coplanar, only the vertex in common.
+  s.points[3] = V(-1, -0.5, 0);
+  s.points[4] = V(-0.5, -1, 0);
+  EXPECT_EQ(count_self_intersections(s), 0u);
+  // Unwelded copy of the shared vertex: same answer (positions identify corners).
+  s.points.push_back(V(0, 0, 0));
+  s.triangles[1][0] = 5;
+  EXPECT_EQ(count_self_intersections(s), 0u);
+}
+
+TEST(QualitySelfIntersection, ClosedShapesHaveNone) {
+  EXPECT_EQ(count_self_intersections(test::cube()), 0u);
+  EXPECT_EQ(count_self_intersections(test::icosphere(4)), 0u);
+  EXPECT_EQ(count_self_intersections(test::torus(32, 16)), 0u);
+  EXPECT_EQ(count_self_intersections(test::grid_patch(20, 20)), 0u);  // many coplanar neighbours
+}
+
+TEST(QualitySelfIntersection, TwoInterpenetratingSpheres) {
+  // Two spheres whose surfaces cross along a circle: many pairs, the same count with
+  // one or two threads (determinism), none once they are apart.
+  TriangleSoup s = test::icosphere(3);
+  const TriangleSoup other = test::icosphere(3);
+  const auto offset = static_cast<std::uint32_t>(s.points.size());
+  for (const auto& p : other.points) s.points.push_back(p + V(0.93, 0.11, 0.07));
+  for (const auto& t : other.triangles) s.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
+  const std::size_t n1 = count_self_intersections(s, 1);
+  EXPECT_GT(n1, 20u);
+  EXPECT_EQ(count_self_intersections(s, 2), n1);
+  EXPECT_EQ(count_self_intersections(s, 3), n1);
+  for (std::size_t i = offset; i < s.points.size(); ++i) s.points[i].x() += 2.5;
+  EXPECT_EQ(count_self_intersections(s, 2), 0u);
+}
+
+TEST(QualitySelfIntersection, PlantedIntersectionInClosedMesh) {
+  // Push one vertex of an icosphere through the opposite side of the sphere.
+  TriangleSoup s = test::icosphere(2);
+  s.points[0] = -1.5 * s.points[0];
+  const std::size_t n = count_self_intersections(s);
+  EXPECT_GT(n, 0u);
+  EXPECT_TRUE(mesh_report(s).topology.is_closed);  // topology alone does not see it
+}
+
+}  // namespace
+}  // namespace nurbsfront
