@@ -1,0 +1,349 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "nurbsfront/nurbs/mba.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <string>
+
+#include <Eigen/Dense>
+
+#include "nurbsfront/core/error.h"
+#include "nurbsfront/core/tolerances.h"
+
+namespace nurbsfront {
+namespace {
+
+// Points whose xy spread across their main direction is below this fraction of the spread
+// along it are collinear: no height field over a line.
+constexpr double kCollinearRelative = 1e-6;
+
+struct Lattice {
+  int n_x = 0;
+  int n_y = 0;
+  std::vector<double> phi;
+  [[nodiscard]] std::size_t stride() const { return static_cast<std::size_t>(n_x) + 3; }
+};
+
+// Position of a point in lattice units (level 0), clamped to [0, n].
+struct LatticePoint {
+  double u;
+  double v;
+};
+
+struct CellWeights {
+  std::size_t offset;  // index of phi_{i-1, j-1}
+  double bx[4];
+  double by[4];
+};
+
+inline CellWeights cell_weights(const LatticePoint& p, double scale, const Lattice& lattice) {
+  const double u = p.u * scale;
+  const double v = p.v * scale;
+  const int i = std::min(static_cast<int>(u), lattice.n_x - 1);
+  const int j = std::min(static_cast<int>(v), lattice.n_y - 1);
+  CellWeights w{};
+  w.offset = static_cast<std::size_t>(j) * lattice.stride() + static_cast<std::size_t>(i);
+  detail::cubic_weights(u - i, w.bx);
+  detail::cubic_weights(v - j, w.by);
+  return w;
+}
+
+// One level of B-spline approximation (BA) of the residuals r: every point proposes
+// phi_c = w_c r / sum w^2 for its 16 coefficients, each coefficient takes the
+// w^2-weighted mean of its proposals.
+Lattice approximate_level(const std::vector<LatticePoint>& pts, const std::vector<double>& r, int n_x, int n_y,
+                          double scale) {
+  Lattice lattice{n_x, n_y, {}};
+  const std::size_t size = lattice.stride() * (static_cast<std::size_t>(n_y) + 3);
+  // delta (sum of w^2 phi_c) and omega (sum of w^2) side by side: one cache line per update.
+  std::vector<double> acc(2 * size, 0.0);
+  const std::size_t stride = lattice.stride();
+  for (std::size_t c = 0; c < pts.size(); ++c) {
+    const CellWeights w = cell_weights(pts[c], scale, lattice);
+    const double sx = w.bx[0] * w.bx[0] + w.bx[1] * w.bx[1] + w.bx[2] * w.bx[2] + w.bx[3] * w.bx[3];
+    const double sy = w.by[0] * w.by[0] + w.by[1] * w.by[1] + w.by[2] * w.by[2] + w.by[3] * w.by[3];
+    const double factor = r[c] / (sx * sy);
+    for (int l = 0; l < 4; ++l) {
+      double* a = acc.data() + 2 * (w.offset + static_cast<std::size_t>(l) * stride);
+      for (int k = 0; k < 4; ++k) {
+        const double wkl = w.bx[k] * w.by[l];
+        const double w2 = wkl * wkl;
+        a[2 * k] += w2 * wkl * factor;
+        a[2 * k + 1] += w2;
+      }
+    }
+  }
+  lattice.phi.assign(size, 0.0);
+  for (std::size_t k = 0; k < size; ++k) {
+    if (acc[2 * k + 1] > 0.0) lattice.phi[k] = acc[2 * k] / acc[2 * k + 1];
+  }
+  return lattice;
+}
+
+inline double evaluate(const Lattice& lattice, const LatticePoint& p, double scale) {
+  const CellWeights w = cell_weights(p, scale, lattice);
+  const double* c = lattice.phi.data() + w.offset;
+  const std::size_t stride = lattice.stride();
+  double z = 0.0;
+  for (int l = 0; l < 4; ++l, c += stride) {
+    z += w.by[l] * (w.bx[0] * c[0] + w.bx[1] * c[1] + w.bx[2] * c[2] + w.bx[3] * c[3]);
+  }
+  return z;
+}
+
+struct Bilinear {
+  Eigen::Vector2d centre = Eigen::Vector2d::Zero();
+  Eigen::Vector2d half = Eigen::Vector2d::Ones();
+  Eigen::Vector4d c = Eigen::Vector4d::Zero();
+  [[nodiscard]] double operator()(double x, double y) const {
+    const double a = (x - centre.x()) / half.x();
+    const double b = (y - centre.y()) / half.y();
+    return c[0] + c[1] * a + c[2] * b + c[3] * a * b;
+  }
+};
+
+// Least-squares bilinear function in coordinates normalised to the rectangle ([-1, 1]^2),
+// which keeps the 4x4 normal equations well conditioned. Rank-deficient samples (e.g. all
+// points on two lines x = const) get the minimum-norm solution.
+Bilinear fit_bilinear(const std::vector<Eigen::Vector3d>& xyz, const Rectangle& rect) {
+  Bilinear g;
+  g.centre = 0.5 * (rect.min + rect.max);
+  g.half = 0.5 * (rect.max - rect.min);
+  Eigen::Matrix4d ata = Eigen::Matrix4d::Zero();
+  Eigen::Vector4d atz = Eigen::Vector4d::Zero();
+  for (const auto& p : xyz) {
+    const double a = (p.x() - g.centre.x()) / g.half.x();
+    const double b = (p.y() - g.centre.y()) / g.half.y();
+    const Eigen::Vector4d row(1.0, a, b, a * b);
+    ata.noalias() += row * row.transpose();
+    atz += row * p.z();
+  }
+  g.c = ata.completeOrthogonalDecomposition().solve(atz);
+  return g;
+}
+
+void check_points(const std::vector<Eigen::Vector3d>& points) {
+  if (points.empty()) throw InvalidInput("fit_height_field: no points");
+  for (std::size_t k = 0; k < points.size(); ++k) {
+    if (!points[k].allFinite()) {
+      throw InvalidInput("fit_height_field: point " + std::to_string(k) + " has a non-finite coordinate");
+    }
+  }
+  Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+  for (const auto& p : points) mean += p.head<2>();
+  mean /= static_cast<double>(points.size());
+  Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();
+  for (const auto& p : points) {
+    const Eigen::Vector2d d = p.head<2>() - mean;
+    cov.noalias() += d * d.transpose();
+  }
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(cov);
+  const double big = std::max(eig.eigenvalues()[1], 0.0);
+  const double small = std::max(eig.eigenvalues()[0], 0.0);
+  if (!(big > 0.0)) throw InvalidInput("fit_height_field: all points coincide in the xy-plane (zero-size rectangle)");
+  if (std::sqrt(small) <= kCollinearRelative * std::sqrt(big)) {
+    throw InvalidInput("fit_height_field: all points are collinear in the xy-plane; no height field over a line");
+  }
+}
+
+}  // namespace
+
+void FitOptions::validate() const {
+  if (!(tolerance >= 0.0) || !std::isfinite(tolerance)) throw InvalidInput("FitOptions: tolerance must be >= 0 and finite");
+  if (!(relative_tolerance >= 0.0) || !std::isfinite(relative_tolerance)) {
+    throw InvalidInput("FitOptions: relative_tolerance must be >= 0 and finite");
+  }
+  if (max_levels < 1 || max_levels > 20) throw InvalidInput("FitOptions: max_levels must be in [1, 20]");
+  if (!(min_spacing >= 0.0) || !std::isfinite(min_spacing)) {
+    throw InvalidInput("FitOptions: min_spacing must be >= 0 and finite");
+  }
+  if (base_cells < 1 || base_cells > 4096) throw InvalidInput("FitOptions: base_cells must be in [1, 4096]");
+  if (max_control_points < 16) throw InvalidInput("FitOptions: max_control_points must be at least 16");
+  if (final_passes < 0 || final_passes > 1000) throw InvalidInput("FitOptions: final_passes must be in [0, 1000]");
+  if (domain) domain->validate();
+}
+
+const char* to_string(FitStop stop) {
+  switch (stop) {
+    case FitStop::kTolerance: return "tolerance reached";
+    case FitStop::kLevelLimit: return "level limit";
+    case FitStop::kSpacingLimit: return "minimum spacing";
+    case FitStop::kSizeLimit: return "lattice size limit";
+  }
+  return "unknown";
+}
+
+FitResult fit_height_field(const std::vector<Eigen::Vector3d>& points, const FitOptions& options) {
+  options.validate();
+  check_points(points);
+
+  Rectangle rect;
+  if (options.domain) {
+    rect = *options.domain;
+  } else {
+    rect.min = points.front().head<2>();
+    rect.max = rect.min;
+    for (const auto& p : points) {
+      rect.min = rect.min.cwiseMin(p.head<2>());
+      rect.max = rect.max.cwiseMax(p.head<2>());
+    }
+  }
+  if (!(rect.width() > tolerance::kZeroLengthRelative * rect.diagonal()) ||
+      !(rect.height() > tolerance::kZeroLengthRelative * rect.diagonal())) {
+    throw InvalidInput("fit_height_field: zero-size rectangle (width " + std::to_string(rect.width()) + ", height " +
+                       std::to_string(rect.height()) + ")");
+  }
+
+  FitResult result;
+  result.n_points = points.size();
+  result.tolerance = options.tolerance > 0.0 ? options.tolerance : options.relative_tolerance * rect.diagonal();
+
+  // Level-0 lattice: base_cells along the shorter side.
+  const double shorter = std::min(rect.width(), rect.height());
+  const int n_x0 = std::max(1, static_cast<int>(std::lround(options.base_cells * rect.width() / shorter)));
+  const int n_y0 = std::max(1, static_cast<int>(std::lround(options.base_cells * rect.height() / shorter)));
+  const auto lattice_size = [](double nx, double ny) { return (nx + 3.0) * (ny + 3.0); };
+  if (lattice_size(n_x0, n_y0) > static_cast<double>(options.max_control_points)) {
+    throw InvalidInput("fit_height_field: the rectangle's aspect ratio needs a level-0 lattice above max_control_points");
+  }
+
+  // Points clamped into the rectangle, in level-0 lattice units.
+  std::vector<Eigen::Vector3d> clamped(points.size());
+  std::vector<LatticePoint> pts(points.size());
+  for (std::size_t c = 0; c < points.size(); ++c) {
+    const Eigen::Vector2d xy = points[c].head<2>().cwiseMax(rect.min).cwiseMin(rect.max);
+    if (xy != points[c].head<2>()) ++result.n_outside;
+    clamped[c] = {xy.x(), xy.y(), points[c].z()};
+    pts[c] = {std::clamp((xy.x() - rect.min.x()) / rect.width() * n_x0, 0.0, static_cast<double>(n_x0)),
+              std::clamp((xy.y() - rect.min.y()) / rect.height() * n_y0, 0.0, static_cast<double>(n_y0))};
+  }
+
+  // Visit the points in cell order (counting sort on a lattice of up to 128 x 128 level-0
+  // cells): the scattered updates of every level then stay in cache. Only the internal
+  // order changes; the fitted function does not depend on it beyond round-off.
+  {
+    const int sort_level = std::min(options.max_levels - 1, 7);
+    const std::size_t bx = static_cast<std::size_t>(n_x0) << sort_level;
+    const std::size_t by = static_cast<std::size_t>(n_y0) << sort_level;
+    if (pts.size() > 1 && bx * by <= options.max_control_points) {
+      const double sx = static_cast<double>(std::size_t{1} << sort_level);
+      std::vector<std::uint32_t> key(pts.size());
+      std::vector<std::size_t> start(bx * by + 1, 0);
+      for (std::size_t c = 0; c < pts.size(); ++c) {
+        const std::size_t i = std::min(static_cast<std::size_t>(pts[c].u * sx), bx - 1);
+        const std::size_t j = std::min(static_cast<std::size_t>(pts[c].v * sx), by - 1);
+        key[c] = static_cast<std::uint32_t>(j * bx + i);
+        ++start[key[c] + 1];
+      }
+      for (std::size_t k = 1; k < start.size(); ++k) start[k] += start[k - 1];
+      std::vector<LatticePoint> sorted_pts(pts.size());
+      std::vector<Eigen::Vector3d> sorted_clamped(pts.size());
+      for (std::size_t c = 0; c < pts.size(); ++c) {
+        const std::size_t at = start[key[c]]++;
+        sorted_pts[at] = pts[c];
+        sorted_clamped[at] = clamped[c];
+      }
+      pts.swap(sorted_pts);
+      clamped.swap(sorted_clamped);
+    }
+  }
+
+  BicubicHeightField field(rect, n_x0, n_y0);
+  std::vector<double> r(points.size());
+  if (options.linear_precision) {
+    const Bilinear g = fit_bilinear(clamped, rect);
+    // A bilinear function is reproduced exactly by coefficients at the Greville points.
+    for (int j = -1; j <= n_y0 + 1; ++j) {
+      for (int i = -1; i <= n_x0 + 1; ++i) {
+        field.set_coefficient(i, j, g(rect.min.x() + i * field.spacing_x(), rect.min.y() + j * field.spacing_y()));
+      }
+    }
+    for (std::size_t c = 0; c < points.size(); ++c) r[c] = clamped[c].z() - g(clamped[c].x(), clamped[c].y());
+  } else {
+    for (std::size_t c = 0; c < points.size(); ++c) r[c] = clamped[c].z();
+  }
+  double max_residual = 0.0;
+  for (double x : r) max_residual = std::max(max_residual, std::abs(x));
+  result.base_max_residual = max_residual;
+
+  report_progress(options.progress, "fit", 0.0);
+  for (int level = 0;; ++level) {
+    const double scale = std::ldexp(1.0, level);
+    const double n_xd = n_x0 * scale;  // doubles: no int overflow before the size check
+    const double n_yd = n_y0 * scale;
+    if (level > 0) {
+      if (max_residual <= result.tolerance) {
+        result.stop = FitStop::kTolerance;
+        break;
+      }
+      if (level >= options.max_levels) {
+        result.stop = FitStop::kLevelLimit;
+        break;
+      }
+      if (std::min(rect.width() / n_xd, rect.height() / n_yd) < options.min_spacing) {
+        result.stop = FitStop::kSpacingLimit;
+        break;
+      }
+      if (lattice_size(n_xd, n_yd) > static_cast<double>(options.max_control_points)) {
+        result.stop = FitStop::kSizeLimit;
+        break;
+      }
+    }
+    const int n_x = static_cast<int>(n_xd);
+    const int n_y = static_cast<int>(n_yd);
+    const Lattice lattice = approximate_level(pts, r, n_x, n_y, scale);
+    max_residual = 0.0;
+    double sum_sq = 0.0;
+    for (std::size_t c = 0; c < pts.size(); ++c) {
+      r[c] -= evaluate(lattice, pts[c], scale);
+      max_residual = std::max(max_residual, std::abs(r[c]));
+      sum_sq += r[c] * r[c];
+    }
+    FitLevel report;
+    report.level = level;
+    report.n_cells_x = n_x;
+    report.n_cells_y = n_y;
+    report.spacing_x = rect.width() / n_x;
+    report.spacing_y = rect.height() / n_y;
+    report.max_residual = max_residual;
+    report.rms_residual = std::sqrt(sum_sq / static_cast<double>(pts.size()));
+    result.levels.push_back(report);
+
+    if (level > 0) field = field.refined();
+    auto& coefficients = field.mutable_coefficients();
+    NURBSFRONT_ASSERT(coefficients.size() == lattice.phi.size());
+    for (std::size_t k = 0; k < coefficients.size(); ++k) coefficients[k] += lattice.phi[k];
+    report_progress(options.progress, "fit", static_cast<double>(level + 1) / options.max_levels);
+    if (level + 1 >= options.max_levels && max_residual > result.tolerance) {
+      result.stop = FitStop::kLevelLimit;
+      break;
+    }
+    if (level + 1 >= options.max_levels) {
+      result.stop = FitStop::kTolerance;
+      break;
+    }
+  }
+  if (result.stop != FitStop::kTolerance) {
+    // Further passes on the finest lattice: same BA, same resolution, residual shrinking.
+    const int n_x = field.n_cells_x();
+    const int n_y = field.n_cells_y();
+    const double scale = static_cast<double>(n_x / n_x0);
+    for (int pass = 0; pass < options.final_passes && max_residual > result.tolerance; ++pass) {
+      const Lattice lattice = approximate_level(pts, r, n_x, n_y, scale);
+      max_residual = 0.0;
+      for (std::size_t c = 0; c < pts.size(); ++c) {
+        r[c] -= evaluate(lattice, pts[c], scale);
+        max_residual = std::max(max_residual, std::abs(r[c]));
+      }
+      auto& coefficients = field.mutable_coefficients();
+      for (std::size_t k = 0; k < coefficients.size(); ++k) coefficients[k] += lattice.phi[k];
+      result.final_pass_max_residual.push_back(max_residual);
+    }
+  }
+  report_progress(options.progress, "fit", 1.0);
+  result.field = std::move(field);
+  return result;
+}
+
+}  // namespace nurbsfront

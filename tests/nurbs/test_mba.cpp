@@ -1,0 +1,343 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <functional>
+#include <random>
+
+#include "nurbsfront/core/error.h"
+#include "nurbsfront/nurbs/height_field.h"
+#include "nurbsfront/nurbs/mba.h"
+
+namespace nurbsfront {
+namespace {
+
+using Function = std::function<double(double, double)>;
+
+std::vector<Eigen::Vector3d> random_samples(const Function& f, std::size_t n, const Rectangle& r, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> ux(r.min.x(), r.max.x());
+  std::uniform_real_distribution<double> uy(r.min.y(), r.max.y());
+  std::vector<Eigen::Vector3d> pts;
+  for (std::size_t k = 0; k < n; ++k) {
+    const double x = ux(rng);
+    const double y = uy(rng);
+    pts.emplace_back(x, y, f(x, y));
+  }
+  return pts;
+}
+
+double max_error_at(const BicubicHeightField& field, const std::vector<Eigen::Vector3d>& pts) {
+  double e = 0.0;
+  for (const auto& p : pts) e = std::max(e, std::abs(field.value(p.x(), p.y()) - p.z()));
+  return e;
+}
+
+Rectangle rect(double x0, double y0, double x1, double y1) {
+  Rectangle r;
+  r.min = {x0, y0};
+  r.max = {x1, y1};
+  return r;
+}
+
+TEST(HeightField, EvaluationMatchesTheDefinitionAndDerivativesMatchFiniteDifferences) {
+  BicubicHeightField f(rect(-1.0, 2.0, 3.0, 4.0), 5, 3);
+  std::mt19937 rng(1);
+  std::uniform_real_distribution<double> c(-1.0, 1.0);
+  for (auto& x : f.mutable_coefficients()) x = c(rng);
+  // Direct sum at a hand-chosen point: x = -1 + 4/5 * (2 + 0.25), cell 2, s = 0.25.
+  const double x = -1.0 + 0.8 * 2.25;
+  const double y = 2.0 + (2.0 / 3.0) * 1.5;  // cell 1, t = 0.5
+  double bx[4];
+  double by[4];
+  detail::cubic_weights(0.25, bx);
+  detail::cubic_weights(0.5, by);
+  double expected = 0.0;
+  for (int l = 0; l < 4; ++l)
+    for (int k = 0; k < 4; ++k) expected += bx[k] * by[l] * f.coefficient(2 + k - 1, 1 + l - 1);
+  EXPECT_NEAR(f.value(x, y), expected, 1e-14);
+  const double h = 1e-6;
+  for (double px : {-0.9, 0.3, 1.7, 2.95}) {
+    for (double py : {2.1, 2.9, 3.5}) {
+      const HeightJet j = f.jet(px, py);
+      EXPECT_NEAR(j.z, f.value(px, py), 1e-14);
+      EXPECT_NEAR(j.zx, (f.value(px + h, py) - f.value(px - h, py)) / (2 * h), 1e-6);
+      EXPECT_NEAR(j.zy, (f.value(px, py + h) - f.value(px, py - h)) / (2 * h), 1e-6);
+      EXPECT_NEAR(j.zxx, (f.jet(px + h, py).zx - f.jet(px - h, py).zx) / (2 * h), 1e-5);
+      EXPECT_NEAR(j.zxy, (f.jet(px, py + h).zx - f.jet(px, py - h).zx) / (2 * h), 1e-5);
+      EXPECT_NEAR(j.zyy, (f.jet(px, py + h).zy - f.jet(px, py - h).zy) / (2 * h), 1e-5);
+      const Eigen::Matrix2d g = f.metric(px, py);
+      EXPECT_NEAR(g(0, 0), 1.0 + j.zx * j.zx, 1e-14);
+      EXPECT_NEAR(g(0, 1), j.zx * j.zy, 1e-14);
+      EXPECT_NEAR(f.normal(px, py).dot(Eigen::Vector3d(1, 0, j.zx)), 0.0, 1e-14);
+    }
+  }
+}
+
+TEST(HeightField, RefinementIsExact) {
+  BicubicHeightField f(rect(0.0, 0.0, 2.0, 1.0), 3, 2);
+  std::mt19937 rng(2);
+  std::uniform_real_distribution<double> c(-1.0, 1.0);
+  for (auto& x : f.mutable_coefficients()) x = c(rng);
+  const BicubicHeightField g = f.refined().refined();
+  EXPECT_EQ(g.n_cells_x(), 12);
+  EXPECT_EQ(g.n_cells_y(), 8);
+  for (int a = 0; a <= 40; ++a) {
+    for (int b = 0; b <= 40; ++b) {
+      const double x = 2.0 * a / 40.0;
+      const double y = 1.0 * b / 40.0;
+      EXPECT_NEAR(g.value(x, y), f.value(x, y), 1e-14);
+      EXPECT_NEAR(g.jet(x, y).zxy, f.jet(x, y).zxy, 1e-11);
+    }
+  }
+}
+
+TEST(HeightField, NurbsConversionAgreesToRoundOff) {
+  BicubicHeightField f(rect(-3.0, 1.0, 2.0, 2.5), 7, 4);
+  std::mt19937 rng(4);
+  std::uniform_real_distribution<double> c(-2.0, 2.0);
+  for (auto& x : f.mutable_coefficients()) x = c(rng);
+  const NurbsSurface s = f.to_nurbs();
+  ASSERT_NO_THROW(s.validate());
+  EXPECT_EQ(s.u.degree, 3);
+  EXPECT_EQ(s.n_u, 10u);
+  EXPECT_EQ(s.n_v, 7u);
+  EXPECT_EQ(s.u.domain_min(), 0.0);
+  EXPECT_EQ(s.u.domain_max(), 1.0);
+  for (double w : s.weights) EXPECT_EQ(w, 1.0);
+  double max_err = 0.0;
+  for (int a = 0; a <= 60; ++a) {
+    for (int b = 0; b <= 60; ++b) {
+      const double u = a / 60.0;
+      const double v = b / 60.0;
+      const double x = -3.0 + 5.0 * u;
+      const double y = 1.0 + 1.5 * v;
+      const Eigen::Vector3d p = s.evaluate(u, v);
+      max_err = std::max(max_err, (p - f.lift(x, y)).norm());
+      // Chain rule: dS/du = width * (1, 0, f_x).
+      const SurfaceDerivatives d = s.derivatives(u, v);
+      const HeightJet j = f.jet(x, y);
+      EXPECT_NEAR(d.su.x(), 5.0, 1e-11);
+      EXPECT_NEAR(d.su.z(), 5.0 * j.zx, 1e-10 * (1 + std::abs(j.zx)));
+      EXPECT_NEAR(d.svv.z(), 1.5 * 1.5 * j.zyy, 1e-9 * (1 + std::abs(j.zyy)));
+    }
+  }
+  EXPECT_LE(max_err, 1e-12);
+}
+
+TEST(Mba, PlaneAndBilinearDataAreReproducedToRoundOff) {
+  const Rectangle r = rect(-2.0, 10.0, 5.0, 13.0);
+  const std::vector<Function> functions = {
+      [](double x, double y) { return 3.0 - 0.25 * x + 1.75 * y; },
+      [](double x, double y) { return 100.0 + 0.5 * x - 2.0 * y + 0.3 * x * y; }};
+  for (const auto& f : functions) {
+    const auto pts = random_samples(f, 500, r, 5);
+    FitOptions o;
+    o.max_levels = 6;
+    const FitResult fit = fit_height_field(pts, o);
+    double scale = 0.0;
+    for (const auto& p : pts) scale = std::max(scale, std::abs(p.z()));
+    EXPECT_LE(max_error_at(fit.field, pts), 1e-12 * scale);
+    EXPECT_LE(fit.max_residual(), 1e-12 * scale);
+    // Everywhere, not only at the samples.
+    for (int a = 0; a <= 20; ++a) {
+      for (int b = 0; b <= 20; ++b) {
+        const double x = -2.0 + 7.0 * a / 20.0;
+        const double y = 10.0 + 3.0 * b / 20.0;
+        EXPECT_NEAR(fit.field.value(x, y), f(x, y), 1e-12 * scale);
+      }
+    }
+  }
+}
+
+TEST(Mba, WithoutLinearPrecisionTheLevelsStillDriveAPlaneDown) {
+  const Rectangle r = rect(0.0, 0.0, 1.0, 1.0);
+  const auto pts = random_samples([](double x, double y) { return 0.2 + x - 0.5 * y; }, 400, r, 6);
+  FitOptions o;
+  o.linear_precision = false;
+  o.tolerance = 1e-6;
+  o.max_levels = 12;
+  const FitResult fit = fit_height_field(pts, o);
+  EXPECT_LT(fit.levels.back().max_residual, fit.levels.front().max_residual);
+  EXPECT_LE(max_error_at(fit.field, pts), 1e-6 * (1 + 1e-9));
+}
+
+struct Analytic {
+  const char* name;
+  Function f;
+  Rectangle domain;
+};
+
+std::vector<Analytic> analytic_patches() {
+  const double radius = 1.5;
+  return {
+      {"paraboloid", [](double x, double y) { return 0.5 * (x * x + y * y); }, rect(-1.0, -1.0, 1.0, 1.0)},
+      {"sine bump", [](double x, double y) { return 0.2 * std::sin(3.0 * x) * std::cos(2.0 * y); }, rect(0.0, 0.0, 2.0, 1.5)},
+      {"sphere cap", [radius](double x, double y) { return std::sqrt(radius * radius - x * x - y * y); },
+       rect(-0.8, -0.8, 0.8, 0.8)},
+  };
+}
+
+TEST(Mba, AnalyticSurfacesConvergeAsLevelsAreAdded) {
+  for (const auto& a : analytic_patches()) {
+    const auto pts = random_samples(a.f, 3000, a.domain, 8);
+    FitOptions o;
+    o.relative_tolerance = 1e-4;
+    o.max_levels = 12;
+    const FitResult fit = fit_height_field(pts, o);
+    const double size = std::max(a.domain.width(), a.domain.height());
+    ASSERT_GE(fit.levels.size(), 4u) << a.name;
+    // The residual falls: never more than a few percent up from one level to the next, and
+    // overall by orders of magnitude.
+    for (std::size_t k = 1; k < fit.levels.size(); ++k) {
+      EXPECT_LE(fit.levels[k].max_residual, 1.05 * fit.levels[k - 1].max_residual) << a.name << " level " << k;
+      EXPECT_LT(fit.levels[k].rms_residual, fit.levels[k - 1].rms_residual) << a.name << " level " << k;
+      EXPECT_EQ(fit.levels[k].n_cells_x, 2 * fit.levels[k - 1].n_cells_x);
+    }
+    EXPECT_LT(fit.levels.back().max_residual, 1e-3 * size) << a.name;
+    EXPECT_LT(fit.levels.back().max_residual, 0.01 * fit.levels.front().max_residual) << a.name;
+    // The report is honest: the merged field has the reported residual at the points.
+    EXPECT_NEAR(max_error_at(fit.field, pts), fit.max_residual(), 1e-12 * size) << a.name;
+    EXPECT_EQ(fit.stop, FitStop::kTolerance) << a.name;
+    EXPECT_LE(fit.max_residual(), fit.tolerance);
+  }
+}
+
+TEST(Mba, CappedLevelsApproximateTheFunctionBetweenTheSamples) {
+  // With the spacing capped at a few sample spacings the field does not interpolate: it is a
+  // smooth approximation, close to the function between the samples as well. (Plain MBA
+  // smooths at the finest level; the final passes reduce that.)
+  for (const auto& a : analytic_patches()) {
+    const auto pts = random_samples(a.f, 4000, a.domain, 9);
+    const auto probes = random_samples(a.f, 1000, a.domain, 10);
+    const auto interior_error = [&](const BicubicHeightField& field) {
+      double e = 0.0;
+      for (const auto& p : probes) {
+        const Eigen::Vector2d d = (p.head<2>() - a.domain.min).cwiseQuotient(a.domain.max - a.domain.min);
+        if (d.minCoeff() < 0.1 || d.maxCoeff() > 0.9) continue;  // border cells are poorly constrained
+        e = std::max(e, std::abs(field.value(p.x(), p.y()) - p.z()));
+      }
+      return e;
+    };
+    FitOptions o;
+    o.tolerance = 1e-12;
+    o.min_spacing = 0.05 * std::min(a.domain.width(), a.domain.height());
+    const FitResult fit = fit_height_field(pts, o);
+    EXPECT_EQ(fit.stop, FitStop::kSpacingLimit) << a.name;
+    EXPECT_GE(std::min(fit.field.spacing_x(), fit.field.spacing_y()), o.min_spacing);
+    ASSERT_EQ(fit.final_pass_max_residual.size(), static_cast<std::size_t>(o.final_passes));
+    EXPECT_LT(fit.max_residual(), fit.levels.back().max_residual) << a.name;
+    FitOptions plain = o;
+    plain.final_passes = 0;
+    const FitResult plain_fit = fit_height_field(pts, plain);
+    EXPECT_LT(interior_error(fit.field), interior_error(plain_fit.field)) << a.name;
+    EXPECT_LT(interior_error(fit.field), 2e-3 * a.domain.diagonal()) << a.name;
+  }
+}
+
+TEST(Mba, FittedSphereCapHasCurvatureOneOverR) {
+  const double radius = 2.0;
+  std::vector<Eigen::Vector3d> pts;
+  for (int a = 0; a <= 100; ++a) {
+    for (int b = 0; b <= 100; ++b) {
+      const double x = -1.0 + 0.02 * a;
+      const double y = -1.0 + 0.02 * b;
+      pts.emplace_back(x, y, std::sqrt(radius * radius - x * x - y * y));
+    }
+  }
+  FitOptions o;
+  o.tolerance = 1e-9;
+  o.min_spacing = 0.06;  // 3 sample spacings: smooth second derivatives
+  const FitResult fit = fit_height_field(pts, o);
+  for (double x : {-0.4, 0.0, 0.3}) {
+    for (double y : {-0.4, 0.0, 0.4}) {
+      const SurfaceCurvature c = curvature_from_derivatives(fit.field.derivatives(x, y));
+      // Upward normal, sphere bending away from it: both curvatures -1/R.
+      EXPECT_NEAR(c.k1, -1.0 / radius, 0.03 / radius) << x << " " << y;
+      EXPECT_NEAR(c.k2, -1.0 / radius, 0.03 / radius) << x << " " << y;
+      EXPECT_NEAR(c.gaussian, 1.0 / (radius * radius), 0.06 / (radius * radius));
+    }
+  }
+  // The same through the exact NURBS form.
+  const NurbsSurface s = fit.field.to_nurbs();
+  const SurfaceCurvature c = s.curvature(0.5, 0.5);
+  EXPECT_NEAR(std::abs(c.mean), 1.0 / radius, 0.03 / radius);
+}
+
+TEST(Mba, EdgePointsDuplicatesAndClustersAreFine) {
+  const Function f = [](double x, double y) { return std::sin(x) + y * y; };
+  std::vector<Eigen::Vector3d> pts;
+  // Corners and edges exactly.
+  for (double x : {0.0, 1.0})
+    for (double y : {0.0, 0.5, 1.0}) pts.emplace_back(x, y, f(x, y));
+  // A tight cluster and exact duplicates (one with a different z).
+  for (int k = 0; k < 200; ++k) pts.emplace_back(0.3 + 1e-9 * k, 0.7, f(0.3, 0.7));
+  pts.emplace_back(0.3, 0.7, f(0.3, 0.7) + 0.01);
+  for (int k = 0; k < 50; ++k) pts.emplace_back(0.6, 0.2, f(0.6, 0.2));
+  FitOptions o;
+  o.max_levels = 8;
+  const FitResult fit = fit_height_field(pts, o);
+  EXPECT_EQ(fit.n_outside, 0u);
+  EXPECT_TRUE(std::isfinite(fit.max_residual()));
+  for (double c : fit.field.coefficients()) ASSERT_TRUE(std::isfinite(c));
+  // The duplicated point with two values: the fit takes (nearly) their mean.
+  EXPECT_NEAR(fit.field.value(0.3, 0.7), f(0.3, 0.7), 0.01);
+  EXPECT_NEAR(fit.field.value(0.6, 0.2), f(0.6, 0.2), 1e-6);
+  EXPECT_NEAR(fit.field.value(1.0, 1.0), f(1.0, 1.0), 1e-6);
+  EXPECT_EQ(fit.stop, FitStop::kLevelLimit);  // conflicting duplicates cannot reach the tolerance
+}
+
+TEST(Mba, PointsOutsideAGivenRectangleAreClampedAndCounted) {
+  const Function f = [](double x, double y) { return x + 2.0 * y; };
+  auto pts = random_samples(f, 300, rect(-0.5, -0.5, 1.5, 1.5), 12);
+  FitOptions o;
+  o.domain = rect(0.0, 0.0, 1.0, 1.0);
+  const FitResult fit = fit_height_field(pts, o);
+  std::size_t outside = 0;
+  for (const auto& p : pts) outside += (p.x() < 0 || p.x() > 1 || p.y() < 0 || p.y() > 1) ? 1 : 0;
+  EXPECT_EQ(fit.n_outside, outside);
+  EXPECT_GT(outside, 0u);
+  for (double c : fit.field.coefficients()) ASSERT_TRUE(std::isfinite(c));
+}
+
+TEST(Mba, BadInputGivesClearErrors) {
+  const auto expect_invalid = [](const std::vector<Eigen::Vector3d>& pts, const FitOptions& o, const std::string& word) {
+    try {
+      (void)fit_height_field(pts, o);
+      ADD_FAILURE() << "no exception, expected one mentioning '" << word << "'";
+    } catch (const InvalidInput& e) {
+      EXPECT_NE(std::string(e.what()).find(word), std::string::npos) << e.what();
+    }
+  };
+  expect_invalid({}, {}, "no points");
+  expect_invalid({{0, 0, 0}, {1, 2, 1}, {2, 4, 0}, {-1, -2, 3}}, {}, "collinear");
+  expect_invalid({{0, 0, 0}, {1, 0, 1}, {2, 0, 0}}, {}, "collinear");
+  expect_invalid({{0, 0, 0}, {1, NAN, 1}, {0, 1, 0}}, {}, "non-finite");
+  expect_invalid({{0, 0, 0}, {1, 0, std::numeric_limits<double>::infinity()}, {0, 1, 0}}, {}, "non-finite");
+  expect_invalid({{1, 1, 0}, {1, 1, 1}, {1, 1, 2}}, {}, "zero-size");
+  const std::vector<Eigen::Vector3d> good = {{0, 0, 0}, {1, 0, 1}, {0, 1, 0}, {1, 1, 1}};
+  FitOptions zero;
+  zero.domain = rect(0.0, 0.0, 0.0, 1.0);
+  expect_invalid(good, zero, "zero-size");
+  FitOptions bad;
+  bad.max_levels = 0;
+  expect_invalid(good, bad, "max_levels");
+  bad = {};
+  bad.tolerance = -1.0;
+  expect_invalid(good, bad, "tolerance");
+  bad = {};
+  bad.min_spacing = NAN;
+  expect_invalid(good, bad, "min_spacing");
+}
+
+TEST(Mba, ProgressCanCancel) {
+  const auto pts = random_samples([](double x, double y) { return x * y; }, 100, rect(0, 0, 1, 1), 13);
+  FitOptions o;
+  int calls = 0;
+  o.progress = [&calls](std::string_view, double) { return ++calls < 3; };
+  EXPECT_THROW((void)fit_height_field(pts, o), Cancelled);
+  EXPECT_EQ(calls, 3);
+}
+
+}  // namespace
+}  // namespace nurbsfront
