@@ -1,0 +1,797 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "nurbsfront/front2d/front.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <fstream>
+#include <functional>
+#include <queue>
+#include <unordered_map>
+#include <unordered_set>
+
+#include <Eigen/Cholesky>
+
+#include "nurbsfront/core/error.h"
+#include "nurbsfront/core/stopwatch.h"
+#include "nurbsfront/core/tolerances.h"
+#include "nurbsfront/front2d/domain.h"
+#include "nurbsfront/front2d/predicates.h"
+
+namespace nurbsfront {
+namespace {
+
+using Vec = Eigen::Vector2d;
+using front2d::orient2d;
+
+// Named constants of the front (all relative to the local target side d of the ideal triangle).
+constexpr double kMinSideFactor = 0.55;    // ideal side >= this times the base edge length
+constexpr double kMaxSideFactor = 2.0;     // ideal side <= this times the base edge length
+constexpr double kSnapRadius = 0.6;        // existing nodes this close to the ideal point are preferred
+constexpr double kWideRadius = 1.2;        // existing nodes considered at all
+constexpr double kNodeClearance = 0.5;     // a new point keeps this distance from front nodes
+constexpr double kEdgeClearance = 0.35;    // ... and this distance from front edges
+constexpr double kSmoothAcceptAlpha = 0.6; // smoothing may lower the worst alpha down to this
+constexpr double kAutoSizeDivisor = 40.0;  // automatic uniform size: bbox diagonal / this
+constexpr int kSizingGridCells = 128;      // background grid of callback sizing fields, per side
+constexpr int kSegmentSamples = 16;        // sizing samples per segment when splitting it
+constexpr std::size_t kMaxGridCells = std::size_t{1} << 22;
+constexpr std::size_t kProgressEvery = 1u << 14;
+constexpr double kIncircleRelative = 1e-12; // swap only if clearly non-Delaunay (no ping-pong)
+const double kSqrt3 = std::sqrt(3.0);
+
+std::uint64_t dkey(int a, int b) { return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(a)) << 32) | static_cast<std::uint32_t>(b); }
+std::uint64_t ukey(int a, int b) { return a < b ? dkey(a, b) : dkey(b, a); }
+
+double alpha(const Vec& a, const Vec& b, const Vec& c) {
+  const double area2 = front2d::orient2d_naive(a, b, c);
+  const double s = (b - a).squaredNorm() + (c - b).squaredNorm() + (a - c).squaredNorm();
+  return s > 0 ? 2.0 * kSqrt3 * area2 / s : 0.0;
+}
+
+// Evaluates a SizingField, gradation-limited.
+class Sizing {
+ public:
+  Sizing(const SizingField& f, const std::vector<Vec>& input, const Vec& lo, const Vec& hi) : f_(f), pts_(input) {
+    slope_ = f.gradation - 1.0;
+    const double diag = (hi - lo).norm();
+    if (f.kind == SizingField::Kind::Uniform) {
+      h_ = f.uniform_size > 0 ? f.uniform_size : diag / kAutoSizeDivisor;
+    } else if (f.kind == SizingField::Kind::Callback) {
+      lo_ = lo;
+      n_ = kSizingGridCells;
+      cell_ = std::max((hi - lo).maxCoeff() / n_, diag * tolerance::kZeroLengthRelative);
+      grid_.resize(static_cast<std::size_t>((n_ + 1) * (n_ + 1)));
+      for (int j = 0; j <= n_; ++j)
+        for (int i = 0; i <= n_; ++i) {
+          const double v = f.callback(lo + cell_ * Vec(i, j));
+          if (!std::isfinite(v) || v <= 0) throw InvalidInput("SizingField: the callback returned a size <= 0 or not finite");
+          grid_[idx(i, j)] = v;
+        }
+      // Gradation limit by repeated sweeps (a discrete distance transform).
+      const double step = slope_ * cell_;
+      const double diag_step = slope_ * cell_ * std::sqrt(2.0);
+      for (int pass = 0; pass < 4; ++pass) {
+        for (int j = 0; j <= n_; ++j)
+          for (int i = 0; i <= n_; ++i) relax(i, j, step, diag_step, pass % 2 == 0 ? -1 : 1);
+        for (int j = n_; j >= 0; --j)
+          for (int i = n_; i >= 0; --i) relax(i, j, step, diag_step, pass % 2 == 0 ? 1 : -1);
+      }
+    }
+  }
+
+  [[nodiscard]] double operator()(const Vec& x) const {
+    switch (f_.kind) {
+      case SizingField::Kind::Uniform:
+        return h_;
+      case SizingField::Kind::PerVertex: {
+        double wsum = 0;
+        double hsum = 0;
+        double cone = std::numeric_limits<double>::infinity();
+        for (std::size_t i = 0; i < pts_.size(); ++i) {
+          const double d2 = (x - pts_[i]).squaredNorm();
+          const double hi = f_.vertex_sizes[i];
+          if (d2 == 0) return hi;
+          wsum += 1.0 / d2;
+          hsum += hi / d2;
+          cone = std::min(cone, hi + slope_ * std::sqrt(d2));
+        }
+        return std::min(hsum / wsum, cone);
+      }
+      case SizingField::Kind::Callback: {
+        const double u = std::clamp((x.x() - lo_.x()) / cell_, 0.0, static_cast<double>(n_));
+        const double v = std::clamp((x.y() - lo_.y()) / cell_, 0.0, static_cast<double>(n_));
+        const int i = std::min(static_cast<int>(u), n_ - 1);
+        const int j = std::min(static_cast<int>(v), n_ - 1);
+        const double s = u - i;
+        const double t = v - j;
+        const double g = (1 - s) * (1 - t) * grid_[idx(i, j)] + s * (1 - t) * grid_[idx(i + 1, j)] +
+                         (1 - s) * t * grid_[idx(i, j + 1)] + s * t * grid_[idx(i + 1, j + 1)];
+        const double c = f_.callback(x);
+        return std::isfinite(c) && c > 0 ? std::min(c, g) : g;
+      }
+    }
+    return h_;
+  }
+
+ private:
+  [[nodiscard]] std::size_t idx(int i, int j) const { return static_cast<std::size_t>(j * (n_ + 1) + i); }
+  void relax(int i, int j, double step, double diag_step, int dir) {
+    double& v = grid_[idx(i, j)];
+    const int jj = j + dir;
+    for (int di = -1; di <= 1; ++di) {
+      const int ii = i + di;
+      if (ii >= 0 && ii <= n_) {
+        v = std::min(v, grid_[idx(ii, j)] + step);
+        if (jj >= 0 && jj <= n_) v = std::min(v, grid_[idx(ii, jj)] + (di == 0 ? step : diag_step));
+      }
+    }
+  }
+  const SizingField& f_;
+  const std::vector<Vec>& pts_;
+  double h_ = 0;
+  double slope_ = 0.5;
+  Vec lo_ = Vec::Zero();
+  int n_ = 0;
+  double cell_ = 1;
+  std::vector<double> grid_;
+};
+
+// Length of d in the metric at x.
+double metric_length(const Metric* m, const Vec& x, const Vec& d) {
+  if (!m) return d.norm();
+  return std::sqrt(std::max(0.0, d.dot(m->tensor(x) * d)));
+}
+
+// Uniform grid of front edges (isolated points are edges with a == b).
+class EdgeGrid {
+ public:
+  EdgeGrid(const Vec& lo, const Vec& hi, double cell) : lo_(lo) {
+    const Vec ext = hi - lo;
+    cell_ = std::max(cell, ext.maxCoeff() * 1e-6);
+    while (true) {
+      nx_ = static_cast<int>(ext.x() / cell_) + 1;
+      ny_ = static_cast<int>(ext.y() / cell_) + 1;
+      if (static_cast<std::size_t>(nx_) * static_cast<std::size_t>(ny_) <= kMaxGridCells) break;
+      cell_ *= 1.5;
+    }
+    inv_ = 1.0 / cell_;
+    cells_.resize(static_cast<std::size_t>(nx_) * static_cast<std::size_t>(ny_));
+  }
+  [[nodiscard]] int cx(double x) const { return std::clamp(static_cast<int>((x - lo_.x()) * inv_), 0, nx_ - 1); }
+  [[nodiscard]] int cy(double y) const { return std::clamp(static_cast<int>((y - lo_.y()) * inv_), 0, ny_ - 1); }
+  std::vector<int>& cell(int i, int j) { return cells_[static_cast<std::size_t>(j) * static_cast<std::size_t>(nx_) + static_cast<std::size_t>(i)]; }
+  void insert(int e, const Vec& p, const Vec& q) {
+    for (int j = cy(std::min(p.y(), q.y())); j <= cy(std::max(p.y(), q.y())); ++j)
+      for (int i = cx(std::min(p.x(), q.x())); i <= cx(std::max(p.x(), q.x())); ++i) cell(i, j).push_back(e);
+  }
+  void erase(int e, const Vec& p, const Vec& q) {
+    for (int j = cy(std::min(p.y(), q.y())); j <= cy(std::max(p.y(), q.y())); ++j)
+      for (int i = cx(std::min(p.x(), q.x())); i <= cx(std::max(p.x(), q.x())); ++i) {
+        auto& c = cell(i, j);
+        auto it = std::find(c.begin(), c.end(), e);
+        if (it != c.end()) {
+          *it = c.back();
+          c.pop_back();
+        }
+      }
+  }
+  //! Calls f(edge) for every edge in the cells meeting the box (an edge may come twice).
+  template <class F>
+  void visit(const Vec& lo, const Vec& hi, F&& f) {
+    const int i0 = cx(lo.x()), i1 = cx(hi.x()), j0 = cy(lo.y()), j1 = cy(hi.y());
+    for (int j = j0; j <= j1; ++j)
+      for (int i = i0; i <= i1; ++i)
+        for (int e : cell(i, j)) f(e);
+  }
+  [[nodiscard]] bool covers_all(const Vec& lo, const Vec& hi) const {
+    return cx(lo.x()) == 0 && cy(lo.y()) == 0 && cx(hi.x()) == nx_ - 1 && cy(hi.y()) == ny_ - 1;
+  }
+
+ private:
+  Vec lo_;
+  double cell_ = 1, inv_ = 1;
+  int nx_ = 1, ny_ = 1;
+  std::vector<std::vector<int>> cells_;
+};
+
+struct FrontEdge {
+  int a = -1, b = -1;
+  bool alive = false;
+  int next_out = -1;  // next front edge leaving a (per-vertex singly linked list)
+};
+
+class AdvancingFront {
+ public:
+  AdvancingFront(std::vector<Vec>& pts, const Sizing& size, const Metric* metric, EdgeGrid grid)
+      : P_(pts), size_(size), metric_(metric), grid_(std::move(grid)) {}
+
+  //! Boundary edges never cancel: both sides of an interior segment are on the front.
+  void add_boundary_edge(int a, int b) {
+    const int e = new_edge(a, b);
+    heap_.emplace((pt(a) - pt(b)).squaredNorm(), e);
+  }
+  void add_isolated_point(int p) {
+    const int e = new_edge(p, p);
+    iso_edge_[p] = e;
+  }
+
+  //! Runs the front; returns the number of edges left open.
+  std::size_t run(std::size_t max_new_points, std::size_t expected_triangles, const ProgressCallback& progress,
+                  FrontReport& report) {
+    std::size_t open = 0;
+    while (!heap_.empty()) {
+      const int e = heap_.top().second;
+      heap_.pop();
+      if (!E_[static_cast<std::size_t>(e)].alive) continue;
+      const bool allow_new = report.n_new_points < max_new_points;
+      if (!advance(e, allow_new, report)) ++open;
+      if (tris_.size() % kProgressEvery == 0 && progress)
+        report_progress(progress, "front2d: front",
+                        std::min(1.0, static_cast<double>(tris_.size()) / static_cast<double>(std::max<std::size_t>(1, expected_triangles))));
+    }
+    return open;
+  }
+
+  std::vector<std::array<int, 3>>& triangles() { return tris_; }
+
+ private:
+  int new_edge(int a, int b) {
+    const int e = static_cast<int>(E_.size());
+    E_.push_back({a, b, true, -1});
+    stamp_e_.push_back(0);
+    if (a != b) {
+      if (out_head_.size() < P_.size()) out_head_.resize(P_.size() + P_.size() / 2 + 16, -1);
+      E_.back().next_out = out_head_[static_cast<std::size_t>(a)];
+      out_head_[static_cast<std::size_t>(a)] = e;
+    }
+    grid_.insert(e, P_[static_cast<std::size_t>(a)], P_[static_cast<std::size_t>(b)]);
+    return e;
+  }
+  void kill(int e) {
+    auto& f = E_[static_cast<std::size_t>(e)];
+    f.alive = false;
+    grid_.erase(e, P_[static_cast<std::size_t>(f.a)], P_[static_cast<std::size_t>(f.b)]);
+    if (f.a != f.b) {
+      int* link = &out_head_[static_cast<std::size_t>(f.a)];
+      while (*link != e) link = &E_[static_cast<std::size_t>(*link)].next_out;
+      *link = f.next_out;
+    }
+  }
+  [[nodiscard]] int find_edge(int a, int b) const {
+    if (static_cast<std::size_t>(a) >= out_head_.size()) return -1;
+    for (int e = out_head_[static_cast<std::size_t>(a)]; e >= 0; e = E_[static_cast<std::size_t>(e)].next_out)
+      if (E_[static_cast<std::size_t>(e)].b == b) return e;
+    return -1;
+  }
+  void add_edge(int a, int b) {
+    if (const int r = find_edge(b, a); r >= 0) {
+      kill(r);
+      return;
+    }
+    const int e = new_edge(a, b);
+    heap_.emplace((P_[static_cast<std::size_t>(a)] - P_[static_cast<std::size_t>(b)]).squaredNorm(), e);
+  }
+  [[nodiscard]] const Vec& pt(int i) const { return P_[static_cast<std::size_t>(i)]; }
+  void next_stamp() {
+    if (++stamp_ == 0) {  // wrapped around: clear the marks
+      std::fill(stamp_e_.begin(), stamp_e_.end(), 0u);
+      std::fill(stamp_v_.begin(), stamp_v_.end(), 0u);
+      stamp_ = 1;
+    }
+  }
+
+  // Exact validity of triangle (a, b, p); p == -1 means the new point q. With clearance, a
+  // new point must also keep distances cn from nodes and ce from edges.
+  bool valid(int a, int b, int p, const Vec& q, double cn, double ce) {
+    const Vec& A = pt(a);
+    const Vec& B = pt(b);
+    if (orient2d(A, B, q) <= 0) return false;
+    Vec lo = A.cwiseMin(B).cwiseMin(q);
+    Vec hi = A.cwiseMax(B).cwiseMax(q);
+    const bool is_new = p < 0;
+    if (is_new) {
+      lo.array() -= std::max(cn, ce);
+      hi.array() += std::max(cn, ce);
+    }
+    next_stamp();
+    auto inside = [&](const Vec& v) { return orient2d(A, B, v) >= 0 && orient2d(B, q, v) >= 0 && orient2d(q, A, v) >= 0; };
+    auto conflict = [&](int u, const Vec& U, int w, const Vec& W, int s, int t) {
+      // New edge (u, w) against front edge (s, t); the pair {u, w} == {s, t} was skipped.
+      int shared = -1, x = -1, y = -1;
+      if (s == u) { shared = u; x = w; y = t; }
+      else if (s == w) { shared = w; x = u; y = t; }
+      else if (t == u) { shared = u; x = w; y = s; }
+      else if (t == w) { shared = w; x = u; y = s; }
+      if (shared >= 0) {
+        const Vec& C = shared == u ? U : W;
+        const Vec& X = x == u ? U : W;
+        const Vec& Y = pt(y);
+        return orient2d(C, X, Y) == 0 && (X - C).dot(Y - C) > 0;
+      }
+      return front2d::segments_intersect(U, W, pt(s), pt(t));
+    };
+    bool ok = true;
+    grid_.visit(lo, hi, [&](int e) {
+      if (!ok || stamp_e_[static_cast<std::size_t>(e)] == stamp_) return;
+      stamp_e_[static_cast<std::size_t>(e)] = stamp_;
+      const FrontEdge& f = E_[static_cast<std::size_t>(e)];
+      const int s = f.a, t = f.b;
+      if (s == a && t == b) return;
+      if (s == t) {
+        if (s == p || s == a || s == b) return;
+        if (inside(pt(s)) || (is_new && (pt(s) - q).squaredNorm() < cn * cn)) ok = false;
+        return;
+      }
+      for (int v : {s, t}) {
+        if (v == a || v == b || v == p) continue;
+        if (inside(pt(v)) || (is_new && (pt(v) - q).squaredNorm() < cn * cn)) {
+          ok = false;
+          return;
+        }
+      }
+      const bool same_ap = (s == a && t == p) || (s == p && t == a);
+      const bool same_pb = (s == p && t == b) || (s == b && t == p);
+      if (!same_ap && conflict(a, A, p, q, s, t)) { ok = false; return; }
+      if (!same_pb && conflict(p, q, b, B, s, t)) { ok = false; return; }
+      if (is_new && s != a && s != b && t != a && t != b) {
+        const Vec& S = pt(s);
+        const Vec d = pt(t) - S;
+        const double l2 = d.squaredNorm();
+        const double u = l2 > 0 ? std::clamp((q - S).dot(d) / l2, 0.0, 1.0) : 0.0;
+        if ((S + u * d - q).squaredNorm() < ce * ce) ok = false;
+      }
+    });
+    return ok;
+  }
+
+  void accept(int e, int p) {
+    const int a = E_[static_cast<std::size_t>(e)].a;
+    const int b = E_[static_cast<std::size_t>(e)].b;
+    tris_.push_back({a, b, p});
+    kill(e);
+    if (auto it = iso_edge_.find(p); it != iso_edge_.end()) {
+      kill(it->second);
+      iso_edge_.erase(it);
+    }
+    add_edge(a, p);
+    add_edge(p, b);
+  }
+
+  void gather(const Vec& lo, const Vec& hi, int a, int b, std::vector<int>& out) {
+    out.clear();
+    next_stamp();
+    grid_.visit(lo, hi, [&](int e) {
+      const FrontEdge& f = E_[static_cast<std::size_t>(e)];
+      for (int v : {f.a, f.b}) {
+        if (v == a || v == b) continue;
+        if (static_cast<std::size_t>(v) >= stamp_v_.size()) stamp_v_.resize(P_.size() + 1024, 0);
+        if (stamp_v_[static_cast<std::size_t>(v)] == stamp_) continue;
+        stamp_v_[static_cast<std::size_t>(v)] = stamp_;
+        out.push_back(v);
+      }
+    });
+  }
+
+  bool advance(int e, bool allow_new, FrontReport& report) {
+    const int a = E_[static_cast<std::size_t>(e)].a;
+    const int b = E_[static_cast<std::size_t>(e)].b;
+    const Vec& A = pt(a);
+    const Vec& B = pt(b);
+    const Vec mid = 0.5 * (A + B);
+    const Vec ab = B - A;
+    // Ideal point: apex of the isosceles triangle of side d over ab, in the metric.
+    const double h = size_(mid);
+    Vec offset;
+    if (metric_) {
+      const Eigen::Matrix2d M = metric_->tensor(mid);
+      const Eigen::Matrix2d R = M.llt().matrixU();
+      const Vec u = R * ab;
+      const double L = u.norm();
+      const double d = std::clamp(h, kMinSideFactor * L, kMaxSideFactor * L);
+      const double height = std::sqrt(std::max(0.0, d * d - 0.25 * L * L));
+      offset = R.triangularView<Eigen::Upper>().solve(Vec(-u.y(), u.x()) / L * height);
+    } else {
+      const double L = ab.norm();
+      const double d = std::clamp(h, kMinSideFactor * L, kMaxSideFactor * L);
+      const double height = std::sqrt(std::max(0.0, d * d - 0.25 * L * L));
+      offset = Vec(-ab.y(), ab.x()) / L * height;
+    }
+    const Vec ideal = mid + offset;
+    const double side = 0.5 * ((ideal - A).norm() + (ideal - B).norm());
+    const double wide = kWideRadius * side;
+    gather(ideal - Vec::Constant(wide), ideal + Vec::Constant(wide), a, b, cand_);
+    near_.clear();
+    for (int v : cand_) {
+      const double dist = (pt(v) - ideal).norm();
+      if (dist < wide && orient2d(A, B, pt(v)) > 0) near_.emplace_back(dist, v);
+    }
+    std::sort(near_.begin(), near_.end());
+    for (const auto& [dist, v] : near_) {
+      if (dist >= kSnapRadius * side) break;
+      if (valid(a, b, v, pt(v), 0, 0)) {
+        accept(e, v);
+        return true;
+      }
+    }
+    if (allow_new && valid(a, b, -1, ideal, kNodeClearance * side, kEdgeClearance * side)) {
+      P_.push_back(ideal);
+      ++report.n_new_points;
+      accept(e, static_cast<int>(P_.size() - 1));
+      return true;
+    }
+    for (auto& [key, v] : near_) key = -alpha(A, B, pt(v));
+    std::sort(near_.begin(), near_.end());
+    for (const auto& [key, v] : near_) {
+      if (valid(a, b, v, pt(v), 0, 0)) {
+        accept(e, v);
+        return true;
+      }
+    }
+    // Repair: the constrained-Delaunay-like choice among every visible node, searched in a
+    // growing box. Such a node exists whenever the front bounds a valid polygonal domain.
+    ++report.n_repairs;
+    double r = 2.0 * ab.norm();
+    while (true) {
+      const Vec lo = mid - Vec::Constant(r);
+      const Vec hi = mid + Vec::Constant(r);
+      gather(lo, hi, a, b, cand_);
+      int best = -1;
+      for (int v : cand_) {
+        if (orient2d(A, B, pt(v)) <= 0) continue;
+        if (best >= 0 && front2d::incircle(A, B, pt(best), pt(v)) <= 0) continue;
+        if (valid(a, b, v, pt(v), 0, 0)) best = v;
+      }
+      if (best >= 0) {
+        accept(e, best);
+        return true;
+      }
+      if (grid_.covers_all(lo, hi)) break;
+      r *= 2.0;
+    }
+    // Unreachable for a valid front; leave the edge open rather than loop.
+    E_[static_cast<std::size_t>(e)].alive = false;
+    return false;
+  }
+
+  std::vector<Vec>& P_;
+  const Sizing& size_;
+  const Metric* metric_;
+  EdgeGrid grid_;
+  std::vector<FrontEdge> E_;
+  std::vector<std::uint32_t> stamp_e_;
+  std::vector<std::uint32_t> stamp_v_;
+  std::uint32_t stamp_ = 0;
+  std::vector<int> out_head_;
+  std::unordered_map<int, int> iso_edge_;
+  std::priority_queue<std::pair<double, int>, std::vector<std::pair<double, int>>, std::greater<>> heap_;
+  std::vector<std::array<int, 3>> tris_;
+  std::vector<int> cand_;
+  std::vector<std::pair<double, int>> near_;
+};
+
+// Triangles with adjacency, for swaps and smoothing.
+class Optimiser {
+ public:
+  Optimiser(std::vector<Vec>& pts, std::vector<std::array<int, 3>>& tris, const std::unordered_set<std::uint64_t>& constraints)
+      : P_(pts), T_(tris) {
+    N_.assign(3 * T_.size(), -1);
+    C_.assign(3 * T_.size(), false);
+    // Slots grouped by their first vertex (CSR); the twin of a->b is the slot b->a.
+    std::vector<int> start(P_.size() + 1, 0);
+    for (const auto& t : T_)
+      for (int x : t) ++start[static_cast<std::size_t>(x) + 1];
+    for (std::size_t i = 0; i < P_.size(); ++i) start[i + 1] += start[i];
+    std::vector<int> slots(static_cast<std::size_t>(start.back()));
+    std::vector<int> fill(start.begin(), start.end() - 1);
+    for (std::size_t s = 0; s < 3 * T_.size(); ++s) slots[static_cast<std::size_t>(fill[static_cast<std::size_t>(v(static_cast<int>(s)))]++)] = static_cast<int>(s);
+    for (std::size_t s = 0; s < 3 * T_.size(); ++s) {
+      const int si = static_cast<int>(s);
+      const int a = v(si), b = v(nxt(si));
+      for (int k = start[static_cast<std::size_t>(b)]; k < start[static_cast<std::size_t>(b) + 1]; ++k) {
+        const int o = slots[static_cast<std::size_t>(k)];
+        if (v(nxt(o)) == a) {
+          N_[s] = o;
+          break;
+        }
+      }
+      if (N_[s] < 0) C_[s] = true;  // boundary edges
+      else if (b < a) continue;
+      else C_[s] = C_[static_cast<std::size_t>(N_[s])] = constraints.count(ukey(a, b)) > 0;
+    }
+  }
+
+  [[nodiscard]] int v(int slot) const { return T_[static_cast<std::size_t>(slot / 3)][static_cast<std::size_t>(slot % 3)]; }
+  [[nodiscard]] static int nxt(int slot) { return slot - slot % 3 + (slot % 3 + 1) % 3; }
+  [[nodiscard]] static int prv(int slot) { return slot - slot % 3 + (slot % 3 + 2) % 3; }
+
+  std::size_t delaunay_swaps() {
+    std::vector<int> stack;
+    for (std::size_t s = 0; s < N_.size(); ++s)
+      if (N_[s] > static_cast<int>(s) && !C_[s]) stack.push_back(static_cast<int>(s));
+    std::size_t n = 0;
+    const std::size_t limit = 20 * T_.size() + 100;
+    while (!stack.empty() && n < limit) {
+      const int s = stack.back();
+      stack.pop_back();
+      const int o = N_[static_cast<std::size_t>(s)];
+      if (o < 0 || C_[static_cast<std::size_t>(s)]) continue;
+      const int a = v(s), b = v(nxt(s)), c = v(prv(s)), d = v(prv(o));
+      const Vec &A = P_[static_cast<std::size_t>(a)], &B = P_[static_cast<std::size_t>(b)],
+                &Cc = P_[static_cast<std::size_t>(c)], &D = P_[static_cast<std::size_t>(d)];
+      const double scale = std::max({(A - B).squaredNorm(), (Cc - D).squaredNorm()});
+      if (front2d::incircle(A, B, Cc, D) <= kIncircleRelative * scale * scale) continue;
+      if (orient2d(A, D, Cc) <= 0 || orient2d(D, B, Cc) <= 0) continue;
+      flip(s);
+      ++n;
+      const int t = s / 3, u = o / 3;
+      for (int i = 0; i < 3; ++i) {
+        stack.push_back(3 * t + i);
+        stack.push_back(3 * u + i);
+      }
+    }
+    return n;
+  }
+
+  void smooth(int passes, int first_free) {
+    // Vertex -> triangle incidence (CSR).
+    std::vector<int> start(P_.size() + 1, 0);
+    for (const auto& t : T_)
+      for (int x : t) ++start[static_cast<std::size_t>(x) + 1];
+    for (std::size_t i = 0; i < P_.size(); ++i) start[i + 1] += start[i];
+    std::vector<int> inc(static_cast<std::size_t>(start.back()));
+    std::vector<int> fill(start.begin(), start.end() - 1);
+    for (std::size_t t = 0; t < T_.size(); ++t)
+      for (int x : T_[t]) inc[static_cast<std::size_t>(fill[static_cast<std::size_t>(x)]++)] = static_cast<int>(t);
+    for (int pass = 0; pass < passes; ++pass) {
+      for (std::size_t vtx = static_cast<std::size_t>(first_free); vtx < P_.size(); ++vtx) {
+        const int b0 = start[vtx], b1 = start[vtx + 1];
+        if (b0 == b1) continue;
+        Vec sum = Vec::Zero();
+        double worst = 2.0;
+        for (int k = b0; k < b1; ++k) {
+          const auto& t = T_[static_cast<std::size_t>(inc[static_cast<std::size_t>(k)])];
+          for (int x : t)
+            if (static_cast<std::size_t>(x) != vtx) sum += P_[static_cast<std::size_t>(x)];
+          worst = std::min(worst, alpha(P_[static_cast<std::size_t>(t[0])], P_[static_cast<std::size_t>(t[1])], P_[static_cast<std::size_t>(t[2])]));
+        }
+        const Vec old = P_[vtx];
+        P_[vtx] = sum / (2.0 * (b1 - b0));
+        bool ok = true;
+        double worst_new = 2.0;
+        for (int k = b0; k < b1 && ok; ++k) {
+          const auto& t = T_[static_cast<std::size_t>(inc[static_cast<std::size_t>(k)])];
+          const Vec &X = P_[static_cast<std::size_t>(t[0])], &Y = P_[static_cast<std::size_t>(t[1])], &Z = P_[static_cast<std::size_t>(t[2])];
+          ok = orient2d(X, Y, Z) > 0;
+          worst_new = std::min(worst_new, alpha(X, Y, Z));
+        }
+        if (!ok || worst_new < std::min(worst, kSmoothAcceptAlpha)) P_[vtx] = old;
+      }
+    }
+  }
+
+  // Region marker per triangle by flood fill from the boundary sides.
+  std::vector<int> regions(const std::unordered_map<std::uint64_t, int>& side_marker) const {
+    std::vector<int> r(T_.size(), 0);
+    std::vector<bool> done(T_.size(), false);
+    std::vector<int> stack;
+    for (std::size_t s = 0; s < N_.size(); ++s) {
+      if (!C_[s]) continue;
+      const int t = static_cast<int>(s / 3);
+      if (done[static_cast<std::size_t>(t)]) continue;
+      auto it = side_marker.find(dkey(v(static_cast<int>(s)), v(nxt(static_cast<int>(s)))));
+      if (it == side_marker.end()) continue;
+      done[static_cast<std::size_t>(t)] = true;
+      stack.push_back(t);
+      while (!stack.empty()) {
+        const int u = stack.back();
+        stack.pop_back();
+        r[static_cast<std::size_t>(u)] = it->second;
+        for (int i = 0; i < 3; ++i) {
+          const int sl = 3 * u + i;
+          const int o = N_[static_cast<std::size_t>(sl)];
+          if (o < 0 || C_[static_cast<std::size_t>(sl)] || done[static_cast<std::size_t>(o / 3)]) continue;
+          done[static_cast<std::size_t>(o / 3)] = true;
+          stack.push_back(o / 3);
+        }
+      }
+    }
+    return r;
+  }
+
+ private:
+  void set_nb(int s, int o) {
+    N_[static_cast<std::size_t>(s)] = o;
+    if (o >= 0) N_[static_cast<std::size_t>(o)] = s;
+  }
+  // Swaps the diagonal of slot s (edge a->b of t = (a, b, c), twin in u = (b, a, d)).
+  void flip(int s) {
+    const int o = N_[static_cast<std::size_t>(s)];
+    const int t = s / 3, u = o / 3;
+    const int a = v(s), b = v(nxt(s)), c = v(prv(s)), d = v(prv(o));
+    const int n_bc = N_[static_cast<std::size_t>(nxt(s))], n_ca = N_[static_cast<std::size_t>(prv(s))];
+    const int n_ad = N_[static_cast<std::size_t>(nxt(o))], n_db = N_[static_cast<std::size_t>(prv(o))];
+    const bool c_bc = C_[static_cast<std::size_t>(nxt(s))], c_ca = C_[static_cast<std::size_t>(prv(s))];
+    const bool c_ad = C_[static_cast<std::size_t>(nxt(o))], c_db = C_[static_cast<std::size_t>(prv(o))];
+    T_[static_cast<std::size_t>(t)] = {c, a, d};
+    T_[static_cast<std::size_t>(u)] = {d, b, c};
+    const int t0 = 3 * t, u0 = 3 * u;
+    set_nb(t0 + 0, n_ca); C_[static_cast<std::size_t>(t0)] = c_ca;
+    set_nb(t0 + 1, n_ad); C_[static_cast<std::size_t>(t0 + 1)] = c_ad;
+    set_nb(u0 + 0, n_db); C_[static_cast<std::size_t>(u0)] = c_db;
+    set_nb(u0 + 1, n_bc); C_[static_cast<std::size_t>(u0 + 1)] = c_bc;
+    set_nb(t0 + 2, u0 + 2);
+    C_[static_cast<std::size_t>(t0 + 2)] = false;
+    C_[static_cast<std::size_t>(u0 + 2)] = false;
+  }
+
+  std::vector<Vec>& P_;
+  std::vector<std::array<int, 3>>& T_;
+  std::vector<int> N_;
+  std::vector<bool> C_;
+};
+
+}  // namespace
+
+void FrontOptions::validate() const {
+  sizing.validate();
+  if (!(work_budget_factor >= 1.0) || !std::isfinite(work_budget_factor))
+    throw InvalidInput("FrontOptions: work_budget_factor must be >= 1");
+  if (smoothing_passes < 0) throw InvalidInput("FrontOptions: smoothing_passes must be >= 0");
+}
+
+double triangle_alpha_2d(const Vec& a, const Vec& b, const Vec& c) { return alpha(a, b, c); }
+
+Mesh2d mesh_pslg(const Pslg& pslg, const FrontOptions& options) {
+  options.validate();
+  if (options.sizing.kind == SizingField::Kind::PerVertex && options.sizing.vertex_sizes.size() != pslg.points.size())
+    throw InvalidInput("FrontOptions: per-vertex sizing needs one size per PSLG point (" +
+                       std::to_string(options.sizing.vertex_sizes.size()) + " for " + std::to_string(pslg.points.size()) + ")");
+  const detail::Domain dom = detail::build_domain(pslg, options.enclose_convex_hull || pslg.segments.empty());
+  Stopwatch clock;
+  Mesh2d mesh;
+  auto& P = mesh.points;
+  P = pslg.points;
+  Vec lo = P[0], hi = P[0];
+  for (const auto& p : P) {
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
+  }
+  const Sizing size(options.sizing, pslg.points, lo, hi);
+  const Metric* metric = options.metric.get();
+
+  // Split segments.
+  std::vector<std::vector<int>> chains(dom.segments.size());
+  for (std::size_t k = 0; k < dom.segments.size(); ++k) {
+    const int a = dom.segments[k][0], b = dom.segments[k][1];
+    auto& ch = chains[k];
+    ch.push_back(a);
+    if (options.split_segments) {
+      const Vec A = P[static_cast<std::size_t>(a)], B = P[static_cast<std::size_t>(b)];
+      std::array<double, kSegmentSamples + 1> cum{};
+      for (int i = 0; i < kSegmentSamples; ++i) {
+        const Vec x = A + (B - A) * ((i + 0.5) / kSegmentSamples);
+        cum[static_cast<std::size_t>(i + 1)] = cum[static_cast<std::size_t>(i)] + metric_length(metric, x, (B - A) / kSegmentSamples) / size(x);
+      }
+      const double total = cum.back();
+      const int n = std::max(1, static_cast<int>(std::lround(total)));
+      int i = 0;
+      for (int j = 1; j < n; ++j) {
+        const double target = total * j / n;
+        while (i < kSegmentSamples - 1 && cum[static_cast<std::size_t>(i + 1)] < target) ++i;
+        const double span = cum[static_cast<std::size_t>(i + 1)] - cum[static_cast<std::size_t>(i)];
+        const double f = (i + (span > 0 ? (target - cum[static_cast<std::size_t>(i)]) / span : 0.0)) / kSegmentSamples;
+        ch.push_back(static_cast<int>(P.size()));
+        P.push_back(A + f * (B - A));
+      }
+    }
+    ch.push_back(b);
+  }
+  const int first_free = static_cast<int>(P.size());
+
+  // Initial front, constraint edges and region markers of each side.
+  std::unordered_set<std::uint64_t> constraints;
+  std::unordered_map<std::uint64_t, int> side_marker;
+  std::vector<std::array<int, 2>> front0;
+  double area2 = 0;
+  for (std::size_t k = 0; k < dom.segments.size(); ++k) {
+    const auto& ch = chains[k];
+    for (std::size_t i = 0; i + 1 < ch.size(); ++i) {
+      const int u = ch[i], w = ch[i + 1];
+      constraints.insert(ukey(u, w));
+      const Vec& U = P[static_cast<std::size_t>(u)];
+      const Vec& W = P[static_cast<std::size_t>(w)];
+      const Vec rel = 0.5 * (U + W) - lo;
+      if (dom.side_in[k][0]) {
+        front0.push_back({u, w});
+        side_marker[dkey(u, w)] = dom.side_marker[k][0];
+        area2 += rel.x() * (W.y() - U.y()) - rel.y() * (W.x() - U.x());
+      }
+      if (dom.side_in[k][1]) {
+        front0.push_back({w, u});
+        side_marker[dkey(w, u)] = dom.side_marker[k][1];
+        area2 -= rel.x() * (W.y() - U.y()) - rel.y() * (W.x() - U.x());
+      }
+    }
+  }
+  mesh.report.domain_area = 0.5 * area2;
+  mesh.report.n_dropped_points = dom.n_dropped_points;
+  {
+    std::unordered_set<int> nodes;
+    for (const auto& e : front0) nodes.insert(e[0]);
+    mesh.report.n_boundary_nodes = nodes.size();
+  }
+  // Expected size of the output, for the grid, the work budget and progress.
+  double expected = 0;
+  {
+    constexpr int kSamples = 32;
+    const Vec ext = hi - lo;
+    for (int j = 0; j < kSamples; ++j)
+      for (int i = 0; i < kSamples; ++i) {
+        const Vec x = lo + Vec((i + 0.5) * ext.x() / kSamples, (j + 0.5) * ext.y() / kSamples);
+        const double hx = size(x);
+        expected += 1.0 / (kSqrt3 / 4.0 * hx * hx);
+      }
+    expected *= std::abs(mesh.report.domain_area) / (kSamples * kSamples);
+  }
+  double mean_edge = 0;
+  for (const auto& e : front0) mean_edge += (P[static_cast<std::size_t>(e[0])] - P[static_cast<std::size_t>(e[1])]).norm();
+  mean_edge /= static_cast<double>(std::max<std::size_t>(1, front0.size()));
+  const double typical = std::max(mean_edge, std::sqrt(std::abs(mesh.report.domain_area) / std::max(1.0, expected)));
+  const double margin = 1e-3 * (hi - lo).norm();
+  EdgeGrid grid(lo - Vec::Constant(margin), hi + Vec::Constant(margin), typical);
+  AdvancingFront front(P, size, metric, std::move(grid));
+  for (const auto& e : front0) front.add_boundary_edge(e[0], e[1]);
+  for (int p : dom.isolated_points) front.add_isolated_point(p);
+  const auto budget = static_cast<std::size_t>(options.work_budget_factor * (expected + 10.0 * static_cast<double>(front0.size())) + 1000.0);
+  report_progress(options.progress, "front2d: front", 0.0);
+  mesh.report.n_open_edges = front.run(budget, static_cast<std::size_t>(2 * expected), options.progress, mesh.report);
+  mesh.triangles = std::move(front.triangles());
+  mesh.report.seconds_front = clock.seconds();
+  if (mesh.report.n_open_edges > 0) {
+    mesh.report.status = FrontStatus::Incomplete;
+    mesh.report.message = std::to_string(mesh.report.n_open_edges) + " front edges could not be closed";
+  }
+
+  clock.restart();
+  report_progress(options.progress, "front2d: optimise", 0.0);
+  Optimiser opt(P, mesh.triangles, constraints);
+  if (options.swap_edges) mesh.report.n_swaps += opt.delaunay_swaps();
+  if (options.smoothing_passes > 0) {
+    opt.smooth(options.smoothing_passes, first_free);
+    if (options.swap_edges) mesh.report.n_swaps += opt.delaunay_swaps();
+  }
+  mesh.triangle_regions = opt.regions(side_marker);
+  mesh.report.seconds_optimise = clock.seconds();
+  report_progress(options.progress, "front2d: optimise", 1.0);
+
+  // Chains of the input segments, oriented as given.
+  for (std::size_t k = 0; k < pslg.segments.size(); ++k) {
+    const auto& ch = chains[static_cast<std::size_t>(dom.input_segment[k])];
+    mesh.segment_chains.push_back(ch);
+    if (ch.front() != pslg.segments[k][0]) std::reverse(mesh.segment_chains.back().begin(), mesh.segment_chains.back().end());
+  }
+  return mesh;
+}
+
+void write_triangle_files(const Mesh2d& mesh, const std::filesystem::path& stem) {
+  auto node = stem;
+  node += ".node";
+  auto ele = stem;
+  ele += ".ele";
+  std::ofstream n(node);
+  if (!n) throw IoError("cannot write '" + node.string() + "'");
+  n.precision(17);
+  n << mesh.points.size() << " 2 0 0\n";
+  for (std::size_t i = 0; i < mesh.points.size(); ++i) n << i << ' ' << mesh.points[i].x() << ' ' << mesh.points[i].y() << '\n';
+  std::ofstream e(ele);
+  if (!e) throw IoError("cannot write '" + ele.string() + "'");
+  e << mesh.triangles.size() << " 3 1\n";
+  for (std::size_t i = 0; i < mesh.triangles.size(); ++i) {
+    const auto& t = mesh.triangles[i];
+    e << i << ' ' << t[0] << ' ' << t[1] << ' ' << t[2] << ' ' << (i < mesh.triangle_regions.size() ? mesh.triangle_regions[i] : 0) << '\n';
+  }
+  if (!n || !e) throw IoError("failed writing '" + stem.string() + ".node/.ele'");
+}
+
+}  // namespace nurbsfront

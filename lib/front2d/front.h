@@ -1,0 +1,122 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#pragma once
+//! \file
+//! 2D advancing front triangulation of a planar straight-line graph.
+//!
+//! Algorithm (Lo 1985; Peraire et al. 1987), as used by the source method in each patch:
+//!  1. Validate the PSLG (finite, distinct points, no crossing segments, holes inside).
+//!  2. Find the domain: the faces of the segment arrangement (optionally closed by the
+//!     convex hull) minus the faces that contain a hole point.
+//!  3. Split every segment by the sizing field (unless split_segments is false: then the
+//!     segments are final mesh edges, as the surface mesher hands in its borders).
+//!  4. The front: every segment side facing the domain is a directed edge with the domain on
+//!     its left. Repeatedly take the shortest edge (a binary heap with lazy deletion), place
+//!     the ideal point at the apex of the triangle of side h (in the metric), gather nearby
+//!     front nodes from a uniform grid and accept the first candidate that gives a positively
+//!     oriented triangle whose new edges cross no front edge and that contains no front node
+//!     (exact predicates). A new point must also keep a clearance from the front.
+//!  5. Repair: if no candidate is valid, the edge is closed by the constrained-Delaunay-like
+//!     choice among all visible front nodes (growing search); such a node always exists, so
+//!     the front always closes. After a work budget no new points are created, which bounds
+//!     the work.
+//!  6. Optimise: Delaunay edge swaps (never across an input segment), smoothing of the new
+//!     points (accepted only if every triangle stays valid and the worst quality does not
+//!     drop), swaps again.
+//!
+//! Output: counter-clockwise triangles, every input segment a chain of mesh edges, every
+//! input point kept at its input index.
+
+#include <array>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "nurbsfront/core/progress.h"
+#include "nurbsfront/front2d/pslg.h"
+#include "nurbsfront/front2d/sizing.h"
+
+namespace nurbsfront {
+
+//! Options of the 2D mesher.
+struct FrontOptions {
+  //! Target edge length field (metric lengths). Default: uniform, automatic size.
+  SizingField sizing;
+  //! Optional metric; null means the identity (Euclidean lengths). Default null.
+  std::shared_ptr<const Metric> metric;
+  //! Split the input segments by the sizing field. false: every segment is a final mesh
+  //! edge (already discretised borders). Default true.
+  bool split_segments = true;
+  //! Add the convex hull of the points as segments (as Triangle's -c), so that open
+  //! polylines are meshed inside their hull. A PSLG without segments (a .node file) always
+  //! gets its hull. Default false.
+  bool enclose_convex_hull = false;
+  //! Smoothing passes over the new points after the front. Default 3.
+  int smoothing_passes = 3;
+  //! Edge swaps after the front (Delaunay criterion, input segments kept). Default true.
+  bool swap_edges = true;
+  //! The front may create at most this many times the expected number of points before it
+  //! stops creating new ones and closes with existing nodes only. Must be >= 1. Default 4.
+  double work_budget_factor = 4.0;
+  //! Progress and cancellation; stage names "front2d: front", "front2d: optimise".
+  ProgressCallback progress;
+
+  //! \throw InvalidInput on nonsense (bad sizing, budget < 1, negative passes).
+  void validate() const;
+};
+
+//! Outcome of the mesher.
+enum class FrontStatus {
+  Ok,          //!< the front closed; the mesh covers the domain
+  Incomplete,  //!< some front edges could not be closed (a bug; the mesh has a gap)
+};
+
+//! Counts and timings of one run.
+struct FrontReport {
+  FrontStatus status = FrontStatus::Ok;
+  std::string message;                //!< empty when Ok
+  std::size_t n_boundary_nodes = 0;   //!< nodes on the initial front
+  std::size_t n_new_points = 0;       //!< points created by the front
+  std::size_t n_repairs = 0;          //!< front edges closed by the fallback search
+  std::size_t n_open_edges = 0;       //!< front edges left open (0 when Ok)
+  std::size_t n_swaps = 0;            //!< edge swaps in the optimisation
+  std::size_t n_dropped_points = 0;   //!< input points outside the domain (left unreferenced)
+  double domain_area = 0.0;           //!< area enclosed by the initial front
+  double seconds_front = 0.0;         //!< wall time of the front
+  double seconds_optimise = 0.0;      //!< wall time of swaps and smoothing
+};
+
+//! The mesh of a PSLG.
+struct Mesh2d {
+  //! Points: the input points first (same indices), then segment splits, then new points.
+  std::vector<Eigen::Vector2d> points;
+  //! Counter-clockwise triangles.
+  std::vector<std::array<int, 3>> triangles;
+  //! Region marker per triangle (Region::marker, 0 where no region point is given).
+  std::vector<int> triangle_regions;
+  //! Per input segment, its mesh nodes from the first endpoint to the second.
+  std::vector<std::vector<int>> segment_chains;
+  FrontReport report;
+};
+
+//! Meshes the domain of a PSLG with the advancing front.
+//! \param pslg    points, segments, holes and regions (see Pslg)
+//! \param options sizing, metric, optimisation; FrontOptions::validate() is called
+//! \return the mesh and its report (status Ok unless a bug left the front open)
+//! \throw InvalidInput for an empty PSLG, NaN/inf coordinates, duplicate points, bad
+//!        indices, crossing or overlapping segments, a point inside a segment, a hole
+//!        point outside the domain, an empty domain, per-vertex sizes of the wrong count.
+//! \throw Cancelled if the progress callback returns false.
+[[nodiscard]] Mesh2d mesh_pslg(const Pslg& pslg, const FrontOptions& options = {});
+
+//! Quality of a triangle (Lo): alpha = 4 sqrt(3) A / (l1^2 + l2^2 + l3^2), signed by A.
+[[nodiscard]] double triangle_alpha_2d(const Eigen::Vector2d& a, const Eigen::Vector2d& b,
+                                       const Eigen::Vector2d& c);
+
+//! Writes Triangle's .node and .ele files (0-based, the .ele with one region attribute).
+//! `stem` is the path without extension.
+//! \throw IoError if a file cannot be written.
+void write_triangle_files(const Mesh2d& mesh, const std::filesystem::path& stem);
+
+}  // namespace nurbsfront

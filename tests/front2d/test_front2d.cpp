@@ -1,0 +1,551 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <limits>
+#include <iomanip>
+#include <map>
+#include <numbers>
+#include <random>
+#include <sstream>
+#include <string>
+
+#include "nurbsfront/core/error.h"
+#include "nurbsfront/front2d/front.h"
+#include "nurbsfront/front2d/predicates.h"
+#include "support/test_data.h"
+
+namespace nurbsfront {
+namespace {
+
+using Vec = Eigen::Vector2d;
+__extension__ typedef __int128 Int128;
+
+// ---------------------------------------------------------------- predicates
+
+TEST(Front2dPredicates, Orient2dIsExactWhereNaiveFails) {
+  // Points on the line y = x, the first moved by a few ulps: coordinates are multiples of
+  // 2^-53, so 2^53 times them are integers and the exact sign comes from 128-bit products.
+  const double ulp = std::ldexp(1.0, -53);
+  const Vec b(12, 12), c(24, 24);
+  int naive_wrong = 0;
+  for (int i = -64; i <= 64; ++i)
+    for (int j = -64; j <= 64; ++j) {
+      const Vec a(0.5 + i * ulp, 0.5 + j * ulp);
+      const auto s = [](double v) { return static_cast<Int128>(std::ldexp(v, 53)); };
+      const Int128 det = (s(a.x()) - s(c.x())) * (s(b.y()) - s(c.y())) - (s(a.y()) - s(c.y())) * (s(b.x()) - s(c.x()));
+      const int exact = det > 0 ? 1 : (det < 0 ? -1 : 0);
+      ASSERT_EQ(front2d::orient2d(a, b, c), exact) << i << " " << j;
+      ASSERT_EQ(front2d::orient2d_exact(a, b, c), exact) << i << " " << j;
+      ASSERT_EQ(front2d::orient2d(b, c, a), exact);
+      ASSERT_EQ(front2d::orient2d(b, a, c), -exact);
+      const double n = front2d::orient2d_naive(a, b, c);
+      if ((n > 0 ? 1 : (n < 0 ? -1 : 0)) != exact) ++naive_wrong;
+    }
+  EXPECT_GT(naive_wrong, 0) << "the test must contain cases where double evaluation fails";
+}
+
+TEST(Front2dPredicates, SegmentsIntersect) {
+  EXPECT_TRUE(front2d::segments_intersect({0, 0}, {2, 2}, {0, 2}, {2, 0}));
+  EXPECT_FALSE(front2d::segments_intersect({0, 0}, {1, 1}, {2, 2}, {3, 3}));
+  EXPECT_TRUE(front2d::segments_intersect({0, 0}, {2, 2}, {1, 1}, {3, 3}));
+  EXPECT_TRUE(front2d::segments_intersect({0, 0}, {2, 0}, {1, 0}, {1, 5}));  // touching
+  EXPECT_FALSE(front2d::segments_intersect({0, 0}, {2, 0}, {1, 1e-300}, {1, 5}));
+}
+
+// ---------------------------------------------------------------- invariants
+
+struct Stats {
+  double area = 0, mean_alpha = 0, min_alpha = 1, min_angle_deg = 180;
+};
+
+double angle_at(const Vec& p, const Vec& q, const Vec& r) {  // angle at p
+  const Vec u = q - p, v = r - p;
+  return std::atan2(std::abs(u.x() * v.y() - u.y() * v.x()), u.dot(v)) * 180.0 / std::numbers::pi;
+}
+
+// Checks a mesh: status, orientation, conformity, edge manifoldness, no overlap, area.
+// Returns an empty string when everything holds.
+std::string check_mesh(const Pslg& pslg, const Mesh2d& m, double expected_area, Stats* stats = nullptr) {
+  std::ostringstream err;
+  if (m.report.status != FrontStatus::Ok) err << "status not Ok: " << m.report.message << "; ";
+  const auto n = static_cast<int>(m.points.size());
+  std::map<std::pair<int, int>, int> dir;
+  double area = 0, sum_alpha = 0;
+  Stats s;
+  for (const auto& t : m.triangles) {
+    for (int v : t)
+      if (v < 0 || v >= n) return "index out of range";
+    const Vec &a = m.points[t[0]], &b = m.points[t[1]], &c = m.points[t[2]];
+    if (front2d::orient2d(a, b, c) <= 0) err << "triangle not counter-clockwise; ";
+    area += 0.5 * front2d::orient2d_naive(a, b, c);
+    const double al = triangle_alpha_2d(a, b, c);
+    sum_alpha += al;
+    s.min_alpha = std::min(s.min_alpha, al);
+    s.min_angle_deg = std::min({s.min_angle_deg, angle_at(a, b, c), angle_at(b, c, a), angle_at(c, a, b)});
+    for (int i = 0; i < 3; ++i)
+      if (++dir[{t[i], t[(i + 1) % 3]}] > 1) err << "directed edge used twice; ";
+  }
+  s.area = area;
+  s.mean_alpha = m.triangles.empty() ? 0 : sum_alpha / static_cast<double>(m.triangles.size());
+  if (stats) *stats = s;
+  if (std::abs(area - expected_area) > 1e-9 * std::max(1.0, std::abs(expected_area)))
+    err << std::setprecision(17) << "area " << area << " != " << expected_area << "; ";
+  // Conformity: every input segment is a chain of mesh edges from one endpoint to the other.
+  if (m.segment_chains.size() != pslg.segments.size()) err << "wrong number of segment chains; ";
+  for (std::size_t k = 0; k < m.segment_chains.size(); ++k) {
+    const auto& ch = m.segment_chains[k];
+    if (ch.front() != pslg.segments[k][0] || ch.back() != pslg.segments[k][1]) err << "chain endpoints differ; ";
+    for (std::size_t i = 0; i + 1 < ch.size(); ++i)
+      if (!dir.count({ch[i], ch[i + 1]}) && !dir.count({ch[i + 1], ch[i]})) {
+        err << "segment " << k << " not conforming; ";
+        break;
+      }
+  }
+  for (std::size_t i = 0; i < pslg.points.size(); ++i)
+    if (m.points[i] != pslg.points[i]) err << "input point moved; ";
+  // No overlap: interiors of two triangles are disjoint iff an edge of one separates them.
+  std::vector<std::array<double, 4>> box;
+  for (const auto& t : m.triangles) {
+    const Vec lo = m.points[t[0]].cwiseMin(m.points[t[1]]).cwiseMin(m.points[t[2]]);
+    const Vec hi = m.points[t[0]].cwiseMax(m.points[t[1]]).cwiseMax(m.points[t[2]]);
+    box.push_back({lo.x(), hi.x(), lo.y(), hi.y()});
+  }
+  std::vector<int> order(m.triangles.size());
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = static_cast<int>(i);
+  std::sort(order.begin(), order.end(), [&](int i, int j) { return box[i][0] < box[j][0]; });
+  auto separated = [&](const std::array<int, 3>& t, const std::array<int, 3>& u) {
+    for (int i = 0; i < 3; ++i) {
+      bool all = true;
+      for (int v : u) all = all && front2d::orient2d(m.points[t[i]], m.points[t[(i + 1) % 3]], m.points[v]) <= 0;
+      if (all) return true;
+    }
+    return false;
+  };
+  std::size_t overlaps = 0;
+  for (std::size_t i = 0; i < order.size(); ++i)
+    for (std::size_t j = i + 1; j < order.size() && box[order[j]][0] < box[order[i]][1]; ++j) {
+      const auto& A = box[order[i]];
+      const auto& B = box[order[j]];
+      if (B[2] >= A[3] || B[3] <= A[2]) continue;
+      const auto& t = m.triangles[order[i]];
+      const auto& u = m.triangles[order[j]];
+      if (!separated(t, u) && !separated(u, t)) ++overlaps;
+    }
+  if (overlaps) err << overlaps << " overlapping triangle pairs; ";
+  return err.str();
+}
+
+Pslg polygon(const std::vector<Vec>& pts) {
+  Pslg p;
+  p.points = pts;
+  for (std::size_t i = 0; i < pts.size(); ++i) p.segments.push_back({static_cast<int>(i), static_cast<int>((i + 1) % pts.size())});
+  return p;
+}
+
+void add_loop(Pslg& p, const std::vector<Vec>& pts) {
+  const int base = static_cast<int>(p.points.size());
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    p.points.push_back(pts[i]);
+    p.segments.push_back({base + static_cast<int>(i), base + static_cast<int>((i + 1) % pts.size())});
+  }
+}
+
+FrontOptions uniform(double h) {
+  FrontOptions o;
+  o.sizing = SizingField::uniform(h);
+  return o;
+}
+
+// ---------------------------------------------------------------- simple domains
+
+TEST(Front2d, UnitSquareUniformQuality) {
+  const Pslg sq = polygon({{0, 0}, {1, 0}, {1, 1}, {0, 1}});
+  const Mesh2d m = mesh_pslg(sq, uniform(0.05));
+  Stats s;
+  EXPECT_EQ(check_mesh(sq, m, 1.0, &s), "");
+  EXPECT_GE(s.mean_alpha, 0.92);
+  EXPECT_GE(s.min_angle_deg, 30.0);
+  // Edge lengths near the target.
+  std::size_t n = 0, inside = 0;
+  for (const auto& t : m.triangles)
+    for (int i = 0; i < 3; ++i) {
+      const double l = (m.points[t[i]] - m.points[t[(i + 1) % 3]]).norm();
+      ++n;
+      if (l > 0.5 * 0.05 && l < 1.5 * 0.05) ++inside;
+    }
+  EXPECT_GT(static_cast<double>(inside), 0.95 * static_cast<double>(n));
+  EXPECT_NEAR(static_cast<double>(m.triangles.size()), 1.0 / (std::sqrt(3.0) / 4 * 0.05 * 0.05), 0.25 * 462.0);
+}
+
+TEST(Front2d, SquareWithHoleAndRegions) {
+  Pslg p = polygon({{0, 0}, {3, 0}, {3, 3}, {0, 3}});
+  add_loop(p, {{1, 1}, {2, 1}, {2, 2}, {1, 2}});
+  p.holes.push_back({1.5, 1.5});
+  const Mesh2d m = mesh_pslg(p, uniform(0.2));
+  Stats s;
+  EXPECT_EQ(check_mesh(p, m, 8.0, &s), "");
+  EXPECT_GE(s.mean_alpha, 0.92);
+  EXPECT_GE(s.min_angle_deg, 30.0);
+  // Same without the hole but with two region markers: two regions, 1 and 7.
+  Pslg q = p;
+  q.holes.clear();
+  q.regions = {{{0.5, 0.5}, 7}, {{1.5, 1.5}, 1}};
+  const Mesh2d r = mesh_pslg(q, uniform(0.2));
+  EXPECT_EQ(check_mesh(q, r, 9.0), "");
+  double area1 = 0, area7 = 0;
+  for (std::size_t i = 0; i < r.triangles.size(); ++i) {
+    const auto& t = r.triangles[i];
+    const double a = 0.5 * front2d::orient2d_naive(r.points[t[0]], r.points[t[1]], r.points[t[2]]);
+    (r.triangle_regions[i] == 1 ? area1 : area7) += a;
+    EXPECT_TRUE(r.triangle_regions[i] == 1 || r.triangle_regions[i] == 7);
+  }
+  EXPECT_NEAR(area1, 1.0, 1e-9);
+  EXPECT_NEAR(area7, 8.0, 1e-9);
+}
+
+TEST(Front2d, InteriorSegmentsAndIsolatedPointsAreKept) {
+  Pslg p = polygon({{0, 0}, {2, 0}, {2, 1}, {0, 1}});
+  p.points.push_back({0.5, 0.5});
+  p.points.push_back({1.5, 0.5});
+  p.segments.push_back({4, 5});   // dangling interior segment
+  p.points.push_back({1.0, 0.8});  // isolated point
+  const Mesh2d m = mesh_pslg(p, uniform(0.1));
+  EXPECT_EQ(check_mesh(p, m, 2.0), "");
+  bool used = false;
+  for (const auto& t : m.triangles)
+    for (int v : t) used = used || v == 6;
+  EXPECT_TRUE(used);
+}
+
+TEST(Front2d, PreDiscretisedBoundaryIsNotSplit) {
+  std::vector<Vec> circle;
+  for (int i = 0; i < 40; ++i) circle.emplace_back(std::cos(2 * std::numbers::pi * i / 40), std::sin(2 * std::numbers::pi * i / 40));
+  const Pslg p = polygon(circle);
+  FrontOptions o = uniform(2 * std::numbers::pi / 40);
+  o.split_segments = false;
+  o.enclose_convex_hull = false;
+  const Mesh2d m = mesh_pslg(p, o);
+  double area = 0;
+  for (int i = 0; i < 40; ++i) area += 0.5 * circle[i].x() * circle[(i + 1) % 40].y() - 0.5 * circle[(i + 1) % 40].x() * circle[i].y();
+  Stats s;
+  EXPECT_EQ(check_mesh(p, m, area, &s), "");
+  for (const auto& ch : m.segment_chains) EXPECT_EQ(ch.size(), 2u);
+  EXPECT_GE(s.mean_alpha, 0.9);
+}
+
+TEST(Front2d, GradedAndAnisotropicSizing) {
+  const Pslg sq = polygon({{0, 0}, {1, 0}, {1, 1}, {0, 1}});
+  FrontOptions o;
+  o.sizing = SizingField::per_vertex({0.01, 0.2, 0.2, 0.2});
+  const Mesh2d a = mesh_pslg(sq, o);
+  EXPECT_EQ(check_mesh(sq, a, 1.0), "");
+  o.sizing = SizingField::from_callback([](const Vec& x) { return 0.02 + 0.1 * x.x(); });
+  const Mesh2d b = mesh_pslg(sq, o);
+  EXPECT_EQ(check_mesh(sq, b, 1.0), "");
+  struct Stretch : Metric {
+    Eigen::Matrix2d tensor(const Vec&) const override { return Eigen::Vector2d(1.0, 4.0).asDiagonal(); }
+  };
+  FrontOptions c = uniform(0.1);
+  c.metric = std::make_shared<Stretch>();
+  const Mesh2d mc = mesh_pslg(sq, c);
+  EXPECT_EQ(check_mesh(sq, mc, 1.0), "");
+  // In the metric, lengths in y count double: the mesh has about twice the triangles.
+  const Mesh2d iso = mesh_pslg(sq, uniform(0.1));
+  EXPECT_GT(mc.triangles.size(), 1.5 * iso.triangles.size());
+}
+
+// ---------------------------------------------------------------- files
+
+// The segments' own faces, or the convex hull when they enclose nothing (open polylines).
+Mesh2d mesh_file(const Pslg& p, double h) {
+  FrontOptions o = uniform(h);
+  try {
+    return mesh_pslg(p, o);
+  } catch (const InvalidInput& e) {
+    if (std::string(e.what()).find("empty") == std::string::npos) throw;
+  }
+  o.enclose_convex_hull = true;
+  return mesh_pslg(p, o);
+}
+
+void mesh_cgal_files(double divisor, bool include_img5) {
+  for (const char* name : {"fish.poly", "clusters.poly", "trivial.poly", "butterfly.edg", "clusters2.edg", "img5.edg",
+                           "img6.edg", "lettre_A.edg"}) {
+    SCOPED_TRACE(name);
+    const Pslg p = read_pslg(test::test_data(std::string("pslg/") + name));
+    Vec lo = p.points[0], hi = p.points[0];
+    for (const auto& x : p.points) {
+      lo = lo.cwiseMin(x);
+      hi = hi.cwiseMax(x);
+    }
+    const Mesh2d m = mesh_file(p, (hi - lo).norm() / divisor);
+    Stats s;
+    EXPECT_EQ(check_mesh(p, m, m.report.domain_area, &s), "");
+    EXPECT_GT(m.report.domain_area, 0);
+    if (include_img5 || std::string(name) != "img5.edg") {
+      EXPECT_GE(s.mean_alpha, 0.92);
+    }
+  }
+}
+
+// img5 has segments of 1/1000 of its size: h must resolve them for a mean alpha >= 0.92,
+// so at the coarse size it is checked for the invariants only.
+TEST(Front2dFiles, CgalDemoDomains) {
+  mesh_cgal_files(60, false);
+  // trivial.poly: a quadrilateral of area 8 and a point outside it (dropped); with the
+  // convex hull enclosed, the area is 8.2 and the point is a mesh vertex.
+  const Pslg t = read_poly(test::test_data("pslg/trivial.poly"));
+  ASSERT_EQ(t.points.size(), 5u);
+  const Mesh2d quad = mesh_pslg(t, uniform(0.3));
+  EXPECT_NEAR(quad.report.domain_area, 8.0, 1e-12);
+  EXPECT_EQ(quad.report.n_dropped_points, 1u);
+  FrontOptions hull = uniform(0.3);
+  hull.enclose_convex_hull = true;
+  const Mesh2d with_hull = mesh_pslg(t, hull);
+  EXPECT_NEAR(with_hull.report.domain_area, 8.2, 1e-12);
+  EXPECT_EQ(check_mesh(t, with_hull, 8.2), "");
+  EXPECT_EQ(with_hull.report.n_dropped_points, 0u);
+}
+
+TEST(Front2dFilesSlow, CgalDemoDomainsFine) { mesh_cgal_files(200, true); }
+
+TEST(Front2dFiles, TriangleExamples) {
+  const auto dir = test::shared_data("pslg/triangle_examples");
+  if (!dir) GTEST_SKIP() << "../shared/data absent";
+  for (const char* name : {"A.poly", "box.poly", "face.poly", "double_hex.poly", "double_hex2.poly", "double_hex3.poly",
+                           "dots.node", "spiral.node", "diamond_02_00009.node"}) {
+    SCOPED_TRACE(name);
+    const Pslg p = read_pslg(*dir / name);
+    Vec lo = p.points[0], hi = p.points[0];
+    for (const auto& x : p.points) {
+      lo = lo.cwiseMin(x);
+      hi = hi.cwiseMax(x);
+    }
+    const Mesh2d m = mesh_file(p, (hi - lo).norm() / 60);
+    EXPECT_EQ(check_mesh(p, m, m.report.domain_area), "");
+    EXPECT_GT(m.report.domain_area, 0);
+  }
+}
+
+TEST(Front2dFiles, ReadersOnHandWrittenFiles) {
+  const auto dir = test::temp_dir("front2d_readers");
+  {
+    std::ofstream f(dir / "sq.poly");
+    f << "# 1-based, one attribute, markers\n4 2 1 1\n1 0 0 0.1 1\n2 2 0 0.1 1\n3 2 2 0.1 1\n4 0 2 0.1 1\n"
+         "4 1\n1 1 2 1\n2 2 3 1\n3 3 4 1\n4 4 1 1\n0\n1\n1 1 1 5 0.1\n";
+  }
+  const Pslg p = read_poly(dir / "sq.poly");
+  ASSERT_EQ(p.points.size(), 4u);
+  ASSERT_EQ(p.segments.size(), 4u);
+  EXPECT_EQ(p.segments[0], (std::array<int, 2>{0, 1}));
+  ASSERT_EQ(p.point_sizes.size(), 4u);
+  ASSERT_EQ(p.regions.size(), 1u);
+  EXPECT_EQ(p.regions[0].marker, 5);
+  FrontOptions o;
+  o.sizing = SizingField::per_vertex(p.point_sizes);
+  const Mesh2d m = mesh_pslg(p, o);
+  EXPECT_EQ(check_mesh(p, m, 4.0), "");
+  for (int r : m.triangle_regions) EXPECT_EQ(r, 5);
+  {
+    std::ofstream f(dir / "pts.node");
+    f << "5 2 0 0\n0 0 0\n1 1 0\n2 1 1\n3 0 1\n4 0.5 0.5\n";
+  }
+  const Pslg n = read_pslg(dir / "pts.node");
+  EXPECT_TRUE(n.segments.empty());
+  const Mesh2d mn = mesh_pslg(n, uniform(0.2));  // no segments: the convex hull
+  EXPECT_EQ(check_mesh(n, mn, 1.0), "");
+  {
+    std::ofstream f(dir / "tri.edg");
+    f << "4\n0 0 1 0\n1 0 0 1\n0 1 0 0\n0.2 0.2 0.2 0.2\n";
+  }
+  const Pslg e = read_pslg(dir / "tri.edg");
+  EXPECT_EQ(e.points.size(), 4u);   // the zero-length segment's point is read ...
+  EXPECT_EQ(e.segments.size(), 3u); // ... but the segment is skipped
+  EXPECT_EQ(check_mesh(e, mesh_pslg(e, uniform(0.1)), 0.5), "");
+  {
+    std::ofstream f(dir / "bad.poly");
+    f << "3 2 0 0\n1 0 0\n2 1 x\n";
+  }
+  EXPECT_THROW((void)read_pslg(dir / "bad.poly"), IoError);
+  EXPECT_THROW((void)read_pslg(dir / "sq.txt"), IoError);
+}
+
+TEST(Front2d, ProgressCanCancel) {
+  const Pslg sq = polygon({{0, 0}, {1, 0}, {1, 1}, {0, 1}});
+  FrontOptions o = uniform(0.05);
+  int calls = 0;
+  o.progress = [&](std::string_view, double f) {
+    ++calls;
+    EXPECT_GE(f, 0.0);
+    EXPECT_LE(f, 1.0);
+    return true;
+  };
+  (void)mesh_pslg(sq, o);
+  EXPECT_GE(calls, 2);
+  o.progress = [](std::string_view, double) { return false; };
+  EXPECT_THROW((void)mesh_pslg(sq, o), Cancelled);
+}
+
+// ---------------------------------------------------------------- bad input
+
+TEST(Front2dErrors, BadInputThrowsClearly) {
+  auto throws_with = [](const Pslg& p, const std::string& what) {
+    try {
+      (void)mesh_pslg(p, uniform(0.1));
+    } catch (const InvalidInput& e) {
+      EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
+      return;
+    }
+    ADD_FAILURE() << "no InvalidInput for " << what;
+  };
+  throws_with(Pslg{}, "empty");
+  Pslg cross = polygon({{0, 0}, {1, 0}, {0, 1}, {1, 1}});  // bow tie
+  throws_with(cross, "cross");
+  Pslg dup = polygon({{0, 0}, {1, 0}, {1, 1}, {0, 1}});
+  dup.points.push_back({1, 0});
+  throws_with(dup, "duplicate");
+  Pslg hole = polygon({{0, 0}, {1, 0}, {1, 1}, {0, 1}});
+  hole.holes.push_back({5, 5});
+  throws_with(hole, "outside");
+  Pslg nan = polygon({{0, 0}, {1, 0}, {1, std::numeric_limits<double>::quiet_NaN()}});
+  throws_with(nan, "finite");
+  Pslg on = polygon({{0, 0}, {2, 0}, {2, 2}, {0, 2}});
+  on.points.push_back({1, 0});
+  throws_with(on, "lies on segment");
+  throws_with(polygon({{0, 0}, {1, 1}, {2, 2}}), "collinear");
+  FrontOptions bad;
+  bad.sizing.gradation = 0.5;
+  EXPECT_THROW((void)mesh_pslg(polygon({{0, 0}, {1, 0}, {0, 1}}), bad), InvalidInput);
+  EXPECT_THROW((void)read_pslg("no_such_file.poly"), IoError);
+}
+
+// ---------------------------------------------------------------- property tests
+
+// A random star-shaped polygon around c with n vertices and radii in [r0, r1].
+std::vector<Vec> star(std::mt19937_64& rng, Vec c, int n, double r0, double r1) {
+  std::uniform_real_distribution<double> u(0, 1);
+  std::vector<double> ang;
+  // Jittered even angles: every gap < pi for n >= 4, so c is inside.
+  for (int i = 0; i < n; ++i) ang.push_back(2 * std::numbers::pi * (i + 0.8 * u(rng)) / n);
+  std::vector<Vec> pts;
+  for (double a : ang) {
+    const double r = r0 + (r1 - r0) * u(rng);
+    pts.push_back(c + r * Vec(std::cos(a), std::sin(a)));
+  }
+  return pts;
+}
+
+double loop_area(const std::vector<Vec>& p) {
+  double a = 0;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    const Vec& u = p[i];
+    const Vec& w = p[(i + 1) % p.size()];
+    a += 0.5 * (u.x() * w.y() - w.x() * u.y());
+  }
+  return a;
+}
+
+// One random domain of a kind chosen by the seed; returns the expected area.
+double random_domain(std::uint64_t seed, Pslg& p, double& h) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(0, 1);
+  const int kind = static_cast<int>(seed % 5);
+  p = Pslg{};
+  double area = 0;
+  switch (kind) {
+    case 0: {  // star polygon with star holes
+      auto outer = star(rng, {0, 0}, 8 + static_cast<int>(rng() % 30), 0.7, 1.0);
+      if (outer.size() < 3) outer = {{1, 0}, {0, 1}, {-1, -1}};
+      area = loop_area(outer);
+      p = polygon(outer);
+      const int n_holes = static_cast<int>(rng() % 3);
+      for (int k = 0; k < n_holes; ++k) {
+        const Vec c(-0.3 + 0.6 * k / std::max(1, n_holes - 1) * (n_holes > 1), 0.0);
+        auto hl = star(rng, c, 4 + static_cast<int>(rng() % 8), 0.05, 0.12);
+        if (hl.size() < 3) continue;
+        std::reverse(hl.begin(), hl.end());
+        add_loop(p, hl);
+        p.holes.push_back(c);
+        area += loop_area(hl);
+      }
+      h = 0.05 + 0.15 * u(rng);
+      break;
+    }
+    case 1: {  // near-collinear and near-duplicate points along the edges of a square
+      std::vector<Vec> pts;
+      const double eps = std::pow(10.0, -4.0 - 10.0 * u(rng));
+      const int n = 2 + static_cast<int>(rng() % 6);
+      for (int side = 0; side < 4; ++side) {
+        const Vec a = side == 0 ? Vec(0, 0) : side == 1 ? Vec(1, 0) : side == 2 ? Vec(1, 1) : Vec(0, 1);
+        const Vec b = side == 0 ? Vec(1, 0) : side == 1 ? Vec(1, 1) : side == 2 ? Vec(0, 1) : Vec(0, 0);
+        const Vec nrm(-(b - a).y(), (b - a).x());
+        for (int i = 0; i < n; ++i) {
+          const double t = static_cast<double>(i) / n + (i > 0 && u(rng) < 0.3 ? eps : 0.0);
+          pts.push_back(a + t * (b - a) + (i > 0 ? eps * (u(rng) - 0.5) : 0.0) * nrm);
+        }
+      }
+      area = loop_area(pts);
+      p = polygon(pts);
+      h = 0.05 + 0.2 * u(rng);
+      break;
+    }
+    case 2: {  // a tiny input angle: a thin wedge
+      const double ang = std::pow(10.0, -0.5 - 2.0 * u(rng));
+      const std::vector<Vec> pts = {{0, 0}, {1, 0}, {std::cos(ang), std::sin(ang)}};
+      area = loop_area(pts);
+      p = polygon(pts);
+      h = 0.03 + 0.1 * u(rng);
+      break;
+    }
+    case 3: {  // size ratio up to 1:1000: tiny hole in a big square
+      const double s = std::pow(10.0, -1.0 - 2.0 * u(rng));
+      const Vec c(0.2 + 0.6 * u(rng), 0.2 + 0.6 * u(rng));
+      p = polygon({{0, 0}, {1, 0}, {1, 1}, {0, 1}});
+      std::vector<Vec> hl = {c + Vec(s, 0), c + Vec(0, -s), c + Vec(-s, 0), c + Vec(0, s)};
+      add_loop(p, hl);
+      p.holes.push_back(c);
+      area = 1.0 + loop_area(hl);
+      h = 0.05 + 0.1 * u(rng);
+      break;
+    }
+    default: {  // long thin rectangle, possibly rotated
+      const double w = std::pow(10.0, -1.0 - 1.5 * u(rng));
+      const double t = u(rng);
+      const Vec ex(std::cos(t), std::sin(t)), ey(-std::sin(t), std::cos(t));
+      const std::vector<Vec> pts = {Vec::Zero(), ex, ex + w * ey, w * ey};
+      area = loop_area(pts);
+      p = polygon(pts);
+      h = 0.01 + 0.05 * u(rng);
+      break;
+    }
+  }
+  return area;
+}
+
+void run_property(std::uint64_t first, std::uint64_t count) {
+  std::size_t failures = 0;
+  for (std::uint64_t seed = first; seed < first + count && failures < 5; ++seed) {
+    Pslg p;
+    double h = 0.1;
+    const double area = random_domain(seed, p, h);
+    try {
+      const Mesh2d m = mesh_pslg(p, uniform(h));
+      const std::string e = check_mesh(p, m, area);
+      if (!e.empty()) {
+        ++failures;
+        ADD_FAILURE() << "seed " << seed << ": " << e;
+      }
+    } catch (const std::exception& ex) {
+      ++failures;
+      ADD_FAILURE() << "seed " << seed << ": exception " << ex.what();
+    }
+  }
+}
+
+TEST(Front2dProperty, RandomDomains) { run_property(1, 150); }
+TEST(Front2dPropertySlow, ThousandsOfRandomDomains) { run_property(1000, 4000); }
+
+}  // namespace
+}  // namespace nurbsfront
