@@ -6,6 +6,8 @@
 #include <cstdint>
 #include <fstream>
 #include <functional>
+#include <limits>
+#include <numbers>
 #include <queue>
 #include <unordered_map>
 #include <unordered_set>
@@ -32,6 +34,10 @@ constexpr double kWideRadius = 1.2;        // existing nodes considered at all
 constexpr double kNodeClearance = 0.5;     // a new point keeps this distance from front nodes
 constexpr double kEdgeClearance = 0.35;    // ... and this distance from front edges
 constexpr double kSmoothAcceptAlpha = 0.6; // smoothing may lower the worst alpha down to this
+constexpr double kMinAngleTargetDeg = 30.0; // relocation treats new points of triangles below this angle
+constexpr double kRelocateFirstStep = 0.1;  // first compass step, times the shortest star edge
+constexpr int kRelocateIterations = 24;     // compass search iterations per point
+constexpr int kRelocateRounds = 2;          // relocation + swaps rounds
 constexpr double kAutoSizeDivisor = 40.0;  // automatic uniform size: bbox diagonal / this
 constexpr int kSizingGridCells = 128;      // background grid of callback sizing fields, per side
 constexpr int kSegmentSamples = 16;        // sizing samples per segment when splitting it
@@ -570,6 +576,91 @@ class Optimiser {
     }
   }
 
+  // Min-angle-driven relocation: every new point of a triangle with an angle below
+  // kMinAngleTargetDeg is moved by a compass search that maximises the smallest angle of its
+  // star; a move is kept only if every triangle of the star stays positively oriented (exact)
+  // and the star's smallest angle strictly grows. Returns the number of points moved.
+  // Segment split points (slide[v] = the input segment's endpoints, {-1, -1} elsewhere) move
+  // along their segment only.
+  std::size_t improve_min_angle(int first_free, const std::vector<std::array<int, 2>>& slide) {
+    const double target = std::cos(kMinAngleTargetDeg * std::numbers::pi / 180.0);
+    std::vector<int> todo;
+    for (const auto& t : T_) {
+      if (!has_small_angle(t, target * target)) continue;
+      for (int x : t)
+        if (x >= first_free || slide[static_cast<std::size_t>(x)][0] >= 0) todo.push_back(x);
+    }
+    if (todo.empty()) return 0;
+    std::sort(todo.begin(), todo.end());
+    todo.erase(std::unique(todo.begin(), todo.end()), todo.end());
+    std::vector<int> start(P_.size() + 1, 0);
+    for (const auto& t : T_)
+      for (int x : t) ++start[static_cast<std::size_t>(x) + 1];
+    for (std::size_t i = 0; i < P_.size(); ++i) start[i + 1] += start[i];
+    std::vector<int> inc(static_cast<std::size_t>(start.back()));
+    std::vector<int> fill(start.begin(), start.end() - 1);
+    for (std::size_t t = 0; t < T_.size(); ++t)
+      for (int x : T_[t]) inc[static_cast<std::size_t>(fill[static_cast<std::size_t>(x)]++)] = static_cast<int>(t);
+    std::size_t moved = 0;
+    for (int vtx : todo) {
+      const auto vi = static_cast<std::size_t>(vtx);
+      const int b0 = start[vi], b1 = start[vi + 1];
+      // The star's quality: the largest cosine of its angles (smaller is better), or
+      // +inf if a triangle is not positively oriented.
+      auto star = [&]() {
+        double worst = -1.0;
+        for (int k = b0; k < b1; ++k) {
+          const auto& t = T_[static_cast<std::size_t>(inc[static_cast<std::size_t>(k)])];
+          if (orient2d(P_[static_cast<std::size_t>(t[0])], P_[static_cast<std::size_t>(t[1])], P_[static_cast<std::size_t>(t[2])]) <= 0)
+            return std::numeric_limits<double>::infinity();
+          worst = std::max(worst, max_cos(t));
+        }
+        return worst;
+      };
+      double best = star();
+      double step = std::numeric_limits<double>::infinity();
+      for (int k = b0; k < b1; ++k)
+        for (int x : T_[static_cast<std::size_t>(inc[static_cast<std::size_t>(k)])])
+          if (x != vtx) step = std::min(step, (P_[static_cast<std::size_t>(x)] - P_[vi]).norm());
+      step *= kRelocateFirstStep;
+      const Vec start_pos = P_[vi];
+      const bool on_segment = vtx < first_free;
+      Vec sa = Vec::Zero(), sd = Vec::Zero();
+      double t_cur = 0.0, seg_len = 1.0;
+      if (on_segment) {
+        sa = P_[static_cast<std::size_t>(slide[vi][0])];
+        sd = P_[static_cast<std::size_t>(slide[vi][1])] - sa;
+        seg_len = sd.norm();
+        t_cur = (P_[vi] - sa).dot(sd) / (seg_len * seg_len);
+      }
+      for (int it = 0; it < kRelocateIterations && step > 0; ++it) {
+        bool improved = false;
+        for (int d = 0; d < (on_segment ? 2 : 8); ++d) {
+          const Vec old = P_[vi];
+          double t_new = t_cur;
+          if (on_segment) {
+            t_new = t_cur + (d == 0 ? step : -step) / seg_len;
+            P_[vi] = sa + t_new * sd;
+          } else {
+            const double ang = d * std::numbers::pi / 4.0;
+            P_[vi] = old + step * Vec(std::cos(ang), std::sin(ang));
+          }
+          const double q = star();
+          if (q < best) {
+            best = q;
+            t_cur = t_new;
+            improved = true;
+          } else {
+            P_[vi] = old;
+          }
+        }
+        if (!improved) step *= 0.5;
+      }
+      if (P_[vi] != start_pos) ++moved;
+    }
+    return moved;
+  }
+
   // Region marker per triangle by flood fill from the boundary sides.
   std::vector<int> regions(const std::unordered_map<std::uint64_t, int>& side_marker) const {
     std::vector<int> r(T_.size(), 0);
@@ -600,6 +691,29 @@ class Optimiser {
   }
 
  private:
+  // Whether t has an angle whose cosine exceeds sqrt(cos2) (cheap: no square roots).
+  [[nodiscard]] bool has_small_angle(const std::array<int, 3>& t, double cos2) const {
+    const Vec& a = P_[static_cast<std::size_t>(t[0])];
+    const Vec& b = P_[static_cast<std::size_t>(t[1])];
+    const Vec& c = P_[static_cast<std::size_t>(t[2])];
+    const Vec ab = b - a, bc = c - b, ca = a - c;
+    const double lab = ab.squaredNorm(), lbc = bc.squaredNorm(), lca = ca.squaredNorm();
+    const double da = -ca.dot(ab), db = -ab.dot(bc), dc = -bc.dot(ca);
+    return (da > 0 && da * da > cos2 * lca * lab) || (db > 0 && db * db > cos2 * lab * lbc) ||
+           (dc > 0 && dc * dc > cos2 * lbc * lca);
+  }
+  // Largest cosine of the three angles of t (the cosine of its smallest angle).
+  [[nodiscard]] double max_cos(const std::array<int, 3>& t) const {
+    double m = -1.0;
+    for (int i = 0; i < 3; ++i) {
+      const Vec& p = P_[static_cast<std::size_t>(t[static_cast<std::size_t>(i)])];
+      const Vec u = P_[static_cast<std::size_t>(t[static_cast<std::size_t>((i + 1) % 3)])] - p;
+      const Vec w = P_[static_cast<std::size_t>(t[static_cast<std::size_t>((i + 2) % 3)])] - p;
+      const double n = u.norm() * w.norm();
+      m = std::max(m, n > 0 ? u.dot(w) / n : 1.0);
+    }
+    return m;
+  }
   void set_nb(int s, int o) {
     N_[static_cast<std::size_t>(s)] = o;
     if (o >= 0) N_[static_cast<std::size_t>(o)] = s;
@@ -688,6 +802,9 @@ Mesh2d mesh_pslg(const Pslg& pslg, const FrontOptions& options) {
     ch.push_back(b);
   }
   const int first_free = static_cast<int>(P.size());
+  std::vector<std::array<int, 2>> slide(P.size(), {-1, -1});  // split point -> its segment's endpoints
+  for (std::size_t k = 0; k < dom.segments.size(); ++k)
+    for (std::size_t i = 1; i + 1 < chains[k].size(); ++i) slide[static_cast<std::size_t>(chains[k][i])] = dom.segments[k];
 
   // Initial front, constraint edges and region markers of each side.
   std::unordered_set<std::uint64_t> constraints;
@@ -760,6 +877,10 @@ Mesh2d mesh_pslg(const Pslg& pslg, const FrontOptions& options) {
   if (options.smoothing_passes > 0) {
     opt.smooth(options.smoothing_passes, first_free);
     if (options.swap_edges) mesh.report.n_swaps += opt.delaunay_swaps();
+    for (int round = 0; round < kRelocateRounds; ++round) {
+      if (opt.improve_min_angle(first_free, slide) == 0) break;
+      if (options.swap_edges) mesh.report.n_swaps += opt.delaunay_swaps();
+    }
   }
   mesh.triangle_regions = opt.regions(side_marker);
   mesh.report.seconds_optimise = clock.seconds();

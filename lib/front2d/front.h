@@ -22,6 +22,10 @@
 //!  6. Optimise: Delaunay edge swaps (never across an input segment), smoothing of the new
 //!     points (accepted only if every triangle stays valid and the worst quality does not
 //!     drop), swaps again.
+//!  7. Min-angle relocation: new points and segment split points (along their segment) of
+//!     triangles with an angle below 30 deg move by a compass search that maximises the
+//!     smallest angle of their star (a move is kept only if every triangle stays valid),
+//!     then swaps again.
 //!
 //! Output: counter-clockwise triangles, every input segment a chain of mesh edges, every
 //! input point kept at its input index.
@@ -52,7 +56,8 @@ struct FrontOptions {
   //! polylines are meshed inside their hull. A PSLG without segments (a .node file) always
   //! gets its hull. Default false.
   bool enclose_convex_hull = false;
-  //! Smoothing passes over the new points after the front. Default 3.
+  //! Smoothing passes over the new points after the front; 0 also turns off the min-angle
+  //! relocation. Default 3.
   int smoothing_passes = 3;
   //! Edge swaps after the front (Delaunay criterion, input segments kept). Default true.
   bool swap_edges = true;

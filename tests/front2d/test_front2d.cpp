@@ -290,6 +290,37 @@ void mesh_cgal_files(double divisor, bool include_img5) {
   }
 }
 
+// Triangles with an angle below 30 deg that touch no input vertex whose input angle (between
+// consecutive incident segments; a dangling segment end counts as 0) is below 60 deg.
+std::size_t count_unexcused_small_angles(const Pslg& p, const Mesh2d& m) {
+  std::vector<std::vector<double>> dirs(p.points.size());
+  for (const auto& s : p.segments)
+    for (int e = 0; e < 2; ++e) {
+      const Vec d = p.points[s[1 - e]] - p.points[s[e]];
+      dirs[s[e]].push_back(std::atan2(d.y(), d.x()));
+    }
+  std::vector<bool> small(p.points.size(), false);
+  for (std::size_t v = 0; v < dirs.size(); ++v) {
+    auto& d = dirs[v];
+    if (d.size() == 1) small[v] = true;
+    if (d.size() < 2) continue;
+    std::sort(d.begin(), d.end());
+    for (std::size_t i = 0; i < d.size(); ++i) {
+      double gap = (i + 1 < d.size() ? d[i + 1] : d[0] + 2 * std::numbers::pi) - d[i];
+      if (gap * 180.0 / std::numbers::pi < 60.0) small[v] = true;
+    }
+  }
+  std::size_t bad = 0;
+  for (const auto& t : m.triangles) {
+    const Vec &a = m.points[t[0]], &b = m.points[t[1]], &c = m.points[t[2]];
+    if (std::min({angle_at(a, b, c), angle_at(b, c, a), angle_at(c, a, b)}) >= 30.0) continue;
+    bool excused = false;
+    for (int v : t) excused = excused || (static_cast<std::size_t>(v) < small.size() && small[v]);
+    if (!excused) ++bad;
+  }
+  return bad;
+}
+
 // img5 has segments of 1/1000 of its size: h must resolve them for a mean alpha >= 0.92,
 // so at the coarse size it is checked for the invariants only.
 TEST(Front2dFiles, CgalDemoDomains) {
@@ -307,6 +338,36 @@ TEST(Front2dFiles, CgalDemoDomains) {
   EXPECT_NEAR(with_hull.report.domain_area, 8.2, 1e-12);
   EXPECT_EQ(check_mesh(t, with_hull, 8.2), "");
   EXPECT_EQ(with_hull.report.n_dropped_points, 0u);
+}
+
+// Issue 4: with uniform sizing, min angle >= 30 deg except at input angles below 60 deg.
+// Asserted on the domains where the mesher achieves it at h = diag / 100 (the files with
+// segments much shorter than h, clusters*, img5, img6, are documented in docs/front2d.md).
+void expect_min_angle_rule(const Pslg& p) {
+  Vec lo = p.points[0], hi = p.points[0];
+  for (const auto& x : p.points) {
+    lo = lo.cwiseMin(x);
+    hi = hi.cwiseMax(x);
+  }
+  const Mesh2d m = mesh_file(p, (hi - lo).norm() / 100);
+  Stats s;
+  EXPECT_EQ(check_mesh(p, m, m.report.domain_area, &s), "");
+  EXPECT_GE(s.mean_alpha, 0.92);
+  EXPECT_EQ(count_unexcused_small_angles(p, m), 0u);
+}
+
+TEST(Front2dFiles, MinAngleRuleAtDiagOver100) {
+  expect_min_angle_rule(polygon({Vec(0, 0), Vec(1, 0), Vec(1, 1), Vec(0, 1)}));
+  for (const char* name : {"fish.poly", "trivial.poly", "butterfly.edg", "lettre_A.edg"}) {
+    SCOPED_TRACE(name);
+    expect_min_angle_rule(read_pslg(test::test_data(std::string("pslg/") + name)));
+  }
+  const auto dir = test::shared_data("pslg/triangle_examples");
+  if (!dir) GTEST_SKIP() << "../shared/data absent";
+  for (const char* name : {"A.poly", "face.poly", "box.poly", "double_hex.poly", "double_hex2.poly", "double_hex3.poly"}) {
+    SCOPED_TRACE(name);
+    expect_min_angle_rule(read_pslg(*dir / name));
+  }
 }
 
 TEST(Front2dFilesSlow, CgalDemoDomainsFine) { mesh_cgal_files(200, true); }
