@@ -3,6 +3,7 @@
 #include <cmath>
 #include <limits>
 #include <numeric>
+#include <optional>
 #include <thread>
 #include <vector>
 
@@ -114,16 +115,39 @@ DistanceReport mesh_distance(const TriangleSoup& mesh, const TriangleSoup& refer
   const double spacing_floor = bounding_box(mesh).diagonal() * options.sample_spacing_relative;
   const double spacing = r.reference_diagonal > 0.0 ? r.reference_diagonal * options.sample_spacing_relative : spacing_floor;
   report_progress(options.progress, "distance", 0.0);
-  const quality_detail::AabbTree mesh_tree(mesh, all_faces(mesh));
-  const quality_detail::AabbTree reference_tree(reference, all_faces(reference));
-  const auto mesh_samples = sample_surface(mesh, spacing, options.max_samples);
-  const auto reference_samples = sample_surface(reference, spacing, options.max_samples);
+  // The two trees and the two sample sets are independent: with two or more threads the
+  // reference's are prepared on a second thread (deterministic, no shared writes).
+  std::optional<quality_detail::AabbTree> mesh_tree;
+  std::optional<quality_detail::AabbTree> reference_tree;
+  std::vector<Eigen::Vector3d> mesh_samples;
+  std::vector<Eigen::Vector3d> reference_samples;
+  auto prepare_reference = [&] {
+    reference_tree.emplace(reference, all_faces(reference));
+    mesh_samples = sample_surface(mesh, spacing, options.max_samples);
+  };
+  auto prepare_mesh = [&] {
+    mesh_tree.emplace(mesh, all_faces(mesh));
+    reference_samples = sample_surface(reference, spacing, options.max_samples);
+  };
+  if (options.n_threads >= 2) {
+    std::thread helper(prepare_reference);
+    try {
+      prepare_mesh();
+    } catch (...) {
+      helper.join();
+      throw;
+    }
+    helper.join();
+  } else {
+    prepare_reference();
+    prepare_mesh();
+  }
   r.n_mesh_samples = mesh_samples.size();
   r.n_reference_samples = reference_samples.size();
   report_progress(options.progress, "distance", 0.1);
-  const OneSided forward = one_sided(mesh_samples, reference_tree, options.n_threads);
+  const OneSided forward = one_sided(mesh_samples, *reference_tree, options.n_threads);
   report_progress(options.progress, "distance", 0.55);
-  const OneSided backward = one_sided(reference_samples, mesh_tree, options.n_threads);
+  const OneSided backward = one_sided(reference_samples, *mesh_tree, options.n_threads);
   r.mesh_to_reference_max = forward.max;
   r.mesh_to_reference_mean = forward.mean;
   r.reference_to_mesh_max = backward.max;

@@ -3,10 +3,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <exception>
 #include <limits>
 #include <numbers>
 #include <numeric>
 #include <string>
+#include <thread>
 
 #include <Eigen/Geometry>
 
@@ -395,15 +397,42 @@ MeshReport mesh_report(const TriangleSoup& soup, const ReportOptions& options) {
   quality_detail::validate_soup(soup, "mesh_report");
   MeshReport report;
   report_progress(options.progress, "topology", 0.0);
-  std::vector<EdgeEntry> edges;
-  std::vector<double> edge_lengths;
-  report.topology = compute_topology(soup, edges, edge_lengths);
-  edges = {};
-  report.quality = compute_quality(soup, edge_lengths);
-  report_progress(options.progress, "topology", 1.0);
+  // With two or more threads the self-intersection count starts on a helper thread while
+  // this one computes topology and quality (its serial set-up overlaps them). Progress is
+  // still reported from this thread in the same stage order; the count does not depend on
+  // the thread count.
+  std::size_t n_pairs = 0;
+  std::exception_ptr helper_error;
+  std::thread helper;
+  if (options.self_intersections && options.n_threads >= 2) {
+    helper = std::thread([&] {
+      try {
+        n_pairs = count_self_intersections(soup, options.n_threads);
+      } catch (...) {
+        helper_error = std::current_exception();
+      }
+    });
+  }
+  try {
+    std::vector<EdgeEntry> edges;
+    std::vector<double> edge_lengths;
+    report.topology = compute_topology(soup, edges, edge_lengths);
+    edges = {};
+    report.quality = compute_quality(soup, edge_lengths);
+    report_progress(options.progress, "topology", 1.0);
+    if (options.self_intersections) report_progress(options.progress, "self-intersections", 0.0);
+  } catch (...) {
+    if (helper.joinable()) helper.join();
+    throw;
+  }
   if (options.self_intersections) {
-    report_progress(options.progress, "self-intersections", 0.0);
-    report.topology.n_self_intersecting_pairs = count_self_intersections(soup, options.n_threads);
+    if (helper.joinable()) {
+      helper.join();
+      if (helper_error) std::rethrow_exception(helper_error);
+    } else {
+      n_pairs = count_self_intersections(soup, options.n_threads);
+    }
+    report.topology.n_self_intersecting_pairs = n_pairs;
     report_progress(options.progress, "self-intersections", 1.0);
   }
   return report;
