@@ -1,0 +1,146 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#pragma once
+//! \file
+//! Surface meshing of a segmented mesh: the third stage of the remeshing pipeline
+//! (DESIGN.md, "Pipeline", surfmesh). Every border curve is discretised once; every patch
+//! gets a fitted height field in its own frame and is meshed by the 2D advancing front in
+//! its plane with the surface metric; new nodes are lifted onto the fitted surface.
+//!
+//! The output is a triangle soup with global node ids, ready for the stitch stage.
+//!
+//! INTERFACE DRAFT (lead, 2026-11-25): the shapes below are the contract between the
+//! surfmesh and stitch/pipeline work. Names may be refined by whoever implements them, as
+//! long as both sides agree.
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "nurbsfront/core/mesh_types.h"
+#include "nurbsfront/core/progress.h"
+#include "nurbsfront/nurbs/frame.h"
+#include "nurbsfront/nurbs/height_field.h"
+#include "nurbsfront/segment/segment.h"
+
+namespace nurbsfront {
+
+//! The 3D target edge length field h(x) (DESIGN.md, "Sizing").
+struct SizingOptions {
+  //! Absolute uniform target edge length (length units); 0 = use relative_size. Default 0.
+  double size = 0.0;
+  //! Target edge length as a multiple of the input's mean edge length, used when size is
+  //! 0. Default 1.5 (about the level of detail of a marching-cubes input).
+  double relative_size = 1.5;
+  //! Curvature-adaptive sizing: h = min(uniform h, sqrt(8 e / kappa_max)) with the chord
+  //! error e below, from the fitted surfaces' principal curvatures. Default false.
+  bool adaptive = false;
+  //! Chord error e for adaptive sizing (length units); 0 = 0.05 * uniform h. Default 0.
+  double chord_error = 0.0;
+  //! Smallest size adaptive sizing may ask for, as a fraction of the uniform h. Default 0.2.
+  double min_size_fraction = 0.2;
+  //! Optional user sizing h(x) at world points (length units, finite, > 0); when set it
+  //! replaces the uniform size (adaptive still applies on top).
+  std::function<double(const Eigen::Vector3d&)> callback;
+  //! Gradation: |grad h| <= gradation - 1. Must be > 1. Default 1.5.
+  double gradation = 1.5;
+  //! \throw InvalidInput on nonsense.
+  void validate() const;
+};
+
+//! Options of the per-patch fit (see FitOptions in nurbs/mba.h).
+struct PatchFitOptions {
+  //! Residual tolerance as a multiple of the input's mean edge length. Default 0.05.
+  double relative_tolerance = 0.05;
+  //! Finest lattice spacing as a multiple of the input's mean edge length, so the fit
+  //! averages a staircase instead of chasing it (DESIGN.md, Pitfalls). Default 2.5.
+  double min_spacing_edges = 2.5;
+  //! Lattice levels at most. Default 10.
+  int max_levels = 10;
+  void validate() const;
+};
+
+//! Options of mesh_surface().
+struct SurfMeshOptions {
+  SizingOptions sizing;
+  PatchFitOptions fit;
+  //! Smoothing passes of the 2D front per patch (FrontOptions::smoothing_passes). Default 3.
+  int smoothing_passes = 3;
+  //! Worker threads for the patches; 0 = all hardware threads. The output is bit-identical
+  //! for every thread count. Default 0.
+  int threads = 0;
+  //! Progress and cancellation (stages "surfmesh: borders", "surfmesh: patches").
+  ProgressCallback progress;
+  void validate() const;
+};
+
+//! A patch's smooth surface: a height field z = f(x, y) in the patch's frame.
+struct PatchSurface {
+  PatchFrame frame;           //!< local z = patch axis
+  BicubicHeightField field;   //!< z = f(x, y) in frame coordinates
+  //! Vertical projection of a world point onto the surface (along the frame's z axis).
+  [[nodiscard]] Eigen::Vector3d project(const Eigen::Vector3d& world) const;
+  //! Unit surface normal (world coordinates) at the vertical projection of a world point.
+  [[nodiscard]] Eigen::Vector3d normal(const Eigen::Vector3d& world) const;
+};
+
+//! What happened to one patch.
+enum class PatchStatus {
+  Ok,          //!< fitted and meshed
+  FitFailed,   //!< the fit threw (message says why)
+  MeshFailed,  //!< the 2D front threw or left the front open (message says why)
+};
+
+struct PatchMeshReport {
+  PatchStatus status = PatchStatus::Ok;
+  std::string message;           //!< empty when Ok
+  std::size_t n_input_faces = 0;
+  std::size_t n_border_nodes = 0;
+  std::size_t n_inner_nodes = 0;
+  std::size_t n_triangles = 0;
+  double fit_max_residual = 0.0; //!< at the patch's input vertices
+  int fit_levels = 0;
+  double seconds = 0.0;
+};
+
+//! Kind of a global node.
+enum class NodeKind : std::uint8_t {
+  Corner,  //!< an input corner (end of border curves): never moves
+  Border,  //!< on a border curve (between two patches or on the input's boundary)
+  Inner,   //!< inside one patch, on its fitted surface
+};
+
+//! The meshed patches with global node ids.
+struct SurfaceMesh {
+  //! Global nodes: border nodes (corners included) first, then the inner nodes patch by
+  //! patch.
+  std::vector<Eigen::Vector3d> nodes;
+  std::vector<NodeKind> node_kind;
+  //! Patch of an inner node; the curve id of a border node; -1 for a corner.
+  std::vector<int> node_owner;
+  std::size_t n_border_nodes = 0;
+  //! Triangles by global node id, oriented like the input faces (normal on the same side).
+  std::vector<std::array<int, 3>> triangles;
+  std::vector<int> triangle_patch;      //!< patch of each triangle
+  std::vector<PatchSurface> surfaces;   //!< one per patch
+  //! Per curve: true when the curve is a crease (its input edges are above the crease
+  //! angle) or on the input's boundary; stitch never flips across or smooths such curves.
+  std::vector<std::uint8_t> curve_is_feature;
+  std::vector<PatchMeshReport> patches; //!< one per patch
+  double target_size = 0.0;             //!< the resolved uniform target edge length
+  double input_mean_edge = 0.0;         //!< mean edge length of the input
+};
+
+//! Discretises the border curves, fits and meshes every patch.
+//! \throw InvalidInput for invalid options or a segmentation that does not match the mesh.
+//! \throw Cancelled if the progress callback returns false.
+//! Patch failures do not throw: they are reported per patch (status != Ok) and the
+//! patch's triangles are missing from the output.
+[[nodiscard]] SurfaceMesh mesh_surface(const TriMesh& input, const Segmentation& segmentation,
+                                       const SurfMeshOptions& options = {});
+
+}  // namespace nurbsfront
