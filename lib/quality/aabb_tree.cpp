@@ -2,17 +2,18 @@
 #include "nurbsfront/quality/aabb_tree.h"
 
 #include <algorithm>
+#include <bit>
+#include <cmath>
 #include <limits>
 
 #include <Eigen/Geometry>
 
 namespace nurbsfront::quality_detail {
 namespace {
+
 constexpr std::uint32_t kLeafSize = 4;
 constexpr std::uint32_t kNoFace = std::numeric_limits<std::uint32_t>::max();
-}  // namespace
-
-namespace {
+constexpr int kMaxDepth = 128;  // 63 Morton bits + log2 of a run of equal codes, with margin
 
 // Spreads the low 21 bits of x so that two zero bits follow each bit (for Morton codes).
 std::uint64_t spread_bits(std::uint64_t x) {
@@ -27,68 +28,132 @@ std::uint64_t spread_bits(std::uint64_t x) {
 
 constexpr double kMortonCells = 2097151.0;  // 2^21 - 1 cells per axis
 
+// Largest float <= x and smallest float >= x (infinite beyond the float range).
+float float_below(double x) {
+  const auto f = static_cast<float>(x);
+  return static_cast<double>(f) > x ? std::nextafter(f, -std::numeric_limits<float>::infinity()) : f;
+}
+float float_above(double x) {
+  const auto f = static_cast<float>(x);
+  return static_cast<double>(f) < x ? std::nextafter(f, std::numeric_limits<float>::infinity()) : f;
+}
+
+Box3f merge(const Box3f& a, const Box3f& b) {
+  Box3f r;
+  for (int k = 0; k < 3; ++k) {
+    r.lo[k] = std::min(a.lo[k], b.lo[k]);
+    r.hi[k] = std::max(a.hi[k], b.hi[k]);
+  }
+  return r;
+}
+
+// Sorts (key, value) pairs by key: least-significant-digit radix sort with 16-bit digits,
+// skipping the digits in which all keys agree. Stable, so equal keys keep their order.
+void radix_sort(std::vector<std::uint64_t>& keys, std::vector<std::uint32_t>& values) {
+  const std::size_t n = keys.size();
+  std::uint64_t all_or = 0, all_and = ~std::uint64_t{0};
+  for (auto k : keys) {
+    all_or |= k;
+    all_and &= k;
+  }
+  std::vector<std::uint64_t> keys2(n);
+  std::vector<std::uint32_t> values2(n);
+  std::vector<std::size_t> offset(1u << 16);
+  for (int shift = 0; shift < 64; shift += 16) {
+    if ((((all_or ^ all_and) >> shift) & 0xffffu) == 0) continue;  // same digit everywhere
+    std::fill(offset.begin(), offset.end(), 0);
+    for (auto k : keys) ++offset[(k >> shift) & 0xffffu];
+    std::size_t sum = 0;
+    for (auto& o : offset) {
+      const std::size_t c = o;
+      o = sum;
+      sum += c;
+    }
+    for (std::size_t i = 0; i < n; ++i) {
+      const std::size_t to = offset[(keys[i] >> shift) & 0xffffu]++;
+      keys2[to] = keys[i];
+      values2[to] = values[i];
+    }
+    keys.swap(keys2);
+    values.swap(values2);
+  }
+}
+
 }  // namespace
 
 AabbTree::AabbTree(const TriangleSoup& soup, std::vector<std::uint32_t> faces) : soup_(&soup) {
   if (faces.empty()) return;
   const std::size_t n = faces.size();
-  // Faces sorted along a Morton (Z-order) curve of their centroids, then split at the
-  // middle of the range: a balanced tree built with one sort and sequential passes
-  // (as in Karras's linear BVH, with midpoint instead of bit splits).
-  std::vector<Box3> boxes(n);
+  // Faces sorted along a Morton (Z-order) curve of their centroids; each range is split
+  // where the codes of its first and last face first differ (a linear BVH, Karras 2012),
+  // so sibling boxes follow octree cells.
   BoundingBox centroid_box;
   std::vector<Eigen::Vector3d> centroids(n);
   for (std::size_t i = 0; i < n; ++i) {
     const auto& t = soup.triangles[faces[i]];
-    const Eigen::Vector3d& a = soup.points[t[0]];
-    const Eigen::Vector3d& b = soup.points[t[1]];
-    const Eigen::Vector3d& c = soup.points[t[2]];
-    boxes[i] = Box3{a.cwiseMin(b).cwiseMin(c), a.cwiseMax(b).cwiseMax(c)};
-    centroids[i] = (a + b + c) / 3.0;
+    centroids[i] = (soup.points[t[0]] + soup.points[t[1]] + soup.points[t[2]]) / 3.0;
     centroid_box.extend(centroids[i]);
   }
   const Eigen::Vector3d extent = (centroid_box.max - centroid_box.min).cwiseMax(std::numeric_limits<double>::min());
-  std::vector<std::pair<std::uint64_t, std::uint32_t>> keys(n);
+  std::vector<std::uint64_t> codes(n);
+  std::vector<std::uint32_t> order(n);
   for (std::size_t i = 0; i < n; ++i) {
     const Eigen::Vector3d q = (centroids[i] - centroid_box.min).cwiseQuotient(extent) * kMortonCells;
-    keys[i] = {spread_bits(static_cast<std::uint64_t>(q.x())) << 2 | spread_bits(static_cast<std::uint64_t>(q.y())) << 1 |
-                   spread_bits(static_cast<std::uint64_t>(q.z())),
-               static_cast<std::uint32_t>(i)};
+    codes[i] = spread_bits(static_cast<std::uint64_t>(q.x())) << 2 | spread_bits(static_cast<std::uint64_t>(q.y())) << 1 |
+               spread_bits(static_cast<std::uint64_t>(q.z()));
+    order[i] = static_cast<std::uint32_t>(i);
   }
   centroids = {};
-  std::sort(keys.begin(), keys.end());
+  radix_sort(codes, order);
   faces_.resize(n);
   boxes_.resize(n);
   for (std::size_t i = 0; i < n; ++i) {
-    faces_[i] = faces[keys[i].second];
-    boxes_[i] = boxes[keys[i].second];
+    faces_[i] = faces[order[i]];
+    const auto& t = soup.triangles[faces_[i]];
+    const Eigen::Vector3d& a = soup.points[t[0]];
+    const Eigen::Vector3d& b = soup.points[t[1]];
+    const Eigen::Vector3d& c = soup.points[t[2]];
+    const Eigen::Vector3d lo = a.cwiseMin(b).cwiseMin(c), hi = a.cwiseMax(b).cwiseMax(c);
+    for (int k = 0; k < 3; ++k) {
+      boxes_[i].lo[k] = float_below(lo[k]);
+      boxes_[i].hi[k] = float_above(hi[k]);
+    }
   }
-  nodes_.reserve(n + 1);  // midpoint splits: leaves of 2..kLeafSize faces, fewer than n nodes
+  nodes_.reserve(2 * n);  // a binary tree with at most n leaves
   nodes_.emplace_back();
-  build(0, 0, static_cast<std::uint32_t>(n));
+  build(0, 0, static_cast<std::uint32_t>(n), codes);
 }
 
-void AabbTree::build(std::uint32_t node, std::uint32_t begin, std::uint32_t end) {
+void AabbTree::build(std::uint32_t node, std::uint32_t begin, std::uint32_t end, const std::vector<std::uint64_t>& codes) {
   if (end - begin <= kLeafSize) {
-    Box3 box = boxes_[begin];
-    for (std::uint32_t i = begin + 1; i < end; ++i) {
-      box.lo = box.lo.cwiseMin(boxes_[i].lo);
-      box.hi = box.hi.cwiseMax(boxes_[i].hi);
-    }
-    nodes_[node].box = box;
-    nodes_[node].begin = begin;
-    nodes_[node].count = end - begin;
+    Box3f box = boxes_[begin];
+    for (std::uint32_t i = begin + 1; i < end; ++i) box = merge(box, boxes_[i]);
+    nodes_[node] = Node{box, begin, end - begin};
     return;
   }
-  const std::uint32_t mid = begin + (end - begin) / 2;
+  std::uint32_t mid = begin + (end - begin) / 2;
+  const std::uint64_t first = codes[begin], last = codes[end - 1];
+  if (first != last) {
+    // Last position whose code shares more leading bits with `first` than `last` does.
+    const int common = std::countl_zero(first ^ last);
+    std::uint32_t lo = begin, hi = end - 1;  // codes[lo] shares more, codes[hi] does not
+    while (hi - lo > 1) {
+      const std::uint32_t m = lo + (hi - lo) / 2;
+      if (std::countl_zero(first ^ codes[m]) > common) {
+        lo = m;
+      } else {
+        hi = m;
+      }
+    }
+    mid = hi;
+  }
   const auto left = static_cast<std::uint32_t>(nodes_.size());
-  nodes_[node].left = left;
+  nodes_[node].index = left;
   nodes_.emplace_back();
   nodes_.emplace_back();
-  build(left, begin, mid);
-  build(left + 1, mid, end);
-  nodes_[node].box = Box3{nodes_[left].box.lo.cwiseMin(nodes_[left + 1].box.lo),
-                          nodes_[left].box.hi.cwiseMax(nodes_[left + 1].box.hi)};
+  build(left, begin, mid, codes);
+  build(left + 1, mid, end, codes);
+  nodes_[node].box = merge(nodes_[left].box, nodes_[left + 1].box);
 }
 
 Eigen::Vector3d closest_point_on_triangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a,
@@ -131,27 +196,31 @@ AabbTree::Closest AabbTree::closest(const Eigen::Vector3d& p, std::uint32_t hint
   if (hint != kNoFace) test_face(hint);
   if (nodes_.empty()) return best;
   // Stack of (node, squared distance to its box), nearer child popped first.
-  std::pair<std::uint32_t, double> stack[64];
+  struct Entry {
+    std::uint32_t node;
+    double box_distance;
+  };
+  Entry stack[kMaxDepth + 1];
   int top = 0;
   stack[top++] = {0u, nodes_[0].box.squared_distance(p)};
   while (top > 0) {
-    const auto [index, box_distance] = stack[--top];
-    if (box_distance > best.squared_distance) continue;
-    const Node& node = nodes_[index];
+    const Entry entry = stack[--top];
+    if (entry.box_distance > best.squared_distance) continue;
+    const Node& node = nodes_[entry.node];
     if (node.is_leaf()) {
-      for (std::uint32_t i = node.begin; i < node.begin + node.count; ++i) {
+      for (std::uint32_t i = node.begin(); i < node.end(); ++i) {
         if (boxes_[i].squared_distance(p) <= best.squared_distance) test_face(faces_[i]);
       }
       continue;
     }
-    const double dl = nodes_[node.left].box.squared_distance(p);
-    const double dr = nodes_[node.left + 1].box.squared_distance(p);
+    const double dl = nodes_[node.left()].box.squared_distance(p);
+    const double dr = nodes_[node.right()].box.squared_distance(p);
     if (dl <= dr) {
-      if (dr <= best.squared_distance) stack[top++] = {node.left + 1, dr};
-      if (dl <= best.squared_distance) stack[top++] = {node.left, dl};
+      if (dr <= best.squared_distance) stack[top++] = {node.right(), dr};
+      if (dl <= best.squared_distance) stack[top++] = {node.left(), dl};
     } else {
-      if (dl <= best.squared_distance) stack[top++] = {node.left, dl};
-      if (dr <= best.squared_distance) stack[top++] = {node.left + 1, dr};
+      if (dl <= best.squared_distance) stack[top++] = {node.left(), dl};
+      if (dr <= best.squared_distance) stack[top++] = {node.right(), dr};
     }
   }
   return best;

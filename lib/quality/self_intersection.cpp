@@ -198,9 +198,9 @@ class SelfIntersectionCounter {
             next.push_back(t);
             continue;
           }
-          next.push_back({a.left, a.left});
-          next.push_back({a.left + 1, a.left + 1});
-          next.push_back({a.left, a.left + 1});
+          next.push_back({a.left(), a.left()});
+          next.push_back({a.right(), a.right()});
+          next.push_back({a.left(), a.right()});
           changed = true;
           continue;
         }
@@ -210,14 +210,14 @@ class SelfIntersectionCounter {
         }
         if (a.is_leaf() && b.is_leaf()) {
           next.push_back(t);
-        } else if (b.is_leaf() || (!a.is_leaf() && (a.box.hi - a.box.lo).squaredNorm() >=
-                                                        (b.box.hi - b.box.lo).squaredNorm())) {
-          next.push_back({a.left, t.b});
-          next.push_back({a.left + 1, t.b});
+        } else if (b.is_leaf() || (!a.is_leaf() && a.box.squared_extent() >=
+                                                        b.box.squared_extent())) {
+          next.push_back({a.left(), t.b});
+          next.push_back({a.right(), t.b});
           changed = true;
         } else {
-          next.push_back({t.a, b.left});
-          next.push_back({t.a, b.left + 1});
+          next.push_back({t.a, b.left()});
+          next.push_back({t.a, b.right()});
           changed = true;
         }
       }
@@ -231,14 +231,14 @@ class SelfIntersectionCounter {
   void self(std::uint32_t n, std::size_t& count) const {
     const auto& node = tree_.nodes()[n];
     if (node.is_leaf()) {
-      for (std::uint32_t i = node.begin; i < node.begin + node.count; ++i) {
-        for (std::uint32_t j = i + 1; j < node.begin + node.count; ++j) test(i, j, count);
+      for (std::uint32_t i = node.begin(); i < node.end(); ++i) {
+        for (std::uint32_t j = i + 1; j < node.end(); ++j) test(i, j, count);
       }
       return;
     }
-    self(node.left, count);
-    self(node.left + 1, count);
-    pair(node.left, node.left + 1, count);
+    self(node.left(), count);
+    self(node.right(), count);
+    pair(node.left(), node.right(), count);
   }
 
   void pair(std::uint32_t na, std::uint32_t nb, std::size_t& count) const {
@@ -246,20 +246,20 @@ class SelfIntersectionCounter {
     const auto& b = tree_.nodes()[nb];
     if (!a.box.overlaps(b.box)) return;
     if (a.is_leaf() && b.is_leaf()) {
-      for (std::uint32_t i = a.begin; i < a.begin + a.count; ++i) {
-        for (std::uint32_t j = b.begin; j < b.begin + b.count; ++j) test(i, j, count);
+      for (std::uint32_t i = a.begin(); i < a.end(); ++i) {
+        for (std::uint32_t j = b.begin(); j < b.end(); ++j) test(i, j, count);
       }
       return;
     }
     // Descend the inner node with the larger box (the non-leaf if one is a leaf).
-    const bool split_a = b.is_leaf() || (!a.is_leaf() && (a.box.hi - a.box.lo).squaredNorm() >=
-                                                             (b.box.hi - b.box.lo).squaredNorm());
+    const bool split_a = b.is_leaf() || (!a.is_leaf() && a.box.squared_extent() >=
+                                                             b.box.squared_extent());
     if (split_a) {
-      pair(a.left, nb, count);
-      pair(a.left + 1, nb, count);
+      pair(a.left(), nb, count);
+      pair(a.right(), nb, count);
     } else {
-      pair(na, b.left, count);
-      pair(na, b.left + 1, count);
+      pair(na, b.left(), count);
+      pair(na, b.right(), count);
     }
   }
 
