@@ -28,15 +28,16 @@ std::uint64_t spread_bits(std::uint64_t x) {
 
 constexpr double kMortonCells = 2097151.0;  // 2^21 - 1 cells per axis
 
-// Largest float <= x and smallest float >= x (infinite beyond the float range).
+// Largest float <= x and smallest float >= x (the largest finite float or infinity
+// beyond the float range). One step of the bit pattern moves to the neighbouring float.
 float float_below(double x) {
   const auto f = static_cast<float>(x);
-  return static_cast<double>(f) > x ? std::nextafter(f, -std::numeric_limits<float>::infinity()) : f;
+  if (!(static_cast<double>(f) > x)) return f;
+  if (f == 0.0f) return -std::numeric_limits<float>::denorm_min();
+  const auto bits = std::bit_cast<std::uint32_t>(f);
+  return std::bit_cast<float>(f > 0.0f ? bits - 1 : bits + 1);
 }
-float float_above(double x) {
-  const auto f = static_cast<float>(x);
-  return static_cast<double>(f) < x ? std::nextafter(f, std::numeric_limits<float>::infinity()) : f;
-}
+float float_above(double x) { return -float_below(-x); }
 
 Box3f merge(const Box3f& a, const Box3f& b) {
   Box3f r;
@@ -120,7 +121,10 @@ AabbTree::AabbTree(const TriangleSoup& soup, std::vector<std::uint32_t> faces) :
     }
   }
   nodes_.reserve(2 * n);  // a binary tree with at most n leaves
+  parent_.reserve(2 * n);
+  leaf_of_.assign(soup.triangles.size(), kNoFace);
   nodes_.emplace_back();
+  parent_.push_back(0);
   build(0, 0, static_cast<std::uint32_t>(n), codes);
 }
 
@@ -129,6 +133,7 @@ void AabbTree::build(std::uint32_t node, std::uint32_t begin, std::uint32_t end,
     Box3f box = boxes_[begin];
     for (std::uint32_t i = begin + 1; i < end; ++i) box = merge(box, boxes_[i]);
     nodes_[node] = Node{box, begin, end - begin};
+    for (std::uint32_t i = begin; i < end; ++i) leaf_of_[faces_[i]] = node;
     return;
   }
   std::uint32_t mid = begin + (end - begin) / 2;
@@ -151,6 +156,8 @@ void AabbTree::build(std::uint32_t node, std::uint32_t begin, std::uint32_t end,
   nodes_[node].index = left;
   nodes_.emplace_back();
   nodes_.emplace_back();
+  parent_.push_back(node);
+  parent_.push_back(node);
   build(left, begin, mid, codes);
   build(left + 1, mid, end, codes);
   nodes_[node].box = merge(nodes_[left].box, nodes_[left + 1].box);
@@ -184,8 +191,7 @@ Eigen::Vector3d closest_point_on_triangle(const Eigen::Vector3d& p, const Eigen:
   return a + ab * (vb * denom) + ac * (vc * denom);
 }
 
-AabbTree::Closest AabbTree::closest(const Eigen::Vector3d& p, std::uint32_t hint) const {
-  Closest best{std::numeric_limits<double>::infinity(), kNoFace};
+void AabbTree::search(const Eigen::Vector3d& p, std::uint32_t start, Closest& best) const {
   auto test_face = [&](std::uint32_t face) {
     const auto& t = soup_->triangles[face];
     const Eigen::Vector3d q =
@@ -193,16 +199,16 @@ AabbTree::Closest AabbTree::closest(const Eigen::Vector3d& p, std::uint32_t hint
     const double d = (q - p).squaredNorm();
     if (d < best.squared_distance || (d == best.squared_distance && face < best.face)) best = {d, face};
   };
-  if (hint != kNoFace) test_face(hint);
-  if (nodes_.empty()) return best;
-  // Stack of (node, squared distance to its box), nearer child popped first.
+  // Stack of (node, squared distance to its box), nearer child popped first. Subtrees
+  // whose box is farther than the best face so far are skipped: every face at the best
+  // distance is still tested, so ties go to the lowest face index whatever the order.
   struct Entry {
     std::uint32_t node;
     double box_distance;
   };
   Entry stack[kMaxDepth + 1];
   int top = 0;
-  stack[top++] = {0u, nodes_[0].box.squared_distance(p)};
+  stack[top++] = {start, nodes_[start].box.squared_distance(p)};
   while (top > 0) {
     const Entry entry = stack[--top];
     if (entry.box_distance > best.squared_distance) continue;
@@ -223,6 +229,20 @@ AabbTree::Closest AabbTree::closest(const Eigen::Vector3d& p, std::uint32_t hint
       if (dr <= best.squared_distance) stack[top++] = {node.right(), dr};
     }
   }
+}
+
+AabbTree::Closest AabbTree::closest(const Eigen::Vector3d& p, std::uint32_t hint) const {
+  Closest best{std::numeric_limits<double>::infinity(), kNoFace};
+  if (nodes_.empty()) return best;
+  if (hint < leaf_of_.size() && leaf_of_[hint] != kNoFace) {
+    // Bottom-up from the hint's leaf: its faces give a tight bound at once, then the
+    // sibling of every ancestor is searched (usually pruned by its box alone).
+    std::uint32_t node = leaf_of_[hint];
+    search(p, node, best);
+    for (; node != 0; node = parent_[node]) search(p, node % 2 == 1 ? node + 1 : node - 1, best);
+    return best;
+  }
+  search(p, 0, best);
   return best;
 }
 

@@ -71,15 +71,20 @@ class AabbTree {
     double squared_distance;
     std::uint32_t face;
   };
-  //! Closest face to p (ties: the lowest face index); `hint` (a face index or UINT32_MAX)
-  //! seeds the search bound.
+  //! Closest face of the tree to p (ties: the lowest face index). `hint` (a face index or
+  //! UINT32_MAX) only speeds the search up: with a face of the tree near p (e.g. the
+  //! previous answer for coherent queries) the search starts at its leaf.
   [[nodiscard]] Closest closest(const Eigen::Vector3d& p, std::uint32_t hint) const;
 
  private:
   void build(std::uint32_t node, std::uint32_t begin, std::uint32_t end, const std::vector<std::uint64_t>& codes);
+  //! Improves `best` by the faces of the subtree at `start` closer than best.squared_distance.
+  void search(const Eigen::Vector3d& p, std::uint32_t start, Closest& best) const;
 
   const TriangleSoup* soup_;
-  std::vector<Node> nodes_;
+  std::vector<Node> nodes_;         //!< root first; siblings at (odd, odd + 1)
+  std::vector<std::uint32_t> parent_;   //!< per node (the root's is 0)
+  std::vector<std::uint32_t> leaf_of_;  //!< per soup face: its leaf, or UINT32_MAX if not in the tree
   std::vector<std::uint32_t> faces_;
   std::vector<Box3f> boxes_;
 };
