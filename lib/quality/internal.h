@@ -3,6 +3,11 @@
 //! \file
 //! Helpers shared by the quality module's sources (not part of the public API).
 
+#include <algorithm>
+#include <cstdint>
+#include <numeric>
+#include <vector>
+
 #include "nurbsfront/core/soup.h"
 
 namespace nurbsfront::quality_detail {
@@ -12,5 +17,30 @@ void validate_soup(const TriangleSoup& soup, const char* what);
 
 //! Every edge has exactly two faces and no face repeats a vertex (orientation ignored).
 bool is_closed_surface(const TriangleSoup& soup);
+
+//! Sorts (key, value) pairs by key (stable).
+void radix_sort(std::vector<std::uint64_t>& keys, std::vector<std::uint32_t>& values);
+
+//! Sorts `items` by `less` when `less` orders first by `bucket(item)`, an integer below
+//! `n_buckets`: a stable counting sort by bucket, then a comparison sort inside each
+//! bucket. Linear for the small buckets of mesh adjacency (edges or faces keyed by their
+//! lowest vertex); the same result as std::sort for a strict total order.
+template <class T, class Bucket, class Less>
+void bucket_sort(std::vector<T>& items, std::size_t n_buckets, Bucket bucket, Less less) {
+  std::vector<std::size_t> start(n_buckets + 1, 0);
+  for (const T& x : items) ++start[bucket(x) + 1];
+  std::partial_sum(start.begin(), start.end(), start.begin());
+  std::vector<T> sorted(items.size());
+  for (const T& x : items) sorted[start[bucket(x)]++] = x;  // start[b] becomes the end of bucket b
+  std::size_t begin = 0;
+  for (std::size_t b = 0; b < n_buckets; ++b) {
+    const std::size_t end = start[b];
+    if (end - begin > 1) {
+      std::sort(sorted.begin() + static_cast<std::ptrdiff_t>(begin), sorted.begin() + static_cast<std::ptrdiff_t>(end), less);
+    }
+    begin = end;
+  }
+  items.swap(sorted);
+}
 
 }  // namespace nurbsfront::quality_detail

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <exception>
+#include <functional>
 #include <limits>
 #include <numbers>
 #include <numeric>
@@ -103,7 +104,7 @@ bool is_closed_surface(const TriangleSoup& soup) {
       keys.push_back(lo << 32 | hi);
     }
   }
-  std::sort(keys.begin(), keys.end());
+  bucket_sort(keys, soup.points.size(), [](std::uint64_t key) { return key >> 32; }, std::less<>());
   for (std::size_t i = 0; i < keys.size();) {
     std::size_t j = i;
     while (j < keys.size() && keys[j] == keys[i]) ++j;
@@ -203,7 +204,7 @@ TopologyReport compute_topology(const TriangleSoup& soup, std::vector<EdgeEntry>
       std::sort(key.begin(), key.end());
       keys[f] = {key, static_cast<std::uint32_t>(f)};
     }
-    std::sort(keys.begin(), keys.end());
+    quality_detail::bucket_sort(keys, n_points, [](const auto& key) { return key.first[0]; }, std::less<>());
     for (std::size_t i = 1; i < keys.size(); ++i) {
       if (keys[i].first == keys[i - 1].first) ++r.n_duplicate_faces;
     }
@@ -221,9 +222,9 @@ TopologyReport compute_topology(const TriangleSoup& soup, std::vector<EdgeEntry>
       edges.push_back({lo << 32 | hi, static_cast<std::uint32_t>(f), from < to ? 1u : 0u});
     }
   }
-  std::sort(edges.begin(), edges.end(), [](const EdgeEntry& x, const EdgeEntry& y) {
-    return x.key < y.key || (x.key == y.key && x.face < y.face);
-  });
+  quality_detail::bucket_sort(
+      edges, n_points, [](const EdgeEntry& e) { return e.key >> 32; },
+      [](const EdgeEntry& x, const EdgeEntry& y) { return x.key < y.key || (x.key == y.key && x.face < y.face); });
 
   // Components through shared vertices; numbered by their lowest face.
   DisjointSets vertex_sets(n_points);

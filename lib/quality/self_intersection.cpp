@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <bit>
 #include <cmath>
 #include <numeric>
 #include <thread>
@@ -144,21 +145,41 @@ namespace {
 
 // Maps every point to the lowest index of a point at exactly the same position, so that
 // unwelded copies of a vertex count as shared corners and not as a touching contact.
+// Points are grouped by a hash of their coordinates (radix-sorted, stable, so each group
+// lists its points in index order); inside a group, exact comparisons decide.
 std::vector<std::uint32_t> canonical_ids(const TriangleSoup& soup) {
-  std::vector<std::uint32_t> order(soup.points.size());
-  std::iota(order.begin(), order.end(), 0u);
-  auto less = [&](std::uint32_t a, std::uint32_t b) {
-    const auto& p = soup.points[a];
-    const auto& q = soup.points[b];
-    if (p.x() != q.x()) return p.x() < q.x();
-    if (p.y() != q.y()) return p.y() < q.y();
-    if (p.z() != q.z()) return p.z() < q.z();
-    return a < b;
-  };
-  std::sort(order.begin(), order.end(), less);
-  std::vector<std::uint32_t> id(soup.points.size());
-  for (std::size_t i = 0; i < order.size(); ++i) {
-    id[order[i]] = (i > 0 && soup.points[order[i]] == soup.points[order[i - 1]]) ? id[order[i - 1]] : order[i];
+  const std::size_t n = soup.points.size();
+  std::vector<std::uint64_t> hashes(n);
+  std::vector<std::uint32_t> order(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    std::uint64_t h = 0x9e3779b97f4a7c15ULL;
+    for (int k = 0; k < 3; ++k) {
+      // + 0.0 turns -0.0 into 0.0: equal coordinates hash equally.
+      h = (h ^ std::bit_cast<std::uint64_t>(soup.points[i][k] + 0.0)) * 0xff51afd7ed558ccdULL;
+      h ^= h >> 33;
+    }
+    hashes[i] = h;
+    order[i] = static_cast<std::uint32_t>(i);
+  }
+  quality_detail::radix_sort(hashes, order);
+  std::vector<std::uint32_t> id(n);
+  std::vector<std::uint32_t> distinct;  // first point of each distinct position in the group
+  for (std::size_t i = 0; i < n;) {
+    std::size_t j = i;
+    while (j < n && hashes[j] == hashes[i]) ++j;
+    distinct.clear();
+    for (std::size_t k = i; k < j; ++k) {
+      const std::uint32_t v = order[k];
+      auto same = std::find_if(distinct.begin(), distinct.end(),
+                               [&](std::uint32_t u) { return soup.points[u] == soup.points[v]; });
+      if (same == distinct.end()) {
+        distinct.push_back(v);
+        id[v] = v;
+      } else {
+        id[v] = *same;
+      }
+    }
+    i = j;
   }
   return id;
 }
