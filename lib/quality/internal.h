@@ -10,7 +10,25 @@
 
 #include "nurbsfront/core/soup.h"
 
+namespace nurbsfront {
+struct DistanceOptions;
+struct DistanceReport;
+}  // namespace nurbsfront
+
 namespace nurbsfront::quality_detail {
+
+class AabbTree;
+
+//! Tree over all faces of `soup` (what count_self_intersections_with and
+//! mesh_distance_with share when a report computes both).
+AabbTree all_faces_tree(const TriangleSoup& soup);
+
+//! count_self_intersections() on a given tree over all faces of the soup (validated).
+std::size_t count_self_intersections_with(const TriangleSoup& soup, const AabbTree& tree, unsigned n_threads);
+
+//! mesh_distance() with the mesh's tree over all its faces given (nullptr: built here).
+DistanceReport mesh_distance_with(const TriangleSoup& mesh, const TriangleSoup& reference,
+                                  const DistanceOptions& options, const AabbTree* mesh_tree);
 
 //! \throw InvalidInput naming `what` for out-of-range indices or non-finite points.
 void validate_soup(const TriangleSoup& soup, const char* what);

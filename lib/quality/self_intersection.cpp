@@ -191,8 +191,9 @@ struct NodePair {
 
 class SelfIntersectionCounter {
  public:
-  SelfIntersectionCounter(const TriangleSoup& soup, const quality_detail::AabbTree& tree, const std::vector<std::uint32_t>& ids)
-      : soup_(soup), tree_(tree), ids_(ids) {}
+  SelfIntersectionCounter(const TriangleSoup& soup, const quality_detail::AabbTree& tree, const std::vector<std::uint32_t>& ids,
+                          const std::vector<char>& usable)
+      : soup_(soup), tree_(tree), ids_(ids), usable_(usable) {}
 
   std::size_t run(NodePair task) const {
     std::size_t count = 0;
@@ -285,7 +286,7 @@ class SelfIntersectionCounter {
   }
 
   void test(std::uint32_t i, std::uint32_t j, std::size_t& count) const {
-    if (!tree_.face_box(i).overlaps(tree_.face_box(j))) return;
+    if (!usable_[i] || !usable_[j] || !tree_.face_box(i).overlaps(tree_.face_box(j))) return;
     const auto& fi = soup_.triangles[tree_.faces()[i]];
     const auto& fj = soup_.triangles[tree_.faces()[j]];
     const std::array<std::uint32_t, 3> ids_i{ids_[fi[0]], ids_[fi[1]], ids_[fi[2]]};
@@ -298,31 +299,35 @@ class SelfIntersectionCounter {
   const TriangleSoup& soup_;
   const quality_detail::AabbTree& tree_;
   const std::vector<std::uint32_t>& ids_;
+  const std::vector<char>& usable_;  //!< by tree position: not degenerate
 };
 
 }  // namespace
 
-std::size_t count_self_intersections(const TriangleSoup& soup, unsigned n_threads) {
-  quality_detail::validate_soup(soup, "count_self_intersections");
-  if (n_threads == 0) throw InvalidInput("nurbsfront: count_self_intersections needs at least one thread");
+namespace quality_detail {
+
+AabbTree all_faces_tree(const TriangleSoup& soup) {
+  std::vector<std::uint32_t> faces(soup.triangles.size());
+  std::iota(faces.begin(), faces.end(), 0u);
+  return AabbTree(soup, std::move(faces));
+}
+
+std::size_t count_self_intersections_with(const TriangleSoup& soup, const AabbTree& tree, unsigned n_threads) {
+  if (tree.empty()) return 0;
   const std::vector<std::uint32_t> ids = canonical_ids(soup);
   // Degenerate faces (repeated corner, or area at the degenerate tolerance) are counted
   // elsewhere and skipped here: the predicates need a proper plane per triangle.
   const double diagonal = bounding_box(soup).diagonal();
   const double area_floor = tolerance::kDegenerateAreaRelative * diagonal * diagonal;
-  std::vector<std::uint32_t> faces;
-  faces.reserve(soup.triangles.size());
-  for (std::size_t f = 0; f < soup.triangles.size(); ++f) {
-    const auto& t = soup.triangles[f];
+  std::vector<char> usable(tree.faces().size());  // by position in the tree
+  for (std::size_t i = 0; i < usable.size(); ++i) {
+    const auto& t = soup.triangles[tree.faces()[i]];
     if (ids[t[0]] == ids[t[1]] || ids[t[1]] == ids[t[2]] || ids[t[2]] == ids[t[0]]) continue;
     const double area =
         0.5 * (soup.points[t[1]] - soup.points[t[0]]).cross(soup.points[t[2]] - soup.points[t[0]]).norm();
-    if (area <= area_floor) continue;
-    faces.push_back(static_cast<std::uint32_t>(f));
+    usable[i] = area > area_floor;
   }
-  const quality_detail::AabbTree tree(soup, std::move(faces));
-  if (tree.empty()) return 0;
-  const SelfIntersectionCounter counter(soup, tree, ids);
+  const SelfIntersectionCounter counter(soup, tree, ids, usable);
   if (n_threads == 1) return counter.run({0, 0});
   // Independent subtree pairs, handed out dynamically; the total does not depend on
   // which thread counted which pair.
@@ -337,6 +342,14 @@ std::size_t count_self_intersections(const TriangleSoup& soup, unsigned n_thread
   work(0);
   for (auto& w : workers) w.join();
   return std::accumulate(counts.begin(), counts.end(), std::size_t{0});
+}
+
+}  // namespace quality_detail
+
+std::size_t count_self_intersections(const TriangleSoup& soup, unsigned n_threads) {
+  quality_detail::validate_soup(soup, "count_self_intersections");
+  if (n_threads == 0) throw InvalidInput("nurbsfront: count_self_intersections needs at least one thread");
+  return quality_detail::count_self_intersections_with(soup, quality_detail::all_faces_tree(soup), n_threads);
 }
 
 }  // namespace nurbsfront
