@@ -48,6 +48,28 @@ TEST(Front2dPredicates, Orient2dIsExactWhereNaiveFails) {
   EXPECT_GT(naive_wrong, 0) << "the test must contain cases where double evaluation fails";
 }
 
+TEST(Front2dPredicates, Orient2dShortcutForEqualCoordinates) {
+  // Points sharing an x or a y coordinate (axis-parallel boundaries) are decided without
+  // the expansion; the answer must equal the exact one, also a few ulps off the line.
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> u(-1, 1);
+  int decided_zero = 0;
+  for (int i = 0; i < 20000; ++i) {
+    const double x = u(rng), y = u(rng);
+    Vec a(x, u(rng)), b(x, u(rng)), c(x, u(rng));  // on the line x = const
+    const int which = i % 3;
+    Vec& m = which == 0 ? a : (which == 1 ? b : c);
+    const int k = static_cast<int>(i / 3 % 5) - 2;  // move one point by -2..2 ulps
+    m.x() = k == 0 ? m.x() : std::nextafter(m.x(), k > 0 ? 2.0 : -2.0);
+    if (std::abs(k) == 2) m.x() = std::nextafter(m.x(), k > 0 ? 2.0 : -2.0);
+    ASSERT_EQ(front2d::orient2d(a, b, c), front2d::orient2d_exact(a, b, c)) << i;
+    const Vec p(a.y(), y), q(b.y(), y), r(c.y(), y);  // on the line y = const
+    ASSERT_EQ(front2d::orient2d(p, q, r), front2d::orient2d_exact(p, q, r)) << i;
+    decided_zero += front2d::orient2d(a, b, c) == 0;
+  }
+  EXPECT_GT(decided_zero, 1000);
+}
+
 TEST(Front2dPredicates, SegmentsIntersect) {
   EXPECT_TRUE(front2d::segments_intersect({0, 0}, {2, 2}, {0, 2}, {2, 0}));
   EXPECT_FALSE(front2d::segments_intersect({0, 0}, {1, 1}, {2, 2}, {3, 3}));
