@@ -70,10 +70,19 @@ struct SurfMeshOptions {
   PatchFitOptions fit;
   //! Smoothing passes of the 2D front per patch (FrontOptions::smoothing_passes). Default 3.
   int smoothing_passes = 3;
+  //! Dihedral angle (deg, between the raw normals of an input edge's two faces) above which
+  //! an edge counts as a crease for SurfaceMesh::curve_is_feature. Pass the segmentation's
+  //! SegmentOptions::crease_angle_deg. In (0, 180]. Default 80 (the segment default).
+  double crease_angle_deg = 80.0;
+  //! Move every border node (not the corners) to the mean of its vertical projections onto
+  //! the fitted surfaces of the curve's patches before meshing, so the border lies near both
+  //! (DESIGN.md, Pitfalls). Default true.
+  bool project_border_nodes = true;
   //! Worker threads for the patches; 0 = all hardware threads. The output is bit-identical
   //! for every thread count. Default 0.
   int threads = 0;
-  //! Progress and cancellation (stages "surfmesh: borders", "surfmesh: patches").
+  //! Progress and cancellation (stages "surfmesh: borders", "surfmesh: patches"). Always
+  //! called from the thread that called mesh_surface().
   ProgressCallback progress;
   void validate() const;
 };

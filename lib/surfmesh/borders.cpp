@@ -1,0 +1,199 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Border curves: validation against the mesh, one discretisation per curve, feature flags.
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <string>
+#include <utility>
+
+#include "nurbsfront/core/error.h"
+#include "nurbsfront/core/soup.h"
+#include "nurbsfront/core/tolerances.h"
+#include "nurbsfront/surfmesh/surfmesh_internal.h"
+
+namespace nurbsfront::surfmesh_detail {
+
+namespace {
+
+[[noreturn]] void mismatch(const std::string& what) {
+  throw InvalidInput("mesh_surface: the segmentation does not match the mesh: " + what);
+}
+
+Eigen::Vector3d point(const TriMesh& mesh, int v) { return to_eigen(mesh.point(TriMesh::VertexHandle(v))); }
+
+int corner_index(const std::vector<int>& corners, int vertex) {
+  const auto it = std::lower_bound(corners.begin(), corners.end(), vertex);
+  if (it == corners.end() || *it != vertex) return -1;
+  return static_cast<int>(it - corners.begin());
+}
+
+// Resamples a polyline (closed: the last point joins the first) into n pieces of equal
+// integral of 1 / size, n = max(min_pieces, round(integral)). Returns the interior points
+// (open: n - 1 of them, the ends are the polyline's ends) or all n points starting at the
+// first polyline point (closed).
+std::vector<Eigen::Vector3d> resample(const std::vector<Eigen::Vector3d>& pts, bool is_closed, int min_pieces,
+                                      const SizeAt& size_at) {
+  std::vector<Eigen::Vector3d> poly = pts;
+  if (is_closed) poly.push_back(pts.front());
+  const std::size_t m = poly.size();
+  std::vector<double> inv_size(m);
+  for (std::size_t i = 0; i < m; ++i) inv_size[i] = 1.0 / size_at(poly[i]);
+  std::vector<double> cumulative(m, 0.0);
+  for (std::size_t i = 1; i < m; ++i)
+    cumulative[i] = cumulative[i - 1] + (poly[i] - poly[i - 1]).norm() * 0.5 * (inv_size[i] + inv_size[i - 1]);
+  const double total = cumulative.back();
+  const long rounded = std::lround(total);
+  const int n = std::max(min_pieces, static_cast<int>(std::min<long>(rounded, 1L << 30)));
+  std::vector<Eigen::Vector3d> out;
+  out.reserve(static_cast<std::size_t>(n));
+  if (is_closed) out.push_back(poly.front());
+  std::size_t seg = 1;
+  for (int k = 1; k < n; ++k) {
+    const double target = total * static_cast<double>(k) / static_cast<double>(n);
+    while (seg + 1 < m && cumulative[seg] < target) ++seg;
+    const double span = cumulative[seg] - cumulative[seg - 1];
+    const double t = span > 0.0 ? std::clamp((target - cumulative[seg - 1]) / span, 0.0, 1.0) : 0.5;
+    out.push_back((1.0 - t) * poly[seg - 1] + t * poly[seg]);
+  }
+  return out;
+}
+
+}  // namespace
+
+double mean_edge_length(const TriMesh& mesh) {
+  const double zero = tolerance::kZeroLengthRelative * bounding_box(mesh).diagonal();
+  double sum = 0.0;
+  std::size_t count = 0;
+  for (const auto e : mesh.edges()) {
+    if (mesh.status(e).deleted()) continue;
+    const double length = mesh.calc_edge_length(e);
+    if (!(length > zero)) continue;
+    sum += length;
+    ++count;
+  }
+  return count == 0 ? 0.0 : sum / static_cast<double>(count);
+}
+
+void validate_segmentation(const TriMesh& mesh, const Segmentation& seg) {
+  const int n_faces = static_cast<int>(mesh.n_faces());
+  const int n_vertices = static_cast<int>(mesh.n_vertices());
+  const int n_edges = static_cast<int>(mesh.n_edges());
+  const int n_patches = static_cast<int>(seg.patches.size());
+  const int n_curves = static_cast<int>(seg.curves.size());
+  if (seg.face_patch.size() != mesh.n_faces())
+    mismatch(std::to_string(seg.face_patch.size()) + " face labels for " + std::to_string(mesh.n_faces()) + " faces");
+  for (const int p : seg.face_patch)
+    if (p < 0 || p >= n_patches) mismatch("a face has patch id " + std::to_string(p));
+  for (int p = 0; p < n_patches; ++p) {
+    const Patch& patch = seg.patches[static_cast<std::size_t>(p)];
+    for (const int f : patch.faces)
+      if (f < 0 || f >= n_faces || seg.face_patch[static_cast<std::size_t>(f)] != p)
+        mismatch("patch " + std::to_string(p) + " lists face " + std::to_string(f) + " that is not its own");
+    for (const int c : patch.curves)
+      if (c < 0 || c >= n_curves) mismatch("patch " + std::to_string(p) + " lists curve " + std::to_string(c));
+    if (!(std::abs(patch.axis.norm() - 1.0) < 1e-6)) mismatch("patch " + std::to_string(p) + " has no unit axis");
+  }
+  for (const int v : seg.corners)
+    if (v < 0 || v >= n_vertices) mismatch("corner vertex " + std::to_string(v) + " out of range");
+  if (!std::is_sorted(seg.corners.begin(), seg.corners.end())) mismatch("corners are not ascending");
+  for (int c = 0; c < n_curves; ++c) {
+    const BorderCurve& curve = seg.curves[static_cast<std::size_t>(c)];
+    const std::string name = "curve " + std::to_string(c);
+    const std::size_t nv = curve.vertices.size();
+    if (nv < 2) mismatch(name + " has fewer than 2 vertices");
+    if (curve.smoothed.size() != nv) mismatch(name + " has " + std::to_string(curve.smoothed.size()) + " smoothed points");
+    if (curve.edges.size() != (curve.is_closed ? nv : nv - 1)) mismatch(name + " has a wrong edge count");
+    if (curve.patch_left < 0 || curve.patch_left >= n_patches || curve.patch_right < -1 ||
+        curve.patch_right >= n_patches || curve.patch_left == curve.patch_right)
+      mismatch(name + " has invalid patch ids");
+    for (const int v : curve.vertices)
+      if (v < 0 || v >= n_vertices) mismatch(name + " has vertex " + std::to_string(v) + " out of range");
+    for (std::size_t i = 0; i < curve.edges.size(); ++i) {
+      const int e = curve.edges[i];
+      if (e < 0 || e >= n_edges) mismatch(name + " has edge " + std::to_string(e) + " out of range");
+      const auto h = mesh.halfedge_handle(TriMesh::EdgeHandle(e), 0);
+      const int a = mesh.from_vertex_handle(h).idx();
+      const int b = mesh.to_vertex_handle(h).idx();
+      const int u = curve.vertices[i];
+      const int w = curve.vertices[(i + 1) % nv];
+      if (!((a == u && b == w) || (a == w && b == u))) mismatch(name + ": edge " + std::to_string(e) + " does not join its vertices");
+    }
+    for (const auto& q : curve.smoothed)
+      if (!q.allFinite()) mismatch(name + " has a non-finite smoothed point");
+    if (!curve.is_closed &&
+        (corner_index(seg.corners, curve.vertices.front()) < 0 || corner_index(seg.corners, curve.vertices.back()) < 0))
+      mismatch(name + " does not end at corners");
+  }
+}
+
+BorderNodes discretise_borders(const TriMesh& mesh, const Segmentation& seg, const SizeAt& size_at) {
+  BorderNodes out;
+  for (const int v : seg.corners) {
+    out.positions.push_back(point(mesh, v));
+    out.kind.push_back(NodeKind::Corner);
+    out.owner.push_back(-1);
+  }
+  // Open curves joining the same two corners: each needs 2 pieces at least, or a patch
+  // bounded by two of them would get the same segment twice.
+  std::vector<std::pair<int, int>> ends;
+  for (const BorderCurve& curve : seg.curves)
+    if (!curve.is_closed)
+      ends.emplace_back(std::minmax(curve.vertices.front(), curve.vertices.back()));
+  std::sort(ends.begin(), ends.end());
+  out.curve_nodes.resize(seg.curves.size());
+  for (std::size_t c = 0; c < seg.curves.size(); ++c) {
+    const BorderCurve& curve = seg.curves[c];
+    std::vector<int>& nodes = out.curve_nodes[c];
+    int min_pieces = 1;
+    if (curve.is_closed || curve.vertices.front() == curve.vertices.back()) {
+      min_pieces = 3;
+    } else {
+      const auto key = std::minmax(curve.vertices.front(), curve.vertices.back());
+      const auto range = std::equal_range(ends.begin(), ends.end(), std::pair<int, int>(key));
+      if (range.second - range.first > 1) min_pieces = 2;
+    }
+    const std::vector<Eigen::Vector3d> samples = resample(curve.smoothed, curve.is_closed, min_pieces, size_at);
+    if (!curve.is_closed) nodes.push_back(corner_index(seg.corners, curve.vertices.front()));
+    for (const auto& q : samples) {
+      nodes.push_back(static_cast<int>(out.positions.size()));
+      out.positions.push_back(q);
+      out.kind.push_back(NodeKind::Border);
+      out.owner.push_back(static_cast<int>(c));
+    }
+    if (!curve.is_closed) nodes.push_back(corner_index(seg.corners, curve.vertices.back()));
+  }
+  return out;
+}
+
+std::vector<std::uint8_t> feature_curves(const TriMesh& mesh, const Segmentation& seg, double crease_angle_deg) {
+  const double cos_crease = std::cos(crease_angle_deg * std::numbers::pi / 180.0);
+  std::vector<std::uint8_t> out(seg.curves.size(), 0);
+  for (std::size_t c = 0; c < seg.curves.size(); ++c) {
+    const BorderCurve& curve = seg.curves[c];
+    if (curve.patch_right < 0) {
+      out[c] = 1;
+      continue;
+    }
+    std::size_t n_crease = 0;
+    for (const int e : curve.edges) {
+      const TriMesh::EdgeHandle eh(e);
+      const auto f0 = mesh.face_handle(mesh.halfedge_handle(eh, 0));
+      const auto f1 = mesh.face_handle(mesh.halfedge_handle(eh, 1));
+      if (!f0.is_valid() || !f1.is_valid()) {
+        ++n_crease;
+        continue;
+      }
+      const Eigen::Vector3d n0 = to_eigen(mesh.calc_face_normal(f0));
+      const Eigen::Vector3d n1 = to_eigen(mesh.calc_face_normal(f1));
+      const double l0 = n0.norm();
+      const double l1 = n1.norm();
+      if (!(l0 > 0.0 && l1 > 0.0)) continue;  // a degenerate face has no dihedral
+      if (n0.dot(n1) / (l0 * l1) < cos_crease) ++n_crease;
+    }
+    out[c] = 2 * n_crease > curve.edges.size() ? 1 : 0;
+  }
+  return out;
+}
+
+}  // namespace nurbsfront::surfmesh_detail

@@ -1,0 +1,269 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// One patch: its frame and height-field fit, the PSLG of its border in the patch plane,
+// the 2D front with the surface metric, and the lift of the new nodes.
+
+#include <algorithm>
+#include <cmath>
+#include <exception>
+#include <memory>
+#include <numbers>
+#include <stdexcept>
+#include <string>
+
+#include "nurbsfront/core/stopwatch.h"
+#include "nurbsfront/front2d/front.h"
+#include "nurbsfront/nurbs/mba.h"
+#include "nurbsfront/surfmesh/surfmesh_internal.h"
+
+namespace nurbsfront::surfmesh_detail {
+
+namespace {
+
+// The first fundamental form of the patch's height field: 3D lengths of plane steps.
+class HeightFieldMetric final : public Metric {
+ public:
+  explicit HeightFieldMetric(const BicubicHeightField& field) : field_(&field) {}
+  [[nodiscard]] Eigen::Matrix2d tensor(const Eigen::Vector2d& x) const override { return field_->metric(x.x(), x.y()); }
+
+ private:
+  const BicubicHeightField* field_;
+};
+
+// Border of one patch as directed edges (domain on the left) between its border nodes.
+struct PatchBorder {
+  std::vector<int> nodes;                   // global ids, ascending
+  std::vector<std::array<int, 2>> edges;    // local indices into nodes
+};
+
+PatchBorder patch_border(const Segmentation& seg, int p, const BorderNodes& borders) {
+  PatchBorder out;
+  std::vector<std::array<int, 2>> global_edges;
+  for (const int c : seg.patches[static_cast<std::size_t>(p)].curves) {
+    const BorderCurve& curve = seg.curves[static_cast<std::size_t>(c)];
+    std::vector<int> chain = borders.curve_nodes[static_cast<std::size_t>(c)];
+    if (curve.is_closed) chain.push_back(chain.front());
+    // The curve walks with patch_left on its left: reversed for the right patch.
+    if (curve.patch_left != p) std::reverse(chain.begin(), chain.end());
+    for (std::size_t i = 0; i + 1 < chain.size(); ++i) global_edges.push_back({chain[i], chain[i + 1]});
+  }
+  for (const auto& e : global_edges) out.nodes.insert(out.nodes.end(), e.begin(), e.end());
+  std::sort(out.nodes.begin(), out.nodes.end());
+  out.nodes.erase(std::unique(out.nodes.begin(), out.nodes.end()), out.nodes.end());
+  auto local = [&](int g) {
+    return static_cast<int>(std::lower_bound(out.nodes.begin(), out.nodes.end(), g) - out.nodes.begin());
+  };
+  for (const auto& e : global_edges) out.edges.push_back({local(e[0]), local(e[1])});
+  return out;
+}
+
+// Traces the directed edges into loops. Where loops touch (a node with several outgoing
+// edges), the next edge is the first outgoing one clockwise from the incoming edge's
+// reverse: it bounds the domain sector on the left of the incoming edge.
+std::vector<std::vector<int>> trace_loops(const std::vector<Eigen::Vector2d>& xy, const std::vector<std::array<int, 2>>& edges) {
+  std::vector<std::vector<int>> outgoing(xy.size());
+  for (std::size_t e = 0; e < edges.size(); ++e) outgoing[static_cast<std::size_t>(edges[e][0])].push_back(static_cast<int>(e));
+  std::vector<bool> used(edges.size(), false);
+  std::vector<std::vector<int>> loops;
+  for (std::size_t start = 0; start < edges.size(); ++start) {
+    if (used[start]) continue;
+    std::vector<int> loop;
+    int e = static_cast<int>(start);
+    while (e >= 0 && !used[static_cast<std::size_t>(e)]) {
+      used[static_cast<std::size_t>(e)] = true;
+      const auto [u, v] = edges[static_cast<std::size_t>(e)];
+      loop.push_back(u);
+      const Eigen::Vector2d back = xy[static_cast<std::size_t>(u)] - xy[static_cast<std::size_t>(v)];
+      const double a0 = std::atan2(back.y(), back.x());
+      int best = -1;
+      double best_sweep = 0.0;
+      for (const int cand : outgoing[static_cast<std::size_t>(v)]) {
+        if (used[static_cast<std::size_t>(cand)]) continue;
+        const Eigen::Vector2d d = xy[static_cast<std::size_t>(edges[static_cast<std::size_t>(cand)][1])] - xy[static_cast<std::size_t>(v)];
+        double sweep = a0 - std::atan2(d.y(), d.x());
+        while (sweep <= 0.0) sweep += 2.0 * std::numbers::pi;
+        if (best < 0 || sweep < best_sweep) {
+          best = cand;
+          best_sweep = sweep;
+        }
+      }
+      e = best;
+    }
+    loops.push_back(std::move(loop));
+  }
+  return loops;
+}
+
+double signed_area(const std::vector<Eigen::Vector2d>& polygon) {
+  double twice = 0.0;
+  for (std::size_t i = 0; i < polygon.size(); ++i) {
+    const auto& a = polygon[i];
+    const auto& b = polygon[(i + 1) % polygon.size()];
+    twice += a.x() * b.y() - a.y() * b.x();
+  }
+  return 0.5 * twice;
+}
+
+std::string what_of(const std::exception_ptr& error) {
+  try {
+    std::rethrow_exception(error);
+  } catch (const std::exception& e) {
+    return e.what();
+  } catch (...) {
+    return "unknown error";
+  }
+}
+
+}  // namespace
+
+bool polygon_contains(const std::vector<Eigen::Vector2d>& polygon, const Eigen::Vector2d& q) {
+  bool inside = false;
+  for (std::size_t i = 0, j = polygon.size() - 1; i < polygon.size(); j = i++) {
+    const auto& a = polygon[i];
+    const auto& b = polygon[j];
+    if ((a.y() > q.y()) != (b.y() > q.y())) {
+      const double x = a.x() + (q.y() - a.y()) * (b.x() - a.x()) / (b.y() - a.y());
+      if (q.x() < x) inside = !inside;
+    }
+  }
+  return inside;
+}
+
+bool point_inside_polygon(const std::vector<Eigen::Vector2d>& polygon, Eigen::Vector2d& inside) {
+  const std::size_t n = polygon.size();
+  if (n < 3) return false;
+  // The leftmost (then lowest) vertex is convex: points just inside its corner are inside.
+  std::size_t v = 0;
+  for (std::size_t i = 1; i < n; ++i)
+    if (polygon[i].x() < polygon[v].x() || (polygon[i].x() == polygon[v].x() && polygon[i].y() < polygon[v].y())) v = i;
+  const Eigen::Vector2d& c = polygon[v];
+  const Eigen::Vector2d d = (polygon[(v + n - 1) % n] - c) + (polygon[(v + 1) % n] - c);
+  double s = 1.0 / 3.0;
+  for (int k = 0; k < 40; ++k, s *= 0.5) {
+    const Eigen::Vector2d q = c + s * d;
+    if (polygon_contains(polygon, q)) {
+      inside = q;
+      return true;
+    }
+  }
+  return false;
+}
+
+void fit_patch(const TriMesh& mesh, const Segmentation& seg, int p, const BorderNodes& borders,
+               const SurfMeshOptions& options, double mean_edge, PatchResult& result) {
+  const Stopwatch clock;
+  const Patch& patch = seg.patches[static_cast<std::size_t>(p)];
+  result.report.n_input_faces = patch.faces.size();
+  try {
+    std::vector<int> vertices;
+    vertices.reserve(3 * patch.faces.size());
+    for (const int f : patch.faces)
+      for (const auto v : mesh.fv_range(TriMesh::FaceHandle(f))) vertices.push_back(v.idx());
+    std::sort(vertices.begin(), vertices.end());
+    vertices.erase(std::unique(vertices.begin(), vertices.end()), vertices.end());
+    std::vector<Eigen::Vector3d> points;
+    points.reserve(vertices.size());
+    for (const int v : vertices) points.push_back(to_eigen(mesh.point(TriMesh::VertexHandle(v))));
+    const std::vector<Eigen::Vector3d> normals(points.size(), patch.axis);
+    const PatchFrame frame = patch_frame(points, normals);
+    std::vector<Eigen::Vector3d> local = frame.to_local(points);
+
+    // The rectangle covers the vertices and the border nodes, slightly enlarged, so every
+    // evaluation during meshing is inside.
+    Eigen::Vector2d lo = local.front().head<2>();
+    Eigen::Vector2d hi = lo;
+    auto extend = [&](const Eigen::Vector3d& q) {
+      lo = lo.cwiseMin(q.head<2>());
+      hi = hi.cwiseMax(q.head<2>());
+    };
+    for (const auto& q : local) extend(q);
+    for (const int c : patch.curves)
+      for (const int g : borders.curve_nodes[static_cast<std::size_t>(c)])
+        extend(frame.to_local(borders.positions[static_cast<std::size_t>(g)]));
+    const double margin = 0.02 * (hi - lo).norm() + mean_edge;
+    FitOptions fit;
+    fit.tolerance = options.fit.relative_tolerance * mean_edge;
+    fit.min_spacing = options.fit.min_spacing_edges * mean_edge;
+    fit.max_levels = options.fit.max_levels;
+    fit.domain = Rectangle{lo - Eigen::Vector2d::Constant(margin), hi + Eigen::Vector2d::Constant(margin)};
+    FitResult fitted = fit_height_field(local, fit);
+    result.surface.frame = frame;
+    result.surface.field = std::move(fitted.field);
+    result.has_surface = true;
+    result.report.fit_max_residual = fitted.max_residual();
+    result.report.fit_levels = static_cast<int>(fitted.levels.size());
+  } catch (...) {
+    result.report.status = PatchStatus::FitFailed;
+    result.report.message = "fit failed: " + what_of(std::current_exception());
+  }
+  result.report.seconds += clock.seconds();
+}
+
+void mesh_patch(const Segmentation& seg, int p, const BorderNodes& borders, const SurfMeshOptions& options,
+                double uniform_size, PatchResult& result) {
+  if (!result.has_surface) return;
+  const Stopwatch clock;
+  try {
+    const PatchSurface& surface = result.surface;
+    const PatchBorder border = patch_border(seg, p, borders);
+    result.report.n_border_nodes = border.nodes.size();
+    if (border.edges.size() < 3) throw std::runtime_error("the patch has no closed border");
+    Pslg pslg;
+    pslg.points.reserve(border.nodes.size());
+    for (const int g : border.nodes)
+      pslg.points.push_back(surface.frame.to_local(borders.positions[static_cast<std::size_t>(g)]).head<2>());
+    pslg.segments = border.edges;
+    // Every loop but the counter-clockwise outer one bounds a hole: front2d needs a point
+    // inside each.
+    for (const auto& loop : trace_loops(pslg.points, border.edges)) {
+      std::vector<Eigen::Vector2d> polygon;
+      polygon.reserve(loop.size());
+      for (const int i : loop) polygon.push_back(pslg.points[static_cast<std::size_t>(i)]);
+      if (signed_area(polygon) >= 0.0) continue;
+      Eigen::Vector2d inside;
+      if (!point_inside_polygon(polygon, inside)) throw std::runtime_error("no point found inside a hole loop");
+      pslg.holes.push_back(inside);
+    }
+
+    FrontOptions front;
+    const BicubicHeightField& field = surface.field;
+    const PatchFrame& frame = surface.frame;
+    if (options.sizing.callback) {
+      const auto& callback = options.sizing.callback;
+      front.sizing = SizingField::from_callback(
+          [&callback, &field, &frame](const Eigen::Vector2d& xy) { return callback(frame.to_world(field.lift(xy.x(), xy.y()))); });
+    } else {
+      front.sizing = SizingField::uniform(uniform_size);
+    }
+    front.sizing.gradation = options.sizing.gradation;
+    front.metric = std::make_shared<HeightFieldMetric>(field);
+    front.split_segments = false;
+    front.smoothing_passes = options.smoothing_passes;
+    const Mesh2d mesh2d = mesh_pslg(pslg, front);
+    if (mesh2d.report.status != FrontStatus::Ok)
+      throw std::runtime_error("the 2D front did not close: " + mesh2d.report.message);
+    for (const auto& chain : mesh2d.segment_chains)
+      if (chain.size() != 2) throw std::runtime_error("the 2D front split a border segment");
+    const int n_input = static_cast<int>(pslg.points.size());
+    auto node_id = [&](int i) {
+      return i < n_input ? border.nodes[static_cast<std::size_t>(i)] : -(i - n_input + 1);
+    };
+    for (std::size_t i = pslg.points.size(); i < mesh2d.points.size(); ++i) {
+      const Eigen::Vector2d& xy = mesh2d.points[i];
+      result.inner_nodes.push_back(frame.to_world(field.lift(xy.x(), xy.y())));
+    }
+    result.triangles.reserve(mesh2d.triangles.size());
+    for (const auto& t : mesh2d.triangles) result.triangles.push_back({node_id(t[0]), node_id(t[1]), node_id(t[2])});
+    result.report.n_inner_nodes = result.inner_nodes.size();
+    result.report.n_triangles = result.triangles.size();
+  } catch (...) {
+    result.inner_nodes.clear();
+    result.triangles.clear();
+    result.report.n_inner_nodes = 0;
+    result.report.n_triangles = 0;
+    result.report.status = PatchStatus::MeshFailed;
+    result.report.message = "meshing failed: " + what_of(std::current_exception());
+  }
+  result.report.seconds += clock.seconds();
+}
+
+}  // namespace nurbsfront::surfmesh_detail

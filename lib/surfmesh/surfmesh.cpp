@@ -1,0 +1,219 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// mesh_surface(): options, the two parallel phases (fit, then mesh) and the global
+// numbering of the nodes.
+
+#include "nurbsfront/surfmesh/surfmesh.h"
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <condition_variable>
+#include <exception>
+#include <mutex>
+#include <string>
+#include <thread>
+
+#include "nurbsfront/core/error.h"
+#include "nurbsfront/surfmesh/surfmesh_internal.h"
+
+namespace nurbsfront {
+
+namespace {
+
+[[noreturn]] void bad_option(const std::string& what) { throw InvalidInput("SurfMeshOptions: " + what); }
+
+bool finite_positive(double x) { return std::isfinite(x) && x > 0.0; }
+
+// Runs task(i) for every i in [0, n) on `threads` workers pulling indices from an atomic
+// counter. Progress is reported from the calling thread (fraction f0 .. f1); returning
+// false from the callback stops the workers and throws Cancelled. The task must not throw
+// (an escaping exception is rethrown here after the workers joined).
+template <class Task>
+void run_parallel(std::size_t n, unsigned threads, const ProgressCallback& progress, double f0, double f1, const Task& task) {
+  constexpr std::string_view kStage = "surfmesh: patches";
+  auto fraction = [&](std::size_t done) { return f0 + (f1 - f0) * static_cast<double>(done) / static_cast<double>(n); };
+  if (threads <= 1 || n <= 1) {
+    for (std::size_t i = 0; i < n; ++i) {
+      task(i);
+      report_progress(progress, kStage, fraction(i + 1));
+    }
+    return;
+  }
+  std::atomic<std::size_t> next{0};
+  std::atomic<bool> stop{false};
+  std::mutex mutex;
+  std::condition_variable changed;
+  std::size_t done = 0;
+  std::exception_ptr error;
+  auto worker = [&] {
+    while (!stop.load()) {
+      const std::size_t i = next.fetch_add(1);
+      if (i >= n) return;
+      try {
+        task(i);
+      } catch (...) {
+        const std::lock_guard lock(mutex);
+        if (!error) error = std::current_exception();
+        stop = true;
+      }
+      {
+        const std::lock_guard lock(mutex);
+        ++done;
+      }
+      changed.notify_one();
+    }
+  };
+  const unsigned n_workers = static_cast<unsigned>(std::min<std::size_t>(threads, n));
+  std::vector<std::thread> pool;
+  pool.reserve(n_workers);
+  for (unsigned t = 0; t < n_workers; ++t) pool.emplace_back(worker);
+  bool cancelled = false;
+  {
+    std::unique_lock lock(mutex);
+    std::size_t reported = 0;
+    while (reported < n && !stop.load()) {
+      changed.wait(lock, [&] { return done > reported || stop.load(); });
+      reported = done;
+      lock.unlock();
+      const bool go_on = !progress || progress(kStage, fraction(reported));
+      lock.lock();
+      if (!go_on) {
+        cancelled = true;
+        stop = true;
+      }
+    }
+  }
+  for (auto& t : pool) t.join();
+  if (error) std::rethrow_exception(error);
+  if (cancelled) throw Cancelled();
+}
+
+}  // namespace
+
+void SizingOptions::validate() const {
+  if (!(std::isfinite(size) && size >= 0.0)) bad_option("sizing.size must be finite and >= 0, got " + std::to_string(size));
+  if (!finite_positive(relative_size)) bad_option("sizing.relative_size must be finite and > 0, got " + std::to_string(relative_size));
+  if (!(std::isfinite(chord_error) && chord_error >= 0.0))
+    bad_option("sizing.chord_error must be finite and >= 0, got " + std::to_string(chord_error));
+  if (!(min_size_fraction > 0.0 && min_size_fraction <= 1.0))
+    bad_option("sizing.min_size_fraction must be in (0, 1], got " + std::to_string(min_size_fraction));
+  if (!(std::isfinite(gradation) && gradation > 1.0)) bad_option("sizing.gradation must be > 1, got " + std::to_string(gradation));
+}
+
+void PatchFitOptions::validate() const {
+  if (!finite_positive(relative_tolerance))
+    bad_option("fit.relative_tolerance must be finite and > 0, got " + std::to_string(relative_tolerance));
+  if (!(std::isfinite(min_spacing_edges) && min_spacing_edges >= 0.0))
+    bad_option("fit.min_spacing_edges must be finite and >= 0, got " + std::to_string(min_spacing_edges));
+  if (max_levels < 1 || max_levels > 20) bad_option("fit.max_levels must be in [1, 20], got " + std::to_string(max_levels));
+}
+
+void SurfMeshOptions::validate() const {
+  sizing.validate();
+  fit.validate();
+  if (smoothing_passes < 0) bad_option("smoothing_passes must be >= 0, got " + std::to_string(smoothing_passes));
+  if (!(crease_angle_deg > 0.0 && crease_angle_deg <= 180.0))
+    bad_option("crease_angle_deg must be in (0, 180], got " + std::to_string(crease_angle_deg));
+  if (threads < 0) bad_option("threads must be >= 0, got " + std::to_string(threads));
+}
+
+Eigen::Vector3d PatchSurface::project(const Eigen::Vector3d& world) const {
+  const Eigen::Vector3d local = frame.to_local(world);
+  return frame.to_world(field.lift(local.x(), local.y()));
+}
+
+Eigen::Vector3d PatchSurface::normal(const Eigen::Vector3d& world) const {
+  const Eigen::Vector3d local = frame.to_local(world);
+  return frame.direction_to_world(field.normal(local.x(), local.y()));
+}
+
+SurfaceMesh mesh_surface(const TriMesh& input, const Segmentation& segmentation, const SurfMeshOptions& options) {
+  using namespace surfmesh_detail;
+  options.validate();
+  validate_segmentation(input, segmentation);
+  SurfaceMesh out;
+  if (input.n_faces() == 0) return out;
+  report_progress(options.progress, "surfmesh: borders", 0.0);
+
+  const double mean_edge = mean_edge_length(input);
+  if (!(mean_edge > 0.0)) throw InvalidInput("mesh_surface: the mesh has no edge of positive length");
+  const double h = options.sizing.size > 0.0 ? options.sizing.size : options.sizing.relative_size * mean_edge;
+  out.input_mean_edge = mean_edge;
+  out.target_size = h;
+  SizeAt size_at = [h](const Eigen::Vector3d&) { return h; };
+  if (options.sizing.callback) {
+    const auto& callback = options.sizing.callback;
+    size_at = [&callback](const Eigen::Vector3d& x) {
+      const double s = callback(x);
+      if (!(std::isfinite(s) && s > 0.0)) throw InvalidInput("mesh_surface: the sizing callback returned " + std::to_string(s));
+      return s;
+    };
+  }
+  BorderNodes borders = discretise_borders(input, segmentation, size_at);
+  out.curve_is_feature = feature_curves(input, segmentation, options.crease_angle_deg);
+  report_progress(options.progress, "surfmesh: borders", 1.0);
+
+  const std::size_t n_patches = segmentation.patches.size();
+  const unsigned threads = options.threads > 0 ? static_cast<unsigned>(options.threads)
+                                               : std::max(1U, std::thread::hardware_concurrency());
+  std::vector<PatchResult> results(n_patches);
+  run_parallel(n_patches, threads, options.progress, 0.0, 0.5, [&](std::size_t p) {
+    fit_patch(input, segmentation, static_cast<int>(p), borders, options, mean_edge, results[p]);
+  });
+
+  if (options.project_border_nodes) {
+    // Each border node moves to the mean of its vertical projections onto the fitted
+    // surfaces of the curve's patches (corners stay), by at most one mean edge length.
+    for (std::size_t c = 0; c < segmentation.curves.size(); ++c) {
+      const BorderCurve& curve = segmentation.curves[c];
+      std::vector<const PatchSurface*> surfaces;
+      for (const int p : {curve.patch_left, curve.patch_right})
+        if (p >= 0 && results[static_cast<std::size_t>(p)].has_surface) surfaces.push_back(&results[static_cast<std::size_t>(p)].surface);
+      if (surfaces.empty()) continue;
+      for (const int g : borders.curve_nodes[c]) {
+        if (borders.kind[static_cast<std::size_t>(g)] != NodeKind::Border) continue;
+        Eigen::Vector3d& x = borders.positions[static_cast<std::size_t>(g)];
+        Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+        for (const PatchSurface* s : surfaces) mean += s->project(x);
+        mean /= static_cast<double>(surfaces.size());
+        Eigen::Vector3d move = mean - x;
+        const double length = move.norm();
+        if (!std::isfinite(length)) continue;
+        if (length > mean_edge) move *= mean_edge / length;
+        x += move;
+      }
+    }
+  }
+
+  run_parallel(n_patches, threads, options.progress, 0.5, 1.0, [&](std::size_t p) {
+    mesh_patch(segmentation, static_cast<int>(p), borders, options, h, results[p]);
+  });
+
+  // Global numbering: border nodes, then the inner nodes patch by patch.
+  out.n_border_nodes = borders.positions.size();
+  out.nodes = std::move(borders.positions);
+  out.node_kind = std::move(borders.kind);
+  out.node_owner = std::move(borders.owner);
+  out.surfaces.resize(n_patches);
+  out.patches.resize(n_patches);
+  for (std::size_t p = 0; p < n_patches; ++p) {
+    PatchResult& r = results[p];
+    const int offset = static_cast<int>(out.nodes.size());
+    for (const auto& x : r.inner_nodes) {
+      out.nodes.push_back(x);
+      out.node_kind.push_back(NodeKind::Inner);
+      out.node_owner.push_back(static_cast<int>(p));
+    }
+    for (const auto& t : r.triangles) {
+      std::array<int, 3> g{};
+      for (int k = 0; k < 3; ++k) g[static_cast<std::size_t>(k)] = t[static_cast<std::size_t>(k)] >= 0 ? t[static_cast<std::size_t>(k)] : offset - t[static_cast<std::size_t>(k)] - 1;
+      out.triangles.push_back(g);
+      out.triangle_patch.push_back(static_cast<int>(p));
+    }
+    out.surfaces[p] = std::move(r.surface);
+    out.patches[p] = std::move(r.report);
+  }
+  return out;
+}
+
+}  // namespace nurbsfront

@@ -1,0 +1,75 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#pragma once
+// Internal to the surfmesh module: border discretisation and per-patch work shared by its
+// .cpp files (not installed API).
+
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "nurbsfront/surfmesh/surfmesh.h"
+
+namespace nurbsfront::surfmesh_detail {
+
+//! Target 3D edge length at a world point.
+using SizeAt = std::function<double(const Eigen::Vector3d&)>;
+
+//! Mean length of the input's non-degenerate edges (0 when there are none).
+[[nodiscard]] double mean_edge_length(const TriMesh& mesh);
+
+//! Throws InvalidInput when the segmentation does not describe `mesh` (sizes, ids, curve
+//! edges that do not join their vertices, curve ends that are not corners).
+void validate_segmentation(const TriMesh& mesh, const Segmentation& segmentation);
+
+//! The discretised border curves.
+struct BorderNodes {
+  std::vector<Eigen::Vector3d> positions;  //!< corners first (in Segmentation::corners order)
+  std::vector<NodeKind> kind;
+  std::vector<int> owner;                  //!< curve id, -1 for a corner
+  //! Per curve, its global node ids along the curve; an open curve starts and ends at its
+  //! corners, a closed one does not repeat its first node.
+  std::vector<std::vector<int>> curve_nodes;
+};
+
+//! Resamples every curve's smoothed polyline once, n segments of about size_at() each
+//! (closed curves and curves from a corner to itself at least 3; an open curve sharing
+//! both ends with another curve at least 2, so no patch gets a doubled segment).
+[[nodiscard]] BorderNodes discretise_borders(const TriMesh& mesh, const Segmentation& segmentation,
+                                             const SizeAt& size_at);
+
+//! Per curve: on the input's boundary, or most of its edges have a dihedral above the angle.
+[[nodiscard]] std::vector<std::uint8_t> feature_curves(const TriMesh& mesh, const Segmentation& segmentation,
+                                                       double crease_angle_deg);
+
+//! One patch's result before global numbering.
+struct PatchResult {
+  PatchMeshReport report;
+  PatchSurface surface;
+  bool has_surface = false;
+  //! New nodes on the surface (world coordinates).
+  std::vector<Eigen::Vector3d> inner_nodes;
+  //! Triangles: ids >= 0 are global border nodes, id < 0 is inner node -(id + 1).
+  std::vector<std::array<int, 3>> triangles;
+};
+
+//! Frame and fit of patch p (fills result.surface, has_surface, report fit fields or
+//! FitFailed). Never throws except Cancelled-free internal errors caught by the caller.
+void fit_patch(const TriMesh& mesh, const Segmentation& segmentation, int p, const BorderNodes& borders,
+               const SurfMeshOptions& options, double mean_edge, PatchResult& result);
+
+//! The 2D front of patch p in its plane and the lift of the new nodes (fills triangles,
+//! inner_nodes, report mesh fields or MeshFailed).
+void mesh_patch(const Segmentation& segmentation, int p, const BorderNodes& borders, const SurfMeshOptions& options,
+                double uniform_size, PatchResult& result);
+
+//! A point strictly inside a simple polygon (either orientation), near its leftmost vertex.
+//! Returns false when no such point was found (a degenerate polygon).
+[[nodiscard]] bool point_inside_polygon(const std::vector<Eigen::Vector2d>& polygon, Eigen::Vector2d& inside);
+
+//! Even-odd point-in-polygon test (floating point).
+[[nodiscard]] bool polygon_contains(const std::vector<Eigen::Vector2d>& polygon, const Eigen::Vector2d& q);
+
+}  // namespace nurbsfront::surfmesh_detail
