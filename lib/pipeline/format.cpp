@@ -61,7 +61,8 @@ std::string to_json(const RemeshReport& r) {
   stitch.count("input_nodes", s.n_input_nodes).count("unused_nodes", s.n_unused_nodes);
   stitch.count("input_triangles", s.n_input_triangles).count("rejected_triangles", s.n_rejected_triangles);
   stitch.count("flips", s.n_flips).count("smoothing_moves", s.n_smoothing_moves);
-  stitch.count("smoothing_rejected", s.n_smoothing_rejected);
+  stitch.count("smoothing_rejected", s.n_smoothing_rejected).count("reverted_moves", s.n_reverted_moves);
+  stitch.flag("optimisation_undone", s.optimisation_undone);
   stitch.num("alpha_mean_before", s.alpha_mean_before).num("alpha_min_before", s.alpha_min_before);
   stitch.add("input_components", components_json(s.input_components));
   stitch.add("output_components", components_json(s.output_components));

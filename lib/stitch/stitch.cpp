@@ -185,7 +185,12 @@ StitchResult stitch_impl(const SurfaceMesh& surface, const TriMesh* input, const
 
   // 2. Cross-border optimisation.
   watch.restart();
-  if (options.optimisation_passes > 0 && mesh.n_faces() > 0) {
+  const bool optimise = options.optimisation_passes > 0 && mesh.n_faces() > 0;
+  TriMesh assembled;
+  std::vector<int> assembled_patch;
+  if (optimise) {
+    assembled = mesh;
+    assembled_patch = result.face_patch;
     stitch_detail::optimise(surface, options, result, report);
   }
   report.seconds_optimise = watch.seconds();
@@ -200,6 +205,34 @@ StitchResult stitch_impl(const SurfaceMesh& surface, const TriMesh* input, const
     check.progress = [&options](std::string_view, double fraction) { return options.progress("stitch: verify", fraction); };
   }
   report.output = mesh_report(to_soup(mesh), check);
+  auto n_intersections = [&report] {
+    return report.output.topology.n_self_intersecting_pairs.value_or(0);
+  };
+  if (optimise && n_intersections() > 0) {
+    // The optimisation may have pushed a node through a nearby sheet (thin walls): move
+    // the nodes of the intersecting triangles back (flips keep vertex indices), then
+    // undo everything if that is not enough.
+    std::vector<std::array<std::uint32_t, 2>> pairs = self_intersecting_pairs(to_soup(mesh), options.n_threads);
+    for (int round = 0; round < 3 && !pairs.empty(); ++round) {
+      for (const auto& pair : pairs) {
+        for (const std::uint32_t f : pair) {
+          for (auto v : mesh.fv_range(TriMesh::FaceHandle(static_cast<int>(f)))) {
+            if (mesh.point(v) != assembled.point(v)) {
+              mesh.set_point(v, assembled.point(v));
+              ++report.n_reverted_moves;
+            }
+          }
+        }
+      }
+      pairs = self_intersecting_pairs(to_soup(mesh), options.n_threads);
+    }
+    if (!pairs.empty()) {
+      mesh = std::move(assembled);
+      result.face_patch = std::move(assembled_patch);
+      report.optimisation_undone = true;
+    }
+    report.output = mesh_report(to_soup(mesh), check);
+  }
   const TopologyReport& topo = report.output.topology;
   if (!topo.is_manifold) {
     report.errors.push_back("output is not 2-manifold (" + std::to_string(topo.n_nonmanifold_edges) + " edges, " +

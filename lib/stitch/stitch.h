@@ -74,6 +74,12 @@ struct StitchReport {
   std::size_t n_flips = 0;             //!< edge flips made
   std::size_t n_smoothing_moves = 0;   //!< node moves accepted
   std::size_t n_smoothing_rejected = 0;  //!< node moves refused by the quality/normal bounds
+  //! Nodes moved back to their assembled position because a triangle of theirs intersected
+  //! another after the optimisation.
+  std::size_t n_reverted_moves = 0;
+  //! True when reverting moves did not remove the intersections the optimisation made, so
+  //! the whole optimisation was undone (the assembled mesh is returned).
+  bool optimisation_undone = false;
   double alpha_mean_before = 0.0;      //!< mean alpha after assembly, before optimisation
   double alpha_min_before = 0.0;       //!< min alpha after assembly, before optimisation
   //! Topology and quality of the result (no distances), from the quality module.
@@ -117,6 +123,9 @@ struct StitchResult {
 //!       Corners, feature and boundary nodes never move. A move is kept only if it turns
 //!       no incident triangle's normal too far and keeps their smallest alpha (bounds in
 //!       StitchOptions).
+//!    If the result has self-intersections (checked when check_self_intersections), the
+//!    nodes of the intersecting triangles go back to their assembled positions (up to 3
+//!    rounds); if some remain, the optimisation is undone as a whole.
 //! 3. Verification (quality module): 2-manifold, consistently oriented, no degenerate or
 //!    self-intersecting triangles; with an input mesh also: closed iff the input is, and
 //!    per component (matched to the input's by nearest bounding box) the same Euler

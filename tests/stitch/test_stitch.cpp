@@ -321,6 +321,31 @@ TEST(Stitch, MissingComponentIsAnError) {
   EXPECT_TRUE(mentions(r.report, "components")) << joined(r.report.errors);
 }
 
+TEST(Stitch, MovesThroughANearbySheetAreUndone) {
+  // Two parallel open sheets 0.002 apart; the upper one's surface is planted 0.002 below
+  // the lower one, so projecting its inner nodes pushes them through the lower sheet.
+  TriangleSoup sheets = test::grid_patch(8, 8);
+  const TriangleSoup upper = test::grid_patch(8, 8);
+  const auto offset = static_cast<std::uint32_t>(sheets.points.size());
+  for (const auto& p : upper.points) sheets.points.push_back(p + Eigen::Vector3d(0, 0, 0.002));
+  for (const auto& t : upper.triangles) sheets.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
+  std::vector<int> face_patch(sheets.triangles.size(), 0);
+  std::fill(face_patch.begin() + static_cast<long>(face_patch.size() / 2), face_patch.end(), 1);
+  SurfaceMesh surface = make_surface(sheets, face_patch, 2);
+  const double local_z = surface.surfaces[1].frame.to_local(Eigen::Vector3d(0.5, 0.5, -0.002)).z();
+  for (double& c : surface.surfaces[1].field.mutable_coefficients()) c = local_z;
+  const TriMesh input = to_trimesh(sheets);
+  StitchOptions unchecked;
+  unchecked.check_self_intersections = false;
+  const StitchResult pushed = stitch(surface, input, unchecked);
+  EXPECT_GT(count_self_intersections(to_soup(pushed.mesh)), 0u);  // the planted defect works
+  const StitchResult r = stitch(surface, input);
+  EXPECT_TRUE(r.report.ok()) << joined(r.report.errors);
+  EXPECT_TRUE(r.report.n_reverted_moves > 0 || r.report.optimisation_undone);
+  ASSERT_TRUE(r.report.output.topology.n_self_intersecting_pairs.has_value());
+  EXPECT_EQ(*r.report.output.topology.n_self_intersecting_pairs, 0u);
+}
+
 TEST(Stitch, InvalidInputThrows) {
   const TriangleSoup soup = test::icosphere(1);
   SurfaceMesh surface = cube_map_surface(soup);
