@@ -4,6 +4,7 @@
 //! Helpers shared by the quality module's sources (not part of the public API).
 
 #include <algorithm>
+#include <array>
 #include <cstdint>
 #include <numeric>
 #include <vector>
@@ -24,7 +25,8 @@ class AabbTree;
 AabbTree all_faces_tree(const TriangleSoup& soup);
 
 //! count_self_intersections() on a given tree over all faces of the soup (validated).
-std::size_t count_self_intersections_with(const TriangleSoup& soup, const AabbTree& tree, unsigned n_threads);
+std::size_t count_self_intersections_with(const TriangleSoup& soup, const AabbTree& tree, unsigned n_threads,
+                                          std::vector<std::array<std::uint32_t, 2>>* pairs = nullptr);
 
 //! mesh_distance() with the mesh's tree over all its faces given (nullptr: built here).
 DistanceReport mesh_distance_with(const TriangleSoup& mesh, const TriangleSoup& reference,

@@ -6,6 +6,7 @@
 #include <bit>
 #include <cmath>
 #include <numeric>
+#include <string>
 #include <thread>
 #include <vector>
 
@@ -184,6 +185,18 @@ std::vector<std::uint32_t> canonical_ids(const TriangleSoup& soup) {
   return id;
 }
 
+using FacePair = std::array<std::uint32_t, 2>;
+
+// Intersecting pairs found by one traversal: counted, and listed when `pairs` is set.
+struct Hits {
+  std::size_t count = 0;
+  std::vector<FacePair>* pairs = nullptr;
+  void add(std::uint32_t f, std::uint32_t g) {
+    ++count;
+    if (pairs != nullptr) pairs->push_back({std::min(f, g), std::max(f, g)});
+  }
+};
+
 struct NodePair {
   std::uint32_t a;
   std::uint32_t b;  // a == b: pairs inside one subtree
@@ -195,14 +208,15 @@ class SelfIntersectionCounter {
                           const std::vector<char>& usable)
       : soup_(soup), tree_(tree), ids_(ids), usable_(usable) {}
 
-  std::size_t run(NodePair task) const {
-    std::size_t count = 0;
+  std::size_t run(NodePair task, std::vector<FacePair>* pairs = nullptr) const {
+    Hits count;
+    count.pairs = pairs;
     if (task.a == task.b) {
       self(task.a, count);
     } else {
       pair(task.a, task.b, count);
     }
-    return count;
+    return count.count;
   }
 
   // Splits the top of the traversal into independent tasks.
@@ -250,7 +264,7 @@ class SelfIntersectionCounter {
   }
 
  private:
-  void self(std::uint32_t n, std::size_t& count) const {
+  void self(std::uint32_t n, Hits& count) const {
     const auto& node = tree_.nodes()[n];
     if (node.is_leaf()) {
       for (std::uint32_t i = node.begin(); i < node.end(); ++i) {
@@ -263,7 +277,7 @@ class SelfIntersectionCounter {
     pair(node.left(), node.right(), count);
   }
 
-  void pair(std::uint32_t na, std::uint32_t nb, std::size_t& count) const {
+  void pair(std::uint32_t na, std::uint32_t nb, Hits& count) const {
     const auto& a = tree_.nodes()[na];
     const auto& b = tree_.nodes()[nb];
     if (!a.box.overlaps(b.box)) return;
@@ -285,7 +299,7 @@ class SelfIntersectionCounter {
     }
   }
 
-  void test(std::uint32_t i, std::uint32_t j, std::size_t& count) const {
+  void test(std::uint32_t i, std::uint32_t j, Hits& count) const {
     if (!usable_[i] || !usable_[j] || !tree_.face_box(i).overlaps(tree_.face_box(j))) return;
     const auto& fi = soup_.triangles[tree_.faces()[i]];
     const auto& fj = soup_.triangles[tree_.faces()[j]];
@@ -293,7 +307,7 @@ class SelfIntersectionCounter {
     const std::array<std::uint32_t, 3> ids_j{ids_[fj[0]], ids_[fj[1]], ids_[fj[2]]};
     const std::array<Eigen::Vector3d, 3> ti{soup_.points[fi[0]], soup_.points[fi[1]], soup_.points[fi[2]]};
     const std::array<Eigen::Vector3d, 3> tj{soup_.points[fj[0]], soup_.points[fj[1]], soup_.points[fj[2]]};
-    if (quality_detail::triangles_intersect(ids_i, ti, ids_j, tj)) ++count;
+    if (quality_detail::triangles_intersect(ids_i, ti, ids_j, tj)) count.add(tree_.faces()[i], tree_.faces()[j]);
   }
 
   const TriangleSoup& soup_;
@@ -312,7 +326,8 @@ AabbTree all_faces_tree(const TriangleSoup& soup) {
   return AabbTree(soup, std::move(faces));
 }
 
-std::size_t count_self_intersections_with(const TriangleSoup& soup, const AabbTree& tree, unsigned n_threads) {
+std::size_t count_self_intersections_with(const TriangleSoup& soup, const AabbTree& tree, unsigned n_threads,
+                                          std::vector<std::array<std::uint32_t, 2>>* pairs) {
   if (tree.empty()) return 0;
   const std::vector<std::uint32_t> ids = canonical_ids(soup);
   // Degenerate faces (repeated corner, or area at the degenerate tolerance) are counted
@@ -328,19 +343,25 @@ std::size_t count_self_intersections_with(const TriangleSoup& soup, const AabbTr
     usable[i] = area > area_floor;
   }
   const SelfIntersectionCounter counter(soup, tree, ids, usable);
-  if (n_threads == 1) return counter.run({0, 0});
+  if (n_threads == 1) return counter.run({0, 0}, pairs);
   // Independent subtree pairs, handed out dynamically; the total does not depend on
-  // which thread counted which pair.
+  // which thread counted which pair (listed pairs are sorted by the caller).
   const std::vector<NodePair> tasks = counter.split(256 * static_cast<std::size_t>(n_threads));
   std::atomic<std::size_t> next{0};
   std::vector<std::size_t> counts(n_threads, 0);
+  std::vector<std::vector<FacePair>> found(n_threads);
   auto work = [&](unsigned thread) {
-    for (std::size_t k = next++; k < tasks.size(); k = next++) counts[thread] += counter.run(tasks[k]);
+    for (std::size_t k = next++; k < tasks.size(); k = next++) {
+      counts[thread] += counter.run(tasks[k], pairs != nullptr ? &found[thread] : nullptr);
+    }
   };
   std::vector<std::thread> workers;
   for (unsigned t = 1; t < n_threads; ++t) workers.emplace_back(work, t);
   work(0);
   for (auto& w : workers) w.join();
+  if (pairs != nullptr) {
+    for (const auto& f : found) pairs->insert(pairs->end(), f.begin(), f.end());
+  }
   return std::accumulate(counts.begin(), counts.end(), std::size_t{0});
 }
 
@@ -350,6 +371,15 @@ std::size_t count_self_intersections(const TriangleSoup& soup, unsigned n_thread
   quality_detail::validate_soup(soup, "count_self_intersections");
   if (n_threads == 0) throw InvalidInput("nurbsfront: count_self_intersections needs at least one thread");
   return quality_detail::count_self_intersections_with(soup, quality_detail::all_faces_tree(soup), n_threads);
+}
+
+std::vector<std::array<std::uint32_t, 2>> self_intersecting_pairs(const TriangleSoup& soup, unsigned n_threads) {
+  quality_detail::validate_soup(soup, "self_intersecting_pairs");
+  if (n_threads == 0) throw InvalidInput("nurbsfront: self_intersecting_pairs needs at least one thread");
+  std::vector<FacePair> pairs;
+  quality_detail::count_self_intersections_with(soup, quality_detail::all_faces_tree(soup), n_threads, &pairs);
+  std::sort(pairs.begin(), pairs.end());
+  return pairs;
 }
 
 }  // namespace nurbsfront
