@@ -9,6 +9,7 @@
 #include <numbers>
 #include <stdexcept>
 #include <string>
+#include <unordered_map>
 #include <unordered_set>
 
 #include "nurbsfront/core/stopwatch.h"
@@ -92,6 +93,31 @@ std::vector<std::vector<int>> trace_loops(const std::vector<Eigen::Vector2d>& xy
     loops.push_back(std::move(loop));
   }
   return loops;
+}
+
+// Splits a closed vertex sequence that visits a vertex more than once (loops touching at
+// a corner: a neighbouring patch inside this one that touches its outer loop, two lobes
+// joined at a corner) into simple cycles. Each cycle bounds one face of the arrangement
+// on one side: a touching hole becomes its own clockwise cycle and gets its hole point.
+std::vector<std::vector<int>> split_at_repeated_vertices(const std::vector<int>& loop) {
+  std::vector<std::vector<int>> out;
+  std::vector<int> stack;
+  std::unordered_map<int, std::size_t> position;  // vertex -> index in stack
+  for (const int v : loop) {
+    const auto it = position.find(v);
+    if (it == position.end()) {
+      position.emplace(v, stack.size());
+      stack.push_back(v);
+      continue;
+    }
+    // v closes the cycle stack[it->second ..]: emit it, keep v on the stack.
+    const std::size_t first = it->second;
+    out.emplace_back(stack.begin() + static_cast<std::ptrdiff_t>(first), stack.end());
+    for (std::size_t i = first + 1; i < stack.size(); ++i) position.erase(stack[i]);
+    stack.resize(first + 1);
+  }
+  if (!stack.empty()) out.push_back(std::move(stack));
+  return out;
 }
 
 double signed_area(const std::vector<Eigen::Vector2d>& polygon) {
@@ -267,17 +293,23 @@ void mesh_patch(const Segmentation& seg, int p, const BorderNodes& borders, cons
     std::vector<std::vector<Eigen::Vector2d>> polygons;
     std::vector<double> orientation;
     double border_area = 0.0;  // area on the left of the directed border
+    std::size_t n_ccw = 0;  // traced loops (a loop through a touching corner counts once)
     for (const auto& loop : trace_loops(pslg.points, border.edges)) {
-      std::vector<Eigen::Vector2d>& polygon = polygons.emplace_back();
-      for (const int i : loop) polygon.push_back(pslg.points[static_cast<std::size_t>(i)]);
-      const double area = signed_area(polygon);
-      border_area += area;
-      orientation.push_back(area >= 0.0 ? 1.0 : -1.0);
+      double loop_area = 0.0;
+      for (const auto& cycle : split_at_repeated_vertices(loop)) {
+        std::vector<Eigen::Vector2d>& polygon = polygons.emplace_back();
+        for (const int i : cycle) polygon.push_back(pslg.points[static_cast<std::size_t>(i)]);
+        const double area = signed_area(polygon);
+        loop_area += area;
+        orientation.push_back(area >= 0.0 ? 1.0 : -1.0);
+      }
+      border_area += loop_area;
+      if (loop_area >= 0.0) ++n_ccw;
     }
     // The segmentation guarantees one counter-clockwise (outer) loop; a second one means
     // the discretised border folds in this plane.
-    if (std::count(orientation.begin(), orientation.end(), 1.0) != 1)
-      throw std::runtime_error("the border has " + std::to_string(std::count(orientation.begin(), orientation.end(), 1.0)) +
+    if (n_ccw != 1)
+      throw std::runtime_error("the border has " + std::to_string(n_ccw) +
                                " counter-clockwise loops in the patch plane (expected 1: it folds)");
     for (const auto& polygon : polygons) {
       Eigen::Vector2d inside;
