@@ -9,7 +9,6 @@
 #include <numbers>
 #include <stdexcept>
 #include <string>
-#include <unordered_map>
 #include <unordered_set>
 
 #include "nurbsfront/core/stopwatch.h"
@@ -95,30 +94,10 @@ std::vector<std::vector<int>> trace_loops(const std::vector<Eigen::Vector2d>& xy
   return loops;
 }
 
-// Splits a closed vertex sequence that visits a vertex more than once (loops touching at
-// a corner: a neighbouring patch inside this one that touches its outer loop, two lobes
-// joined at a corner) into simple cycles. Each cycle bounds one face of the arrangement
-// on one side: a touching hole becomes its own clockwise cycle and gets its hole point.
-std::vector<std::vector<int>> split_at_repeated_vertices(const std::vector<int>& loop) {
-  std::vector<std::vector<int>> out;
-  std::vector<int> stack;
-  std::unordered_map<int, std::size_t> position;  // vertex -> index in stack
-  for (const int v : loop) {
-    const auto it = position.find(v);
-    if (it == position.end()) {
-      position.emplace(v, stack.size());
-      stack.push_back(v);
-      continue;
-    }
-    // v closes the cycle stack[it->second ..]: emit it, keep v on the stack.
-    const std::size_t first = it->second;
-    out.emplace_back(stack.begin() + static_cast<std::ptrdiff_t>(first), stack.end());
-    for (std::size_t i = first + 1; i < stack.size(); ++i) position.erase(stack[i]);
-    stack.resize(first + 1);
-  }
-  if (!stack.empty()) out.push_back(std::move(stack));
-  return out;
-}
+// A traced loop that passes a corner twice (a neighbouring patch inside this one touching
+// its outer loop there, two lobes joined at a corner) is split into simple cycles
+// (split_at_repeated_vertices): a touching hole becomes its own clockwise cycle and gets
+// its hole point.
 
 double signed_area(const std::vector<Eigen::Vector2d>& polygon) {
   double twice = 0.0;
