@@ -70,6 +70,28 @@ TEST(Front2dPredicates, Orient2dShortcutForEqualCoordinates) {
   EXPECT_GT(decided_zero, 1000);
 }
 
+TEST(Front2dPredicates, Orient2dAdaptiveStageIsExact) {
+  // Nearly collinear points close together (exact differences) and far apart (inexact
+  // ones): the second stage must agree with the full expansion.
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> u(0.5, 1.0);
+  for (int i = 0; i < 20000; ++i) {
+    const double scale = i % 2 == 0 ? 1e-3 : 1e3;
+    const Vec a(u(rng), u(rng));
+    const Vec d(u(rng) - 0.75, u(rng) - 0.75);
+    const double t = u(rng);
+    Vec b = a + scale * d, c = a + scale * t * d;
+    for (int k = 0; k < static_cast<int>(i % 4); ++k) c.y() = std::nextafter(c.y(), i % 3 == 0 ? 2.0 : -2.0);
+    const int exact = front2d::orient2d_exact(a, b, c);
+    ASSERT_EQ(front2d::orient2d_adapt(a, b, c), exact) << i;
+    ASSERT_EQ(front2d::orient2d(a, b, c), exact) << i;
+  }
+  const Vec p(0.5, 0.5), q(0.75, 0.75), r(0.625, 0.625);  // exactly collinear
+  EXPECT_EQ(front2d::orient2d_adapt(p, q, r), 0);
+  EXPECT_EQ(front2d::orient2d(p, q, r), 0);
+  EXPECT_EQ(front2d::orient2d_adapt(p, r, Vec(0.625, std::nextafter(0.625, 1.0))), 1);
+}
+
 TEST(Front2dPredicates, SegmentsIntersect) {
   EXPECT_TRUE(front2d::segments_intersect({0, 0}, {2, 2}, {0, 2}, {2, 0}));
   EXPECT_FALSE(front2d::segments_intersect({0, 0}, {1, 1}, {2, 2}, {3, 3}));
