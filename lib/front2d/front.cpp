@@ -559,30 +559,24 @@ class AdvancingFront {
       if (stamp_e_[static_cast<std::size_t>(e)] == stamp_) return;
       stamp_e_[static_cast<std::size_t>(e)] = stamp_;
       local_edges_.push_back(e);
-      const FrontEdge& f = E_[static_cast<std::size_t>(e)];
-      for (int v : {f.a, f.b}) {
-        if (v == a || v == b) continue;
-        if (static_cast<std::size_t>(v) >= stamp_v_.size()) stamp_v_.resize(P_.size() + 1024, 0);
-        if (stamp_v_[static_cast<std::size_t>(v)] == stamp_) continue;
-        stamp_v_[static_cast<std::size_t>(v)] = stamp_;
-        cand_.push_back(v);
-      }
+      add_nodes(E_[static_cast<std::size_t>(e)], a, b, cand_);
     });
   }
 
   void gather(const Vec& lo, const Vec& hi, int a, int b, std::vector<int>& out) {
     out.clear();
     next_stamp();
-    grid_.visit(lo, hi, [&](int e) {
-      const FrontEdge& f = E_[static_cast<std::size_t>(e)];
-      for (int v : {f.a, f.b}) {
-        if (v == a || v == b) continue;
-        if (static_cast<std::size_t>(v) >= stamp_v_.size()) stamp_v_.resize(P_.size() + 1024, 0);
-        if (stamp_v_[static_cast<std::size_t>(v)] == stamp_) continue;
-        stamp_v_[static_cast<std::size_t>(v)] = stamp_;
-        out.push_back(v);
-      }
-    });
+    grid_.visit(lo, hi, [&](int e) { add_nodes(E_[static_cast<std::size_t>(e)], a, b, out); });
+  }
+  // Appends the nodes of f other than a and b not yet seen in this walk.
+  void add_nodes(const FrontEdge& f, int a, int b, std::vector<int>& out) {
+    for (int v : {f.a, f.b}) {
+      if (v == a || v == b) continue;
+      if (static_cast<std::size_t>(v) >= stamp_v_.size()) stamp_v_.resize(P_.size() + 1024, 0);
+      if (stamp_v_[static_cast<std::size_t>(v)] == stamp_) continue;
+      stamp_v_[static_cast<std::size_t>(v)] = stamp_;
+      out.push_back(v);
+    }
   }
 
   bool advance(int e, bool allow_new, FrontReport& report) {

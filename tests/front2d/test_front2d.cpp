@@ -536,6 +536,15 @@ TEST(Front2dTouching, VeryNonUniformFinalBoundary) {
 
 // ---------------------------------------------------------------- files
 
+double bbox_diagonal(const Pslg& p) {
+  Vec lo = p.points[0], hi = p.points[0];
+  for (const auto& x : p.points) {
+    lo = lo.cwiseMin(x);
+    hi = hi.cwiseMax(x);
+  }
+  return (hi - lo).norm();
+}
+
 // The segments' own faces, or the convex hull when they enclose nothing (open polylines).
 Mesh2d mesh_file(const Pslg& p, double h) {
   FrontOptions o = uniform(h);
@@ -553,12 +562,7 @@ void mesh_cgal_files(double divisor, bool include_img5) {
                            "img6.edg", "lettre_A.edg"}) {
     SCOPED_TRACE(name);
     const Pslg p = read_pslg(test::test_data(std::string("pslg/") + name));
-    Vec lo = p.points[0], hi = p.points[0];
-    for (const auto& x : p.points) {
-      lo = lo.cwiseMin(x);
-      hi = hi.cwiseMax(x);
-    }
-    const Mesh2d m = mesh_file(p, (hi - lo).norm() / divisor);
+    const Mesh2d m = mesh_file(p, bbox_diagonal(p) / divisor);
     Stats s;
     EXPECT_EQ(check_mesh(p, m, m.report.domain_area, &s), "");
     EXPECT_GT(m.report.domain_area, 0);
@@ -719,12 +723,7 @@ TEST(Front2dFiles, MinAngleFailuresAreWhereSizeHCannotFit) {
   for (const char* name : {"clusters.poly", "clusters2.edg", "img6.edg"}) {
     SCOPED_TRACE(name);
     const Pslg p = read_pslg(test::test_data(std::string("pslg/") + name));
-    Vec lo = p.points[0], hi = p.points[0];
-    for (const auto& x : p.points) {
-      lo = lo.cwiseMin(x);
-      hi = hi.cwiseMax(x);
-    }
-    const double h = (hi - lo).norm() / 100;
+    const double h = bbox_diagonal(p) / 100;
     bool hull = false;
     FrontOptions o = uniform(h);
     Mesh2d m;
