@@ -71,7 +71,7 @@ double max_cos_in_metric(const Vec& a, const Vec& b, const Vec& c, const Mat& M)
   for (int i = 0; i < 3; ++i) {
     const Vec u = *p[static_cast<std::size_t>((i + 1) % 3)] - *p[static_cast<std::size_t>(i)];
     const Vec w = *p[static_cast<std::size_t>((i + 2) % 3)] - *p[static_cast<std::size_t>(i)];
-    const double n = std::sqrt(u.dot(M * u) * w.dot(M * w));
+    const double n = std::sqrt(u.dot(M * u)) * std::sqrt(w.dot(M * w));  // = |u| |w| exactly for M = I
     m = std::max(m, n > 0 ? u.dot(M * w) / n : 1.0);
   }
   return m;
