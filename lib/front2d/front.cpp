@@ -280,7 +280,7 @@ class EdgeHeap {
   [[nodiscard]] bool empty() const { return h_.empty(); }
   //! Ties of key are broken by `birth` (a creation counter), so the order does not depend
   //! on how edge ids are recycled.
-  void push(int e, double key, std::int64_t birth) {
+  void push(int e, double key, std::uint32_t birth) {
     if (pos_.size() <= static_cast<std::size_t>(e)) pos_.resize(static_cast<std::size_t>(e) + 1024, -1);
     h_.push_back({key, birth, e});
     up(h_.size() - 1);
@@ -304,9 +304,9 @@ class EdgeHeap {
   }
 
  private:
-  struct Entry {
+  struct Entry {  // 16 bytes
     double key;
-    std::int64_t birth;
+    std::uint32_t birth;
     int e;
   };
   static bool less(const Entry& x, const Entry& y) { return x.key < y.key || (x.key == y.key && x.birth < y.birth); }
@@ -669,7 +669,7 @@ class AdvancingFront {
   std::vector<FrontEdge> E_;
   std::vector<std::uint32_t> stamp_e_;
   std::vector<int> free_edges_;
-  std::int64_t births_ = 0;
+  std::uint32_t births_ = 0;  // creation counter (wraps after 4e9 edges: only ties reorder)
   std::vector<std::uint32_t> stamp_v_;
   std::uint32_t stamp_ = 0;
   std::vector<int> out_head_;
