@@ -2,6 +2,7 @@
 // stitch(): assembly by global node id, optimisation (optimise.cpp), verification.
 #include "nurbsfront/stitch/stitch.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -210,9 +211,30 @@ StitchResult stitch_impl(const SurfaceMesh& surface, const TriMesh* input, const
   };
   if (optimise && n_intersections() > 0) {
     // The optimisation may have pushed a node through a nearby sheet (thin walls): move
-    // the nodes of the intersecting triangles back (flips keep vertex indices), then
-    // undo everything if that is not enough.
-    std::vector<std::array<std::uint32_t, 2>> pairs = self_intersecting_pairs(to_soup(mesh), options.n_threads);
+    // the nodes of the intersecting triangles back (flips keep vertex indices), then undo
+    // everything if that is not enough. Pairs of two faces the optimisation did not touch
+    // (same vertices, same positions as assembled) were there before and stay reported.
+    auto is_untouched = [&](std::uint32_t f) {
+      const TriMesh::FaceHandle now(static_cast<int>(f));
+      std::array<int, 3> a{}, b{};
+      int k = 0;
+      for (auto v : mesh.fv_range(now)) {
+        if (mesh.point(v) != assembled.point(v)) return false;
+        a[static_cast<std::size_t>(k++)] = v.idx();
+      }
+      k = 0;
+      for (auto v : assembled.fv_range(now)) b[static_cast<std::size_t>(k++)] = v.idx();
+      std::sort(a.begin(), a.end());
+      std::sort(b.begin(), b.end());
+      return a == b;
+    };
+    auto new_pairs = [&] {
+      std::vector<std::array<std::uint32_t, 2>> pairs = self_intersecting_pairs(to_soup(mesh), options.n_threads);
+      std::erase_if(pairs, [&](const auto& p) { return is_untouched(p[0]) && is_untouched(p[1]); });
+      return pairs;
+    };
+    std::vector<std::array<std::uint32_t, 2>> pairs = new_pairs();
+    const bool changed = !pairs.empty();
     for (int round = 0; round < 3 && !pairs.empty(); ++round) {
       for (const auto& pair : pairs) {
         for (const std::uint32_t f : pair) {
@@ -224,14 +246,14 @@ StitchResult stitch_impl(const SurfaceMesh& surface, const TriMesh* input, const
           }
         }
       }
-      pairs = self_intersecting_pairs(to_soup(mesh), options.n_threads);
+      pairs = new_pairs();
     }
     if (!pairs.empty()) {
       mesh = std::move(assembled);
       result.face_patch = std::move(assembled_patch);
       report.optimisation_undone = true;
     }
-    report.output = mesh_report(to_soup(mesh), check);
+    if (changed) report.output = mesh_report(to_soup(mesh), check);
   }
   const TopologyReport& topo = report.output.topology;
   if (!topo.is_manifold) {

@@ -123,9 +123,10 @@ struct StitchResult {
 //!       Corners, feature and boundary nodes never move. A move is kept only if it turns
 //!       no incident triangle's normal too far and keeps their smallest alpha (bounds in
 //!       StitchOptions).
-//!    If the result has self-intersections (checked when check_self_intersections), the
-//!    nodes of the intersecting triangles go back to their assembled positions (up to 3
-//!    rounds); if some remain, the optimisation is undone as a whole.
+//!    If the result has self-intersections (checked when check_self_intersections) that
+//!    involve a triangle the optimisation changed, the nodes of those triangles go back
+//!    to their assembled positions (up to 3 rounds); if some remain, the optimisation is
+//!    undone as a whole. Intersections already in the assembly stay (and are errors).
 //! 3. Verification (quality module): 2-manifold, consistently oriented, no degenerate or
 //!    self-intersecting triangles; with an input mesh also: closed iff the input is, and
 //!    per component (matched to the input's by nearest bounding box) the same Euler

@@ -346,6 +346,21 @@ TEST(Stitch, MovesThroughANearbySheetAreUndone) {
   EXPECT_EQ(*r.report.output.topology.n_self_intersecting_pairs, 0u);
 }
 
+TEST(Stitch, IntersectionsOfTheInputStayReportedAndKeepTheOptimisation) {
+  // A horizontal and a vertical sheet crossing each other: intersecting before any move.
+  TriangleSoup sheets = test::grid_patch(8, 8);
+  const TriangleSoup wall = test::grid_patch(8, 8);
+  const auto offset = static_cast<std::uint32_t>(sheets.points.size());
+  for (const auto& p : wall.points) sheets.points.push_back(Eigen::Vector3d(p.x() + 0.03, 0.51, p.y() - 0.5));
+  for (const auto& t : wall.triangles) sheets.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
+  std::vector<int> face_patch(sheets.triangles.size(), 0);
+  std::fill(face_patch.begin() + static_cast<long>(face_patch.size() / 2), face_patch.end(), 1);
+  const StitchResult r = stitch(make_surface(sheets, face_patch, 2), to_trimesh(sheets));
+  EXPECT_FALSE(r.report.ok());
+  EXPECT_TRUE(mentions(r.report, "self-intersecting")) << joined(r.report.errors);
+  EXPECT_FALSE(r.report.optimisation_undone);
+}
+
 TEST(Stitch, InvalidInputThrows) {
   const TriangleSoup soup = test::icosphere(1);
   SurfaceMesh surface = cube_map_surface(soup);
