@@ -15,6 +15,7 @@ void add_fit_command(CLI::App& app);
 void add_patch_command(CLI::App& app);
 void add_remesh_command(CLI::App& app);
 void add_corpus_command(CLI::App& app);
+void add_render_command(CLI::App& app);
 
 //! Registers every subcommand (called once by main).
 inline void add_all_commands(CLI::App& app) {
@@ -27,6 +28,7 @@ inline void add_all_commands(CLI::App& app) {
   add_patch_command(app);
   add_remesh_command(app);
   add_corpus_command(app);
+  add_render_command(app);
 }
 
 }  // namespace nurbsfront::cli
