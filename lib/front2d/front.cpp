@@ -189,39 +189,88 @@ class EdgeGrid {
   }
   [[nodiscard]] int cx(double x) const { return std::clamp(static_cast<int>((x - lo_.x()) * inv_), 0, nx_ - 1); }
   [[nodiscard]] int cy(double y) const { return std::clamp(static_cast<int>((y - lo_.y()) * inv_), 0, ny_ - 1); }
-  std::vector<int>& cell(int i, int j) { return cells_[static_cast<std::size_t>(j) * static_cast<std::size_t>(nx_) + static_cast<std::size_t>(i)]; }
+  // Each cell keeps up to kInline edges in place (one cache line, no allocation); more go
+  // to a linked overflow list in a shared pool with a free list.
   void insert(int e, const Vec& p, const Vec& q) {
     for (int j = cy(std::min(p.y(), q.y())); j <= cy(std::max(p.y(), q.y())); ++j)
-      for (int i = cx(std::min(p.x(), q.x())); i <= cx(std::max(p.x(), q.x())); ++i) cell(i, j).push_back(e);
+      for (int i = cx(std::min(p.x(), q.x())); i <= cx(std::max(p.x(), q.x())); ++i) {
+        Cell& c = cell(i, j);
+        if (c.n < kInline) {
+          c.e[static_cast<std::size_t>(c.n++)] = e;
+          continue;
+        }
+        int node = free_;
+        if (node >= 0) {
+          free_ = pool_[static_cast<std::size_t>(node)].next;
+        } else {
+          node = static_cast<int>(pool_.size());
+          pool_.emplace_back();
+        }
+        pool_[static_cast<std::size_t>(node)] = {e, c.overflow};
+        c.overflow = node;
+      }
   }
   void erase(int e, const Vec& p, const Vec& q) {
     for (int j = cy(std::min(p.y(), q.y())); j <= cy(std::max(p.y(), q.y())); ++j)
-      for (int i = cx(std::min(p.x(), q.x())); i <= cx(std::max(p.x(), q.x())); ++i) {
-        auto& c = cell(i, j);
-        auto it = std::find(c.begin(), c.end(), e);
-        if (it != c.end()) {
-          *it = c.back();
-          c.pop_back();
-        }
-      }
+      for (int i = cx(std::min(p.x(), q.x())); i <= cx(std::max(p.x(), q.x())); ++i) erase_in(cell(i, j), e);
   }
   //! Calls f(edge) for every edge in the cells meeting the box (an edge may come twice).
   template <class F>
-  void visit(const Vec& lo, const Vec& hi, F&& f) {
+  void visit(const Vec& lo, const Vec& hi, F&& f) const {
     const int i0 = cx(lo.x()), i1 = cx(hi.x()), j0 = cy(lo.y()), j1 = cy(hi.y());
     for (int j = j0; j <= j1; ++j)
-      for (int i = i0; i <= i1; ++i)
-        for (int e : cell(i, j)) f(e);
+      for (int i = i0; i <= i1; ++i) {
+        const Cell& c = cells_[static_cast<std::size_t>(j) * static_cast<std::size_t>(nx_) + static_cast<std::size_t>(i)];
+        for (int k = 0; k < c.n; ++k) f(c.e[static_cast<std::size_t>(k)]);
+        for (int node = c.overflow; node >= 0; node = pool_[static_cast<std::size_t>(node)].next) f(pool_[static_cast<std::size_t>(node)].edge);
+      }
   }
   [[nodiscard]] bool covers_all(const Vec& lo, const Vec& hi) const {
     return cx(lo.x()) == 0 && cy(lo.y()) == 0 && cx(hi.x()) == nx_ - 1 && cy(hi.y()) == ny_ - 1;
   }
 
  private:
+  static constexpr int kInline = 6;
+  struct Cell {
+    int n = 0;
+    int overflow = -1;
+    std::array<int, kInline> e{};
+  };
+  struct Node {
+    int edge = -1;
+    int next = -1;
+  };
+  Cell& cell(int i, int j) { return cells_[static_cast<std::size_t>(j) * static_cast<std::size_t>(nx_) + static_cast<std::size_t>(i)]; }
+  void erase_in(Cell& c, int e) {
+    for (int k = 0; k < c.n; ++k)
+      if (c.e[static_cast<std::size_t>(k)] == e) {
+        if (c.overflow >= 0) {  // refill the slot from the overflow list
+          const int node = c.overflow;
+          c.e[static_cast<std::size_t>(k)] = pool_[static_cast<std::size_t>(node)].edge;
+          c.overflow = pool_[static_cast<std::size_t>(node)].next;
+          pool_[static_cast<std::size_t>(node)].next = free_;
+          free_ = node;
+        } else {
+          c.e[static_cast<std::size_t>(k)] = c.e[static_cast<std::size_t>(--c.n)];
+        }
+        return;
+      }
+    for (int* link = &c.overflow; *link >= 0; link = &pool_[static_cast<std::size_t>(*link)].next)
+      if (pool_[static_cast<std::size_t>(*link)].edge == e) {
+        const int node = *link;
+        *link = pool_[static_cast<std::size_t>(node)].next;
+        pool_[static_cast<std::size_t>(node)].next = free_;
+        free_ = node;
+        return;
+      }
+  }
+
   Vec lo_;
   double cell_ = 1, inv_ = 1;
   int nx_ = 1, ny_ = 1;
-  std::vector<std::vector<int>> cells_;
+  std::vector<Cell> cells_;
+  std::vector<Node> pool_;
+  int free_ = -1;
 };
 
 struct FrontEdge {
@@ -316,8 +365,9 @@ class AdvancingFront {
     const Vec& A = pt(a);
     const Vec& B = pt(b);
     if (orient2d(A, B, q) <= 0) return false;
-    Vec lo = A.cwiseMin(B).cwiseMin(q);
-    Vec hi = A.cwiseMax(B).cwiseMax(q);
+    const Vec tlo = A.cwiseMin(B).cwiseMin(q);
+    const Vec thi = A.cwiseMax(B).cwiseMax(q);
+    Vec lo = tlo, hi = thi;
     const bool is_new = p < 0;
     if (is_new) {
       lo.array() -= std::max(cn, ce);
@@ -347,6 +397,26 @@ class AdvancingFront {
       const FrontEdge& f = E_[static_cast<std::size_t>(e)];
       const int s = f.a, t = f.b;
       if (s == a && t == b) return;
+      const Vec& S = pt(s);
+      const Vec& T = pt(t);
+      if (std::max(S.x(), T.x()) < tlo.x() || std::min(S.x(), T.x()) > thi.x() || std::max(S.y(), T.y()) < tlo.y() ||
+          std::min(S.y(), T.y()) > thi.y()) {
+        // Disjoint from the triangle's box: no containment, no crossing; only the clearance
+        // of a new point remains to check.
+        if (!is_new) return;
+        const bool s_free = s != a && s != b, t_free = t != a && t != b;
+        if ((s_free && (S - q).squaredNorm() < cn * cn) || (t_free && (T - q).squaredNorm() < cn * cn)) {
+          ok = false;
+          return;
+        }
+        if (s != t && s_free && t_free) {
+          const Vec d = T - S;
+          const double l2 = d.squaredNorm();
+          const double u = l2 > 0 ? std::clamp((q - S).dot(d) / l2, 0.0, 1.0) : 0.0;
+          if ((S + u * d - q).squaredNorm() < ce * ce) ok = false;
+        }
+        return;
+      }
       if (s == t) {
         if (s == p || s == a || s == b) return;
         if (inside(pt(s)) || (is_new && (pt(s) - q).squaredNorm() < cn * cn)) ok = false;
@@ -364,8 +434,7 @@ class AdvancingFront {
       if (!same_ap && conflict(a, A, p, q, s, t)) { ok = false; return; }
       if (!same_pb && conflict(p, q, b, B, s, t)) { ok = false; return; }
       if (is_new && s != a && s != b && t != a && t != b) {
-        const Vec& S = pt(s);
-        const Vec d = pt(t) - S;
+        const Vec d = T - S;
         const double l2 = d.squaredNorm();
         const double u = l2 > 0 ? std::clamp((q - S).dot(d) / l2, 0.0, 1.0) : 0.0;
         if ((S + u * d - q).squaredNorm() < ce * ce) ok = false;
@@ -379,7 +448,7 @@ class AdvancingFront {
     const int b = E_[static_cast<std::size_t>(e)].b;
     tris_.push_back({a, b, p});
     kill(e);
-    if (auto it = iso_edge_.find(p); it != iso_edge_.end()) {
+    if (auto it = iso_edge_.empty() ? iso_edge_.end() : iso_edge_.find(p); it != iso_edge_.end()) {
       kill(it->second);
       iso_edge_.erase(it);
     }
@@ -506,7 +575,7 @@ class AdvancingFront {
 class Optimiser {
  public:
   Optimiser(std::vector<Vec>& pts, std::vector<std::array<int, 3>>& tris, const std::unordered_set<std::uint64_t>& constraints,
-            const Metric* metric)
+            int first_free, const Metric* metric)
       : P_(pts), T_(tris), metric_(metric) {
     if (metric_) {
       Mv_.resize(P_.size());
@@ -534,7 +603,8 @@ class Optimiser {
       }
       if (N_[s] < 0) C_[s] = true;  // boundary edges
       else if (b < a) continue;
-      else C_[s] = C_[static_cast<std::size_t>(N_[s])] = constraints.count(ukey(a, b)) > 0;
+      // Constraint edges join segment nodes, which all precede first_free.
+      else C_[s] = C_[static_cast<std::size_t>(N_[s])] = a < first_free && b < first_free && constraints.count(ukey(a, b)) > 0;
     }
   }
 
@@ -574,11 +644,11 @@ class Optimiser {
       for (std::size_t vtx = static_cast<std::size_t>(first_free); vtx < P_.size(); ++vtx) {
         const int b0 = inc.start[vtx], b1 = inc.start[vtx + 1];
         if (b0 == b1) continue;
-        double worst = 2.0;
-        for (int k = b0; k < b1; ++k) worst = std::min(worst, quality(T_[static_cast<std::size_t>(inc.tri[static_cast<std::size_t>(k)])]));
         const Vec old = P_[vtx];
         const Mat old_m = metric_ ? Mv_[vtx] : Mat::Identity();
         move(static_cast<int>(vtx), smoothing_target(static_cast<int>(vtx), inc));
+        // Kept if every triangle stays counter-clockwise and the worst alpha stays above
+        // min(old worst, kSmoothAcceptAlpha); the old worst is needed only below that.
         bool ok = true;
         double worst_new = 2.0;
         for (int k = b0; k < b1 && ok; ++k) {
@@ -586,7 +656,20 @@ class Optimiser {
           ok = orient2d(pt(t[0]), pt(t[1]), pt(t[2])) > 0;
           worst_new = std::min(worst_new, quality(t));
         }
-        if (!ok || worst_new < std::min(worst, kSmoothAcceptAlpha)) {
+        if (ok && worst_new < kSmoothAcceptAlpha) {
+          const Vec moved = P_[vtx];
+          const Mat moved_m = metric_ ? Mv_[vtx] : Mat::Identity();
+          P_[vtx] = old;
+          if (metric_) Mv_[vtx] = old_m;
+          double worst = 2.0;
+          for (int k = b0; k < b1; ++k) worst = std::min(worst, quality(T_[static_cast<std::size_t>(inc.tri[static_cast<std::size_t>(k)])]));
+          ok = worst_new >= worst;
+          if (ok) {
+            P_[vtx] = moved;
+            if (metric_) Mv_[vtx] = moved_m;
+          }
+        }
+        if (!ok) {
           P_[vtx] = old;
           if (metric_) Mv_[vtx] = old_m;
         }
@@ -676,6 +759,7 @@ class Optimiser {
   // Region marker per triangle by flood fill from the boundary sides.
   std::vector<int> regions(const std::unordered_map<std::uint64_t, int>& side_marker) const {
     std::vector<int> r(T_.size(), 0);
+    if (std::all_of(side_marker.begin(), side_marker.end(), [](const auto& kv) { return kv.second == 0; })) return r;
     std::vector<bool> done(T_.size(), false);
     std::vector<int> stack;
     for (std::size_t s = 0; s < N_.size(); ++s) {
@@ -966,7 +1050,7 @@ Mesh2d mesh_pslg(const Pslg& pslg, const FrontOptions& options) {
 
   clock.restart();
   report_progress(options.progress, "front2d: optimise", 0.0);
-  Optimiser opt(P, mesh.triangles, constraints, metric);
+  Optimiser opt(P, mesh.triangles, constraints, first_free, metric);
   if (options.swap_edges) mesh.report.n_swaps += opt.delaunay_swaps();
   if (options.smoothing_passes > 0) {
     opt.smooth(options.smoothing_passes, first_free);

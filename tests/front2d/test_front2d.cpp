@@ -48,6 +48,28 @@ TEST(Front2dPredicates, Orient2dIsExactWhereNaiveFails) {
   EXPECT_GT(naive_wrong, 0) << "the test must contain cases where double evaluation fails";
 }
 
+TEST(Front2dPredicates, Orient2dShortcutForEqualCoordinates) {
+  // Points sharing an x or a y coordinate (axis-parallel boundaries) are decided without
+  // the expansion; the answer must equal the exact one, also a few ulps off the line.
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> u(-1, 1);
+  int decided_zero = 0;
+  for (int i = 0; i < 20000; ++i) {
+    const double x = u(rng), y = u(rng);
+    Vec a(x, u(rng)), b(x, u(rng)), c(x, u(rng));  // on the line x = const
+    const int which = i % 3;
+    Vec& m = which == 0 ? a : (which == 1 ? b : c);
+    const int k = static_cast<int>(i / 3 % 5) - 2;  // move one point by -2..2 ulps
+    m.x() = k == 0 ? m.x() : std::nextafter(m.x(), k > 0 ? 2.0 : -2.0);
+    if (std::abs(k) == 2) m.x() = std::nextafter(m.x(), k > 0 ? 2.0 : -2.0);
+    ASSERT_EQ(front2d::orient2d(a, b, c), front2d::orient2d_exact(a, b, c)) << i;
+    const Vec p(a.y(), y), q(b.y(), y), r(c.y(), y);  // on the line y = const
+    ASSERT_EQ(front2d::orient2d(p, q, r), front2d::orient2d_exact(p, q, r)) << i;
+    decided_zero += front2d::orient2d(a, b, c) == 0;
+  }
+  EXPECT_GT(decided_zero, 1000);
+}
+
 TEST(Front2dPredicates, SegmentsIntersect) {
   EXPECT_TRUE(front2d::segments_intersect({0, 0}, {2, 2}, {0, 2}, {2, 0}));
   EXPECT_FALSE(front2d::segments_intersect({0, 0}, {1, 1}, {2, 2}, {3, 3}));
@@ -153,6 +175,8 @@ void add_loop(Pslg& p, const std::vector<Vec>& pts) {
     p.segments.push_back({base + static_cast<int>(i), base + static_cast<int>((i + 1) % pts.size())});
   }
 }
+
+double loop_area(const std::vector<Vec>& p);
 
 FrontOptions uniform(double h) {
   FrontOptions o;
@@ -380,6 +404,112 @@ TEST(Front2dMetric, ParaboloidHeightFieldMetric) {
   EXPECT_GE(min_angle, 25.0);  // a Euclidean optimiser left 19 deg here
   // In the plane the triangles are stretched along the slope: worse than on the surface.
   EXPECT_LT(sum_plain / static_cast<double>(m.triangles.size()), mean);
+}
+
+// ---------------------------------------------------------------- touching loops
+
+// Points along the closed polyline `corners` (the first point not repeated), about `step`
+// apart on each side; returns their indices appended to p.points (the corners included).
+std::vector<int> discretise(Pslg& p, const std::vector<Vec>& corners, double step, std::vector<int> fixed = {}) {
+  std::vector<int> idx;
+  for (std::size_t i = 0; i < corners.size(); ++i) {
+    const Vec a = corners[i], b = corners[(i + 1) % corners.size()];
+    const int n = std::max(1, static_cast<int>(std::lround((b - a).norm() / step)));
+    for (int k = 0; k < n; ++k) {
+      if (k == 0 && i < fixed.size() && fixed[i] >= 0) {
+        idx.push_back(fixed[i]);
+        continue;
+      }
+      idx.push_back(static_cast<int>(p.points.size()));
+      p.points.push_back(a + (b - a) * (static_cast<double>(k) / n));
+    }
+  }
+  for (std::size_t i = 0; i < idx.size(); ++i) p.segments.push_back({idx[i], idx[(i + 1) % idx.size()]});
+  return idx;
+}
+
+// Mesh with split_segments on and off; both must be valid, oriented, conforming, of the area.
+void expect_touching_domain(const Pslg& p, double area, double h) {
+  for (bool split : {false, true}) {
+    SCOPED_TRACE(split ? "split_segments" : "segments final");
+    FrontOptions o = uniform(h);
+    o.split_segments = split;
+    const Mesh2d m = mesh_pslg(p, o);
+    Stats s;
+    EXPECT_EQ(check_mesh(p, m, area, &s), "");
+    EXPECT_NEAR(m.report.domain_area, area, 1e-12);
+    EXPECT_GE(s.mean_alpha, 0.85);
+  }
+}
+
+TEST(Front2dTouching, OuterLoopTouchesHoleAtOneVertex) {
+  // The square [0, 4]^2 and a diamond hole whose bottom vertex is the point (2, 0) of the
+  // square's bottom side: that point has 4 incident segments.
+  const double h = 0.25;
+  Pslg p;
+  const std::vector<int> outer = discretise(p, {{0, 0}, {2, 0}, {4, 0}, {4, 4}, {0, 4}}, h);
+  const int touch = outer[8];
+  ASSERT_EQ(p.points[touch], Vec(2, 0));
+  discretise(p, {{2, 0}, {1, 1}, {2, 2}, {3, 1}}, h, {touch});
+  p.holes.push_back({2, 1});
+  expect_touching_domain(p, 16.0 - 2.0, h);
+  // A hole touching the outer loop at a corner of both (the outer corner of 90 deg is split
+  // into angles of about 26.6 deg, the hole's own and 26.6 deg).
+  Pslg q;
+  const std::vector<int> o2 = discretise(q, {{0, 0}, {4, 0}, {4, 4}, {0, 4}}, h);
+  discretise(q, {{0, 0}, {1, 2}, {1.5, 1.5}, {2, 1}}, h, {o2[0]});
+  q.holes.push_back({1.2, 1.2});
+  expect_touching_domain(q, 16.0 - 1.5, h);
+}
+
+TEST(Front2dTouching, TwoLobesJoinedAtOneVertex) {
+  const double h = 0.2;
+  Pslg p;
+  const std::vector<int> a = discretise(p, {{0, 0}, {2, 0}, {2, 2}, {0, 2}}, h);
+  discretise(p, {{2, 2}, {4, 2}, {4, 4}, {2, 4}}, h, {a[20]});
+  ASSERT_EQ(p.points[a[20]], Vec(2, 2));
+  expect_touching_domain(p, 8.0, h);
+  // Lobes meeting at a sharp vertex (input angles 30 deg on both sides).
+  Pslg q;
+  const std::vector<int> b = discretise(q, {{0, 0}, {2, -0.5}, {2, 0.5}}, 0.1);
+  const int apex = b[0];
+  discretise(q, {{0, 0}, {-2, 0.5}, {-2, -0.5}}, 0.1, {apex});
+  expect_touching_domain(q, 2.0, 0.1);
+}
+
+TEST(Front2dTouching, VeryNonUniformFinalBoundary) {
+  // Border nodes spaced 0.2 h .. 3 h (random), segments final (split_segments = false).
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> u(0.2, 3.0);
+  const double h = 0.05;
+  for (int shape = 0; shape < 2; ++shape) {
+    SCOPED_TRACE(shape);
+    std::vector<Vec> pts;
+    if (shape == 0) {  // circle of radius 1
+      double t = 0;
+      while (t < 2 * std::numbers::pi - 0.2 * h) {
+        pts.emplace_back(std::cos(t), std::sin(t));
+        t += u(rng) * h;
+      }
+    } else {  // unit square with random spacing on each side
+      const std::vector<Vec> c = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+      for (int side = 0; side < 4; ++side) {
+        double t = 0;
+        while (t < 1.0 - 0.2 * h) {
+          pts.push_back(c[side] + t * (c[(side + 1) % 4] - c[side]));
+          t += u(rng) * h;
+        }
+      }
+    }
+    const Pslg p = polygon(pts);
+    FrontOptions o = uniform(h);
+    o.split_segments = false;
+    const Mesh2d m = mesh_pslg(p, o);
+    Stats s;
+    EXPECT_EQ(check_mesh(p, m, loop_area(pts), &s), "");
+    for (const auto& ch : m.segment_chains) EXPECT_EQ(ch.size(), 2u);
+    EXPECT_GE(s.mean_alpha, 0.85);
+  }
 }
 
 // ---------------------------------------------------------------- files
