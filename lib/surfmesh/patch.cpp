@@ -9,6 +9,7 @@
 #include <numbers>
 #include <stdexcept>
 #include <string>
+#include <unordered_set>
 
 #include "nurbsfront/core/stopwatch.h"
 #include "nurbsfront/front2d/front.h"
@@ -103,6 +104,49 @@ double signed_area(const std::vector<Eigen::Vector2d>& polygon) {
   return 0.5 * twice;
 }
 
+// Rings of faces outside the patch added to its fit (1 measured best on level-set and
+// occupancy spheres and tori: 2 and 3 pull the level-set fits off), and the smallest
+// normal . axis such a
+// face must have (a steeper face would fold the height field).
+constexpr int kFitOverlapRings = 1;
+constexpr double kFitOverlapMinNormalDot = 0.5;
+
+// Vertices of the faces of other patches within kFitOverlapRings vertex rings of patch p's
+// border that face its axis, not in the patch, ascending.
+std::vector<int> overlap_vertices(const TriMesh& mesh, const Segmentation& seg, int p) {
+  const Patch& patch = seg.patches[static_cast<std::size_t>(p)];
+  std::vector<int> frontier;
+  for (const int c : patch.curves)
+    for (const int v : seg.curves[static_cast<std::size_t>(c)].vertices) frontier.push_back(v);
+  std::unordered_set<int> taken_faces;
+  std::vector<int> added;
+  for (int ring = 0; ring < kFitOverlapRings && !frontier.empty(); ++ring) {
+    std::vector<int> next;
+    for (const int v : frontier) {
+      for (const auto f : mesh.vf_range(TriMesh::VertexHandle(v))) {
+        if (seg.face_patch[static_cast<std::size_t>(f.idx())] == p || taken_faces.count(f.idx()) != 0) continue;
+        const Eigen::Vector3d n = to_eigen(mesh.calc_face_normal(f));
+        if (!(n.dot(patch.axis) >= kFitOverlapMinNormalDot)) continue;
+        taken_faces.insert(f.idx());
+        for (const auto w : mesh.fv_range(f)) next.push_back(w.idx());
+      }
+    }
+    added.insert(added.end(), next.begin(), next.end());
+    frontier = std::move(next);
+  }
+  std::sort(added.begin(), added.end());
+  added.erase(std::unique(added.begin(), added.end()), added.end());
+  // Keep only vertices outside the patch (its own are fitted already).
+  std::vector<int> out;
+  for (const int v : added) {
+    bool in_patch = false;
+    for (const auto f : mesh.vf_range(TriMesh::VertexHandle(v)))
+      if (seg.face_patch[static_cast<std::size_t>(f.idx())] == p) in_patch = true;
+    if (!in_patch) out.push_back(v);
+  }
+  return out;
+}
+
 std::string what_of(const std::exception_ptr& error) {
   try {
     std::rethrow_exception(error);
@@ -165,6 +209,10 @@ void fit_patch(const TriMesh& mesh, const Segmentation& seg, int p, const Border
     for (const int v : vertices) points.push_back(to_eigen(mesh.point(TriMesh::VertexHandle(v))));
     const std::vector<Eigen::Vector3d> normals(points.size(), patch.axis);
     const PatchFrame frame = patch_frame(points, normals);
+    // The fit also sees a few rings of the neighbouring patches' faces (those the axis
+    // still sees from above), so it is determined beyond the border, where MBA alone is
+    // weakest and both patches' surfaces must agree.
+    for (const int v : overlap_vertices(mesh, seg, p)) points.push_back(to_eigen(mesh.point(TriMesh::VertexHandle(v))));
     std::vector<Eigen::Vector3d> local = frame.to_local(points);
 
     // The rectangle covers the vertices and the border nodes, slightly enlarged, so every

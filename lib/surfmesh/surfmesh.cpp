@@ -88,6 +88,46 @@ void run_parallel(std::size_t n, unsigned threads, const ProgressCallback& progr
   if (cancelled) throw Cancelled();
 }
 
+// Moves each border node to the mean of its vertical projections onto the fitted surfaces
+// of its curve's patches, by at most one mean edge length, so the border lies near both
+// surfaces. Corners move the same way (onto all their patches' surfaces) unless one of
+// their curves is a feature: crease corners stay where the input has them.
+void project_border_nodes(const Segmentation& seg, const std::vector<surfmesh_detail::PatchResult>& results,
+                          const std::vector<std::uint8_t>& is_feature, double max_move, surfmesh_detail::BorderNodes& borders) {
+  const std::size_t n_corners = seg.corners.size();
+  std::vector<std::vector<int>> node_patches(borders.positions.size());
+  std::vector<std::uint8_t> corner_fixed(n_corners, 0);
+  for (std::size_t c = 0; c < seg.curves.size(); ++c) {
+    const BorderCurve& curve = seg.curves[c];
+    for (const int g : borders.curve_nodes[c]) {
+      auto& patches = node_patches[static_cast<std::size_t>(g)];
+      for (const int p : {curve.patch_left, curve.patch_right})
+        if (p >= 0 && std::find(patches.begin(), patches.end(), p) == patches.end()) patches.push_back(p);
+      if (static_cast<std::size_t>(g) < n_corners && is_feature[c] != 0) corner_fixed[static_cast<std::size_t>(g)] = 1;
+    }
+  }
+  for (std::size_t g = 0; g < borders.positions.size(); ++g) {
+    if (g < n_corners && corner_fixed[g] != 0) continue;
+    auto& patches = node_patches[g];
+    std::sort(patches.begin(), patches.end());  // the same summation order on every run
+    Eigen::Vector3d& x = borders.positions[g];
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    int count = 0;
+    for (const int p : patches) {
+      const auto& r = results[static_cast<std::size_t>(p)];
+      if (!r.has_surface) continue;
+      sum += r.surface.project(x);
+      ++count;
+    }
+    if (count == 0) continue;
+    Eigen::Vector3d move = sum / count - x;
+    const double length = move.norm();
+    if (!std::isfinite(length)) continue;
+    if (length > max_move) move *= max_move / length;
+    x += move;
+  }
+}
+
 }  // namespace
 
 void SizingOptions::validate() const {
@@ -161,29 +201,7 @@ SurfaceMesh mesh_surface(const TriMesh& input, const Segmentation& segmentation,
     fit_patch(input, segmentation, static_cast<int>(p), borders, options, mean_edge, results[p]);
   });
 
-  if (options.project_border_nodes) {
-    // Each border node moves to the mean of its vertical projections onto the fitted
-    // surfaces of the curve's patches (corners stay), by at most one mean edge length.
-    for (std::size_t c = 0; c < segmentation.curves.size(); ++c) {
-      const BorderCurve& curve = segmentation.curves[c];
-      std::vector<const PatchSurface*> surfaces;
-      for (const int p : {curve.patch_left, curve.patch_right})
-        if (p >= 0 && results[static_cast<std::size_t>(p)].has_surface) surfaces.push_back(&results[static_cast<std::size_t>(p)].surface);
-      if (surfaces.empty()) continue;
-      for (const int g : borders.curve_nodes[c]) {
-        if (borders.kind[static_cast<std::size_t>(g)] != NodeKind::Border) continue;
-        Eigen::Vector3d& x = borders.positions[static_cast<std::size_t>(g)];
-        Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-        for (const PatchSurface* s : surfaces) mean += s->project(x);
-        mean /= static_cast<double>(surfaces.size());
-        Eigen::Vector3d move = mean - x;
-        const double length = move.norm();
-        if (!std::isfinite(length)) continue;
-        if (length > mean_edge) move *= mean_edge / length;
-        x += move;
-      }
-    }
-  }
+  if (options.project_border_nodes) project_border_nodes(segmentation, results, out.curve_is_feature, mean_edge, borders);
 
   run_parallel(n_patches, threads, options.progress, 0.5, 1.0, [&](std::size_t p) {
     mesh_patch(segmentation, static_cast<int>(p), borders, options, h, results[p]);

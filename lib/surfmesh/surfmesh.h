@@ -74,9 +74,11 @@ struct SurfMeshOptions {
   //! an edge counts as a crease for SurfaceMesh::curve_is_feature. Pass the segmentation's
   //! SegmentOptions::crease_angle_deg. In (0, 180]. Default 80 (the segment default).
   double crease_angle_deg = 80.0;
-  //! Move every border node (not the corners) to the mean of its vertical projections onto
-  //! the fitted surfaces of the curve's patches before meshing, so the border lies near both
-  //! (DESIGN.md, Pitfalls). Default true.
+  //! Move every border node to the mean of its vertical projections onto the fitted
+  //! surfaces of its curve's patches before meshing (by at most one mean input edge), so the
+  //! border lies near both (DESIGN.md, Pitfalls). Corners move the same way onto all their
+  //! patches' surfaces, except corners of a feature curve (crease or input boundary), which
+  //! keep their input position. Default true.
   bool project_border_nodes = true;
   //! Worker threads for the patches; 0 = all hardware threads. The output is bit-identical
   //! for every thread count. Default 0.

@@ -11,6 +11,7 @@
 #include <functional>
 #include <set>
 #include <string>
+#include <variant>
 
 #include "fixtures/shapes.h"
 #include "nurbsfront/core/error.h"
@@ -18,6 +19,7 @@
 #include "nurbsfront/isosurface/scenes.h"
 #include "nurbsfront/quality/report.h"
 #include "nurbsfront/surfmesh/surfmesh.h"
+#include "nurbsfront/surfmesh/surfmesh_internal.h"
 
 namespace nurbsfront {
 namespace {
@@ -112,13 +114,28 @@ SoupFigures figures(const SurfaceMesh& sm) {
   return f;
 }
 
+// Edge lengths against the target: the mean close to it, none far above. (Short edges
+// remain where the segmentation put two corners close together.)
+void expect_sizes(const SurfaceMesh& sm, const SoupFigures& f) {
+  EXPECT_GT(f.mean_edge, 0.8 * sm.target_size);
+  EXPECT_LT(f.mean_edge, 1.2 * sm.target_size);
+  EXPECT_LT(f.max_edge, 2.5 * sm.target_size);
+}
+
 using OutwardNormal = std::function<Eigen::Vector3d(const Eigen::Vector3d&)>;
 
-// Every triangle's normal on the analytic outward side; every node near the surface.
-void expect_on_true_surface(const SurfaceMesh& sm, const Scene& scene, const OutwardNormal& outward, double max_distance) {
+// Every triangle's normal on the analytic outward side; nodes near the surface (in voxels).
+void expect_on_true_surface(const SurfaceMesh& sm, const Scene& scene, const OutwardNormal& outward, double voxel,
+                            double max_mean, double max_max) {
   double worst = 0.0;
-  for (const auto& x : sm.nodes) worst = std::max(worst, std::abs(signed_distance(scene, x)));
-  EXPECT_LE(worst, max_distance);
+  double sum = 0.0;
+  for (const auto& x : sm.nodes) {
+    const double d = std::abs(signed_distance(scene, x)) / voxel;
+    worst = std::max(worst, d);
+    sum += d;
+  }
+  EXPECT_LE(sum / static_cast<double>(sm.nodes.size()), max_mean);
+  EXPECT_LE(worst, max_max);
   std::size_t n_flipped = 0;
   for (const auto& t : sm.triangles) {
     const Eigen::Vector3d& a = sm.nodes[static_cast<std::size_t>(t[0])];
@@ -141,19 +158,160 @@ TEST(Surfmesh, LevelSetSphere) {
   EXPECT_TRUE(f.closed);
   EXPECT_EQ(f.euler, 2);
   const double voxel = 2.0 / kRes;
-  expect_on_true_surface(sm, scene_by_name("sphere"), [](const Eigen::Vector3d& x) { return x.normalized(); }, 0.25 * voxel);
+  expect_on_true_surface(sm, scene_by_name("sphere"), [](const Eigen::Vector3d& x) { return x.normalized(); }, voxel, 0.1, 0.25);
   EXPECT_GE(f.mean_alpha, 0.85);
-  EXPECT_GT(f.mean_edge, 0.7 * sm.target_size);
-  EXPECT_LT(f.mean_edge, 1.3 * sm.target_size);
-  std::printf("sphere: patches %zu nodes %zu triangles %zu mean alpha %.3f min alpha %.3f edges %.3f/%.3f/%.3f h %.3f\n",
-              sm.patches.size(), sm.nodes.size(), sm.triangles.size(), f.mean_alpha, f.min_alpha, f.min_edge / sm.target_size,
-              f.mean_edge / sm.target_size, f.max_edge / sm.target_size, sm.target_size);
+  expect_sizes(sm, f);
   for (const auto& c : sm.curve_is_feature) EXPECT_EQ(c, 0);
 
   options.threads = 2;
   const SurfaceMesh again = mesh_surface(mesh, seg, options);
   EXPECT_EQ(again.nodes, sm.nodes);
   EXPECT_EQ(again.triangles, sm.triangles);
+}
+
+
+Eigen::Vector3d torus_outward(const Eigen::Vector3d& x) {
+  const TorusScene torus = std::get<TorusScene>(scene_by_name("torus"));
+  const Eigen::Vector3d ring = torus.major_radius * Eigen::Vector3d(x.x(), x.y(), 0.0).normalized();
+  return (x - torus.center - ring).normalized();
+}
+
+TEST(Surfmesh, LevelSetTorus) {
+  constexpr int kRes = 48;
+  const TriMesh mesh = scene_mesh("torus", kRes, SampleMode::LevelSet);
+  const Segmentation seg = segment(mesh);
+  SurfMeshOptions options;
+  options.threads = 2;
+  const SurfaceMesh sm = mesh_surface(mesh, seg, options);
+  expect_consistent(seg, sm);
+  const SoupFigures f = figures(sm);
+  EXPECT_TRUE(f.closed);
+  EXPECT_EQ(f.euler, 0);
+  const BoundingBox box = bounding_box(scene_by_name("torus"));
+  const double voxel = (box.max - box.min).maxCoeff() / kRes;
+  // Measured 0.06 mean, 0.24 max (inner nodes; border nodes 0.16, corners 0.09).
+  expect_on_true_surface(sm, scene_by_name("torus"), torus_outward, voxel, 0.1, 0.3);
+  EXPECT_GE(f.mean_alpha, 0.85);
+  expect_sizes(sm, f);
+}
+
+TEST(Surfmesh, OccupancySphere) {
+  constexpr int kRes = 48;
+  const TriMesh mesh = scene_mesh("sphere", kRes, SampleMode::Occupancy);
+  const Segmentation seg = segment(mesh);
+  const SurfaceMesh sm = mesh_surface(mesh, seg, {});
+  expect_consistent(seg, sm);
+  const SoupFigures f = figures(sm);
+  EXPECT_TRUE(f.closed);
+  EXPECT_EQ(f.euler, 2);
+  const double voxel = 2.0 / kRes;
+  // The terraced input is up to half a voxel off; the fit averages it (measured mean 0.06)
+  // except at the apex plateaus, which hold it half a voxel low (docs/nurbs.md, Pitfalls).
+  expect_on_true_surface(sm, scene_by_name("sphere"), [](const Eigen::Vector3d& x) { return x.normalized(); }, voxel, 0.1, 0.6);
+  EXPECT_GE(f.mean_alpha, 0.85);
+  expect_sizes(sm, f);
+}
+
+
+// A wavy open square z = 0.15 sin(3x) cos(2y) over [0, 1]^2, optionally with the cells of
+// a centred square hole removed (an annulus: the patch's border has a hole loop).
+TriMesh wavy_patch(int n, bool with_hole) {
+  TriangleSoup grid = test::grid_patch(n, n);
+  for (auto& p : grid.points) p.z() = 0.15 * std::sin(3.0 * p.x()) * std::cos(2.0 * p.y());
+  if (with_hole) {
+    std::vector<std::array<std::uint32_t, 3>> kept;
+    for (const auto& t : grid.triangles) {
+      const Eigen::Vector3d c = (grid.points[t[0]] + grid.points[t[1]] + grid.points[t[2]]) / 3.0;
+      if (std::abs(c.x() - 0.5) < 0.2 && std::abs(c.y() - 0.5) < 0.2) continue;
+      kept.push_back(t);
+    }
+    grid.triangles = kept;
+  }
+  return to_trimesh(grid);
+}
+
+TEST(Surfmesh, OpenWavyPatch) {
+  const TriMesh mesh = wavy_patch(30, false);
+  const Segmentation seg = segment(mesh);
+  const SurfaceMesh sm = mesh_surface(mesh, seg, {});
+  expect_consistent(seg, sm);
+  const SoupFigures f = figures(sm);
+  EXPECT_FALSE(f.closed);
+  EXPECT_EQ(f.euler, 1);
+  EXPECT_GE(f.mean_alpha, 0.85);
+  for (const auto c : sm.curve_is_feature) EXPECT_EQ(c, 1);  // every curve is on the input boundary
+  // Nodes are near the analytic surface: the fit (finest spacing 2.5 mean edges by
+  // default) smooths this wave by about a tenth of an edge.
+  for (const auto& x : sm.nodes)
+    EXPECT_NEAR(x.z(), 0.15 * std::sin(3.0 * x.x()) * std::cos(2.0 * x.y()), 0.15 * sm.input_mean_edge);
+}
+
+TEST(Surfmesh, PatchWithHoleLoop) {
+  const TriMesh mesh = wavy_patch(30, true);
+  const Segmentation seg = segment(mesh);
+  ASSERT_EQ(seg.patches.size(), 1u);
+  ASSERT_EQ(seg.curves.size(), 2u);  // outer and hole loop
+  // The hole's border loop is clockwise in some patch: front2d must get a hole point.
+  const SurfaceMesh sm = mesh_surface(mesh, seg, {});
+  expect_consistent(seg, sm);
+  const SoupFigures f = figures(sm);
+  EXPECT_FALSE(f.closed);
+  EXPECT_EQ(f.euler, 0);
+  EXPECT_GE(f.mean_alpha, 0.85);
+  // No triangle covers the hole.
+  for (const auto& t : sm.triangles) {
+    const Eigen::Vector3d c = (sm.nodes[t[0]] + sm.nodes[t[1]] + sm.nodes[t[2]]) / 3.0;
+    EXPECT_FALSE(std::abs(c.x() - 0.5) < 0.19 && std::abs(c.y() - 0.5) < 0.19);
+  }
+}
+
+TEST(Surfmesh, HolePointInsideClockwiseLoop) {
+  // An L-shaped clockwise loop: the point must be strictly inside.
+  const std::vector<Eigen::Vector2d> loop{{0, 0}, {0, 2}, {2, 2}, {2, 1}, {1, 1}, {1, 0}};
+  Eigen::Vector2d q;
+  ASSERT_TRUE(surfmesh_detail::point_inside_polygon(loop, q));
+  EXPECT_TRUE(surfmesh_detail::polygon_contains(loop, q));
+  EXPECT_GT(q.x(), 0.0);
+  EXPECT_LT(q.x(), 1.0);
+  EXPECT_FALSE(surfmesh_detail::polygon_contains(loop, Eigen::Vector2d(1.5, 0.5)));
+}
+
+TEST(Surfmesh, BadOptionsAndMismatchedSegmentation) {
+  const TriMesh mesh = scene_mesh("sphere", 16, SampleMode::LevelSet);
+  const Segmentation seg = segment(mesh);
+  const std::vector<std::function<void(SurfMeshOptions&)>> bad{
+      [](SurfMeshOptions& o) { o.sizing.size = -1.0; },
+      [](SurfMeshOptions& o) { o.sizing.relative_size = 0.0; },
+      [](SurfMeshOptions& o) { o.sizing.gradation = 1.0; },
+      [](SurfMeshOptions& o) { o.sizing.min_size_fraction = 0.0; },
+      [](SurfMeshOptions& o) { o.fit.relative_tolerance = std::nan(""); },
+      [](SurfMeshOptions& o) { o.fit.max_levels = 0; },
+      [](SurfMeshOptions& o) { o.smoothing_passes = -1; },
+      [](SurfMeshOptions& o) { o.threads = -2; },
+      [](SurfMeshOptions& o) { o.crease_angle_deg = 0.0; },
+  };
+  for (const auto& spoil : bad) {
+    SurfMeshOptions options;
+    spoil(options);
+    EXPECT_THROW((void)mesh_surface(mesh, seg, options), InvalidInput);
+  }
+  const TriMesh other = scene_mesh("sphere", 20, SampleMode::LevelSet);
+  EXPECT_THROW((void)mesh_surface(other, seg, {}), InvalidInput);
+  Segmentation broken = seg;
+  broken.curves.front().edges.front() = broken.curves.front().edges.back() + 1;
+  EXPECT_THROW((void)mesh_surface(mesh, broken, {}), InvalidInput);
+}
+
+TEST(Surfmesh, CancelledByProgress) {
+  const TriMesh mesh = scene_mesh("sphere", 16, SampleMode::LevelSet);
+  const Segmentation seg = segment(mesh);
+  for (const int threads : {1, 2}) {
+    SurfMeshOptions options;
+    options.threads = threads;
+    int calls = 0;
+    options.progress = [&](std::string_view stage, double) { return ++calls < 3 || stage != "surfmesh: patches"; };
+    EXPECT_THROW((void)mesh_surface(mesh, seg, options), Cancelled);
+  }
 }
 
 }  // namespace
