@@ -28,10 +28,30 @@ int corner_index(const std::vector<int>& corners, int vertex) {
   return static_cast<int>(it - corners.begin());
 }
 
+// Loops with fewer vertices use their input positions, not the smoothed ones (the Taubin
+// steps can collapse a loop of three or four edges onto a line; measured on the level-set
+// DRAM cell at 128 cells, a one-face patch).
+constexpr std::size_t kMinSmoothedLoopVertices = 8;
+
+// A piece may cut off at most this share of its chord length: where the curve turns
+// more within one piece (a small loop, a sharp bend), the chords could fold in a patch's
+// plane, so the curve gets more pieces.
+constexpr double kMaxChordDeviation = 0.25;
+// More pieces than this multiple of the size-driven count are never added for the chord rule.
+constexpr int kMaxRefinement = 4;
+
+double point_segment_distance(const Eigen::Vector3d& q, const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  const Eigen::Vector3d ab = b - a;
+  const double len2 = ab.squaredNorm();
+  const double t = len2 > 0.0 ? std::clamp((q - a).dot(ab) / len2, 0.0, 1.0) : 0.0;
+  return (a + t * ab - q).norm();
+}
+
 // Resamples a polyline (closed: the last point joins the first) into n pieces of equal
-// integral of 1 / size, n = max(min_pieces, round(integral)). Returns the interior points
-// (open: n - 1 of them, the ends are the polyline's ends) or all n points starting at the
-// first polyline point (closed).
+// integral of 1 / size, n = max(min_pieces, round(integral)), raised until no polyline
+// point is further than kMaxChordDeviation x chord from its piece's chord. Returns the
+// interior points (open: n - 1 of them, the ends are the polyline's ends) or all n points
+// starting at the first polyline point (closed).
 std::vector<Eigen::Vector3d> resample(const std::vector<Eigen::Vector3d>& pts, bool is_closed, int min_pieces,
                                       const SizeAt& size_at) {
   std::vector<Eigen::Vector3d> poly = pts;
@@ -44,18 +64,38 @@ std::vector<Eigen::Vector3d> resample(const std::vector<Eigen::Vector3d>& pts, b
     cumulative[i] = cumulative[i - 1] + (poly[i] - poly[i - 1]).norm() * 0.5 * (inv_size[i] + inv_size[i - 1]);
   const double total = cumulative.back();
   const long rounded = std::lround(total);
-  const int n = std::max(min_pieces, static_cast<int>(std::min<long>(rounded, 1L << 30)));
-  std::vector<Eigen::Vector3d> out;
-  out.reserve(static_cast<std::size_t>(n));
-  if (is_closed) out.push_back(poly.front());
-  std::size_t seg = 1;
-  for (int k = 1; k < n; ++k) {
-    const double target = total * static_cast<double>(k) / static_cast<double>(n);
-    while (seg + 1 < m && cumulative[seg] < target) ++seg;
-    const double span = cumulative[seg] - cumulative[seg - 1];
-    const double t = span > 0.0 ? std::clamp((target - cumulative[seg - 1]) / span, 0.0, 1.0) : 0.5;
-    out.push_back((1.0 - t) * poly[seg - 1] + t * poly[seg]);
+  const int n0 = std::max(min_pieces, static_cast<int>(std::min<long>(rounded, 1L << 30)));
+  std::vector<Eigen::Vector3d> nodes;  // all n + 1 piece ends, first and last = the polyline's ends
+  for (int n = n0; n <= kMaxRefinement * n0; ++n) {
+    nodes.assign(1, poly.front());
+    std::vector<std::size_t> first_after(1, 1);  // per piece end: index of the first polyline point after it
+    std::size_t seg = 1;
+    for (int k = 1; k < n; ++k) {
+      const double target = total * static_cast<double>(k) / static_cast<double>(n);
+      while (seg + 1 < m && cumulative[seg] < target) ++seg;
+      const double span = cumulative[seg] - cumulative[seg - 1];
+      const double t = span > 0.0 ? std::clamp((target - cumulative[seg - 1]) / span, 0.0, 1.0) : 0.5;
+      nodes.push_back((1.0 - t) * poly[seg - 1] + t * poly[seg]);
+      first_after.push_back(t >= 1.0 ? seg + 1 : seg);
+    }
+    nodes.push_back(poly.back());
+    first_after.push_back(m);
+    bool is_fine = true;
+    for (int k = 0; k < n && is_fine; ++k) {
+      const Eigen::Vector3d& a = nodes[static_cast<std::size_t>(k)];
+      const Eigen::Vector3d& b = nodes[static_cast<std::size_t>(k) + 1];
+      const double limit = kMaxChordDeviation * (b - a).norm();
+      for (std::size_t i = first_after[static_cast<std::size_t>(k)]; i < first_after[static_cast<std::size_t>(k) + 1] && i + 1 < m; ++i)
+        if (point_segment_distance(poly[i], a, b) > limit) {
+          is_fine = false;
+          break;
+        }
+    }
+    if (is_fine) break;
   }
+  std::vector<Eigen::Vector3d> out;
+  if (is_closed) out.push_back(nodes.front());
+  out.insert(out.end(), nodes.begin() + 1, nodes.end() - 1);
   return out;
 }
 
@@ -153,7 +193,12 @@ BorderNodes discretise_borders(const TriMesh& mesh, const Segmentation& seg, con
       const auto range = std::equal_range(ends.begin(), ends.end(), std::pair<int, int>(key));
       if (range.second - range.first > 1) min_pieces = 2;
     }
-    const std::vector<Eigen::Vector3d> samples = resample(curve.smoothed, curve.is_closed, min_pieces, size_at);
+    // Smoothing a short loop (closed, or from a corner to itself) can collapse it: such a
+    // loop keeps its input positions.
+    std::vector<Eigen::Vector3d> polyline = curve.smoothed;
+    if (min_pieces == 3 && curve.vertices.size() < kMinSmoothedLoopVertices)
+      for (std::size_t i = 0; i < polyline.size(); ++i) polyline[i] = point(mesh, curve.vertices[i]);
+    const std::vector<Eigen::Vector3d> samples = resample(polyline, curve.is_closed, min_pieces, size_at);
     if (!curve.is_closed) nodes.push_back(corner_index(seg.corners, curve.vertices.front()));
     for (const auto& q : samples) {
       nodes.push_back(static_cast<int>(out.positions.size()));

@@ -109,6 +109,8 @@ double signed_area(const std::vector<Eigen::Vector2d>& polygon) {
 // normal . axis such a
 // face must have (a steeper face would fold the height field).
 constexpr int kFitOverlapRings = 1;
+// Relative tolerance between the meshed area and the area inside the border (round-off).
+constexpr double kAreaTolerance = 1e-9;
 constexpr double kFitOverlapMinNormalDot = 0.5;
 
 // Vertices of the faces of other patches within kFitOverlapRings vertex rings of patch p's
@@ -260,16 +262,34 @@ void mesh_patch(const Segmentation& seg, int p, const BorderNodes& borders, cons
     for (const int g : border.nodes)
       pslg.points.push_back(surface.frame.to_local(borders.positions[static_cast<std::size_t>(g)]).head<2>());
     pslg.segments = border.edges;
-    // Every loop but the counter-clockwise outer one bounds a hole: front2d needs a point
-    // inside each.
+    // Faces of the loop arrangement with winding number 0 are holes (front2d needs a point
+    // inside each); 1 is the domain; anything else means the projected border folds.
+    std::vector<std::vector<Eigen::Vector2d>> polygons;
+    std::vector<double> orientation;
+    double border_area = 0.0;  // area on the left of the directed border
     for (const auto& loop : trace_loops(pslg.points, border.edges)) {
-      std::vector<Eigen::Vector2d> polygon;
-      polygon.reserve(loop.size());
+      std::vector<Eigen::Vector2d>& polygon = polygons.emplace_back();
       for (const int i : loop) polygon.push_back(pslg.points[static_cast<std::size_t>(i)]);
-      if (signed_area(polygon) >= 0.0) continue;
+      const double area = signed_area(polygon);
+      border_area += area;
+      orientation.push_back(area >= 0.0 ? 1.0 : -1.0);
+    }
+    // The segmentation guarantees one counter-clockwise (outer) loop; a second one means
+    // the discretised border folds in this plane.
+    if (std::count(orientation.begin(), orientation.end(), 1.0) != 1)
+      throw std::runtime_error("the border has " + std::to_string(std::count(orientation.begin(), orientation.end(), 1.0)) +
+                               " counter-clockwise loops in the patch plane (expected 1: it folds)");
+    for (const auto& polygon : polygons) {
       Eigen::Vector2d inside;
-      if (!point_inside_polygon(polygon, inside)) throw std::runtime_error("no point found inside a hole loop");
-      pslg.holes.push_back(inside);
+      if (!point_inside_polygon(polygon, inside)) throw std::runtime_error("a border loop is degenerate in the patch plane");
+      double winding = 0.0;
+      for (std::size_t k = 0; k < polygons.size(); ++k)
+        if (polygon_contains(polygons[k], inside)) winding += orientation[k];
+      if (winding == 0.0) {
+        pslg.holes.push_back(inside);
+      } else if (winding != 1.0) {
+        throw std::runtime_error("the border folds in the patch plane (winding number " + std::to_string(winding) + ")");
+      }
     }
 
     FrontOptions front;
@@ -289,6 +309,16 @@ void mesh_patch(const Segmentation& seg, int p, const BorderNodes& borders, cons
     const Mesh2d mesh2d = mesh_pslg(pslg, front);
     if (mesh2d.report.status != FrontStatus::Ok)
       throw std::runtime_error("the 2D front did not close: " + mesh2d.report.message);
+    // front2d meshes every bounded face without a hole point; where the discretised border
+    // folds (a loop on the wrong side), that differs from the area left of the border.
+    double meshed_area = 0.0;
+    for (const auto& t : mesh2d.triangles) {
+      const Eigen::Vector2d& a = mesh2d.points[static_cast<std::size_t>(t[0])];
+      meshed_area += 0.5 * ((mesh2d.points[static_cast<std::size_t>(t[1])] - a).x() * (mesh2d.points[static_cast<std::size_t>(t[2])] - a).y() -
+                            (mesh2d.points[static_cast<std::size_t>(t[1])] - a).y() * (mesh2d.points[static_cast<std::size_t>(t[2])] - a).x());
+    }
+    if (!(std::abs(meshed_area - border_area) <= kAreaTolerance * std::abs(border_area)))
+      throw std::runtime_error("the meshed area differs from the area inside the border (the border folds in the patch plane)");
     for (const auto& chain : mesh2d.segment_chains)
       if (chain.size() != 2) throw std::runtime_error("the 2D front split a border segment");
     const int n_input = static_cast<int>(pslg.points.size());

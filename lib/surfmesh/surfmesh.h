@@ -79,7 +79,7 @@ struct SurfMeshOptions {
   //! border lies near both (DESIGN.md, Pitfalls). Corners move the same way onto all their
   //! patches' surfaces, except corners of a feature curve (crease or input boundary), which
   //! keep their input position. Default true.
-  bool project_border_nodes = true;
+  bool project_border_nodes = false;
   //! Worker threads for the patches; 0 = all hardware threads. The output is bit-identical
   //! for every thread count. Default 0.
   int threads = 0;
