@@ -136,7 +136,7 @@ InputResult run_input(const CompareInput& in, const Settings& s) {
   ReportOptions input_options;
   input_options.n_threads = std::max(2u, s.threads);
   MethodRow input_row;
-  input_row.method = "marching cubes (input)";
+  input_row.method = "input (marching cubes or file)";
   input_row.seconds = seconds_load;
   input_row.vertices = input.n_vertices();
   input_row.faces = input.n_faces();
