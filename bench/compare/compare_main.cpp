@@ -73,10 +73,14 @@ std::string fmt(const char* format, double x) {
   return buffer;
 }
 
+// CPU time of the whole process (all threads), seconds.
+double process_cpu_seconds() { return double(std::clock()) / CLOCKS_PER_SEC; }
+
 // One method's result on one input.
 struct MethodRow {
   std::string method;
-  double seconds = 0.0;
+  double seconds = 0.0;      // wall
+  double cpu_seconds = 0.0;  // CPU time of the process (all threads) during the method
   std::size_t vertices = 0;
   std::size_t faces = 0;
   std::optional<MeshReport> report;  // unset when the method failed
@@ -104,11 +108,12 @@ bool topology_kept(const TopologyReport& in, const TopologyReport& out) {
   return signature(in) == signature(out);
 }
 
-MethodRow measure(const std::string& method, const TriMesh& mesh, double seconds, const TriangleSoup& input_soup,
-                  const TopologyReport& input_topology, unsigned threads) {
+MethodRow measure(const std::string& method, const TriMesh& mesh, double seconds, double cpu_seconds,
+                  const TriangleSoup& input_soup, const TopologyReport& input_topology, unsigned threads) {
   MethodRow row;
   row.method = method;
   row.seconds = seconds;
+  row.cpu_seconds = cpu_seconds;
   row.vertices = mesh.n_vertices();
   row.faces = mesh.n_faces();
   ReportOptions options;
@@ -130,14 +135,17 @@ void write_output(const Settings& s, const std::string& input, const std::string
 InputResult run_input(const CompareInput& in, const Settings& s) {
   InputResult result{in.name, in.description, {}};
   Stopwatch watch;
+  double cpu = process_cpu_seconds();
   const TriMesh input = in.load();
   const double seconds_load = watch.seconds();
+  const double cpu_load = process_cpu_seconds() - cpu;
   const TriangleSoup input_soup = to_soup(input);
   ReportOptions input_options;
   input_options.n_threads = std::max(2u, s.threads);
   MethodRow input_row;
   input_row.method = "input (marching cubes or file)";
   input_row.seconds = seconds_load;
+  input_row.cpu_seconds = cpu_load;
   input_row.vertices = input.n_vertices();
   input_row.faces = input.n_faces();
   input_row.report = mesh_report(input_soup, input_options);
@@ -150,9 +158,11 @@ InputResult run_input(const CompareInput& in, const Settings& s) {
   std::size_t target = 0;
   try {
     watch.restart();
+    cpu = process_cpu_seconds();
     const RemeshResult remeshed = remesh(input, remesh_options(s.threads));
     const double seconds = watch.seconds();
-    MethodRow row = measure("nurbsfront remesh", remeshed.mesh, seconds, input_soup, input_topology, s.threads);
+    MethodRow row = measure("nurbsfront remesh", remeshed.mesh, seconds, process_cpu_seconds() - cpu, input_soup,
+                            input_topology, s.threads);
     row.remesh_errors = remeshed.report.errors.size();
     if (!remeshed.report.errors.empty()) row.note = "report errors: " + remeshed.report.errors.front();
     target = remeshed.mesh.n_vertices();
@@ -168,10 +178,11 @@ InputResult run_input(const CompareInput& in, const Settings& s) {
   for (const bool roundness : {false, true}) {
     const std::string method = roundness ? "decimater + roundness" : "decimater (quadric)";
     watch.restart();
+    cpu = process_cpu_seconds();
     const DecimateResult dec = decimate(input, target, decimate_options(roundness, s.roundness_angle));
     const double seconds = watch.seconds();
     const TriMesh& decimated = dec.mesh;
-    MethodRow row = measure(method, decimated, seconds, input_soup, input_topology, s.threads);
+    MethodRow row = measure(method, decimated, seconds, process_cpu_seconds() - cpu, input_soup, input_topology, s.threads);
     if (decimated.n_vertices() != target) {
       row.note = "stopped at " + std::to_string(decimated.n_vertices()) + " vertices (target " + std::to_string(target) + ")";
     }
@@ -211,21 +222,21 @@ std::string markdown(const std::vector<InputResult>& results, const std::vector<
                      const Settings& s, const std::string& header) {
   std::ostringstream md;
   md << header << "\n\n";
-  md << "| input | method | time s | vertices | faces | alpha mean | alpha min | alpha p1 | min angle | max angle | "
+  md << "| input | method | wall s | CPU s | vertices | faces | alpha mean | alpha min | alpha p1 | min angle | max angle | "
         "obtuse % | min angle < 30 % | Hausdorff | mean dist | self-int. | topology kept |\n";
-  md << "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+  md << "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
   std::vector<std::string> notes;
   for (const auto& r : results) {
     for (const auto& row : r.rows) {
       md << "| " << r.name << " | " << row.method << " | ";
       if (!row.report) {
-        md << "- | - | - | - | - | - | - | - | - | - | - | - | - | - |\n";
+        md << "- | - | - | - | - | - | - | - | - | - | - | - | - | - | - |\n";
         notes.push_back(r.name + ", " + row.method + ": " + row.note);
         continue;
       }
       const QualityReport& q = row.report->quality;
       const bool is_input = &row == &r.rows.front();
-      md << fmt("%.2f", row.seconds) << " | " << row.vertices << " | " << row.faces << " | " << fmt("%.3f", q.alpha_mean)
+      md << fmt("%.2f", row.seconds) << " | " << fmt("%.2f", row.cpu_seconds) << " | " << row.vertices << " | " << row.faces << " | " << fmt("%.3f", q.alpha_mean)
          << " | " << fmt("%.3f", q.alpha_min) << " | " << fmt("%.3f", q.alpha_p1) << " | " << fmt("%.1f", q.min_angle_deg)
          << " | " << fmt("%.1f", q.max_angle_deg) << " | " << fmt("%.2f", 100.0 * q.obtuse_fraction) << " | "
          << fmt("%.1f", 100.0 * q.small_angle_fraction) << " | ";
@@ -242,7 +253,8 @@ std::string markdown(const std::vector<InputResult>& results, const std::vector<
   md << "\nDistances are two-sided, to the input, in the input's length unit (voxel units for brain; "
         "scene units for the scenes). Times: the method alone (for the input row: making it by marching cubes or "
         "reading it), nurbsfront with "
-     << s.threads << " thread(s), the decimater single-threaded.\n";
+     << s.threads << " thread(s), the decimater single-threaded; CPU s is the process's CPU time (all threads) "
+        "during the method, the better figure on a loaded machine.\n";
   if (!notes.empty()) {
     md << "\nNotes:\n\n";
     for (const auto& n : notes) md << "- " << n << "\n";
@@ -283,7 +295,7 @@ std::string json_report(const std::vector<InputResult>& results, const std::vect
     std::vector<std::string> rows;
     for (const auto& row : r.rows) {
       json::Object o;
-      o.text("method", row.method).num("seconds", row.seconds).count("vertices", row.vertices).count("faces", row.faces);
+      o.text("method", row.method).num("seconds", row.seconds).num("cpu_seconds", row.cpu_seconds).count("vertices", row.vertices).count("faces", row.faces);
       o.flag("topology_kept", row.topology_kept).count("remesh_errors", row.remesh_errors).text("note", row.note);
       o.add("report", row.report ? to_json(*row.report) : "null");
       rows.push_back(o.str());

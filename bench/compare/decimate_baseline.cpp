@@ -47,7 +47,9 @@ DecimateResult decimate(const TriMesh& input, std::size_t target_vertices, const
   while (options.roundness && mesh.n_vertices() - count_deleted(mesh) > target_vertices && angle > 1.0) {
     angle *= 0.5;
     decimater.module(roundness).set_min_angle(static_cast<float>(angle), true);
-    decimater.decimate_to(target_vertices);
+    // decimate_to() counts deleted vertices as present: aim at the same number of removals.
+    const std::size_t alive = mesh.n_vertices() - count_deleted(mesh);
+    decimater.decimate_to(mesh.n_vertices() - (alive - target_vertices));
   }
   mesh.garbage_collection();
   if (options.roundness) result.roundness_angle = angle;
