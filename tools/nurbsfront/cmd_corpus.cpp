@@ -16,6 +16,8 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <chrono>
 #include <csignal>
@@ -93,6 +95,26 @@ std::string outcome_json(const OneArgs& a, const std::string& outcome, const std
   return o.str();
 }
 
+std::string fixed(double x, int digits) {
+  if (!std::isfinite(x)) return "-";
+  char buffer[48];
+  std::snprintf(buffer, sizeof buffer, "%.*f", digits, x);
+  return buffer;
+}
+
+// The figures of the Markdown table row: input faces, output faces, alpha mean, min angle,
+// obtuse %, self-intersecting pairs, Hausdorff / input mean edge.
+std::string markdown_cells(const TriMesh* input, const RemeshReport* report) {
+  std::string row = (input != nullptr ? std::to_string(input->n_faces()) : "-") + " | ";
+  if (report == nullptr) return row + "- | - | - | - | - | -";
+  const MeshReport& out = report->output;
+  row += std::to_string(out.topology.n_faces) + " | " + fixed(out.quality.alpha_mean, 3) + " | " +
+         fixed(out.quality.min_angle_deg, 1) + " | " + fixed(100.0 * out.quality.obtuse_fraction, 2) + " | ";
+  row += (out.topology.n_self_intersecting_pairs ? std::to_string(*out.topology.n_self_intersecting_pairs) : "-") + " | ";
+  row += out.distance && report->input_mean_edge > 0.0 ? fixed(out.distance->hausdorff / report->input_mean_edge, 2) : "-";
+  return row;
+}
+
 void run_one(const OneArgs& a) {
   if (a.self_test_crash) std::abort();
   Stopwatch watch;
@@ -142,7 +164,8 @@ void run_one(const OneArgs& a) {
   }
   std::cout << outcome_json(a, outcome, message, iso, input ? &*input : nullptr, result ? &result->report : nullptr,
                             watch.seconds())
-            << std::endl;
+            << '\n'
+            << "MD\t" << markdown_cells(input ? &*input : nullptr, result ? &result->report : nullptr) << std::endl;
 }
 
 // ---------------------------------------------------------------- parent: the corpus
@@ -152,6 +175,7 @@ struct CorpusArgs {
   double timeout = 300.0;
   unsigned threads = 1;
   std::string output;
+  std::string markdown;
   std::string out_dir;
   bool quiet = false;
   bool self_test_crash = false;
@@ -224,6 +248,7 @@ std::string tail(const std::string& text, std::size_t n) {
 
 struct ChildResult {
   std::string line;  // the child's JSON (empty when none)
+  std::string cells;  // the child's Markdown cells (empty when none)
   std::string outcome_override;  // timeout / crash
   std::string message;
   double wall_seconds = 0.0;
@@ -275,9 +300,17 @@ ChildResult run_child(const std::vector<std::string>& argv_strings, const fs::pa
     result.message = "exit status " + std::to_string(WIFEXITED(status) ? WEXITSTATUS(status) : -1) +
                      " without a result: " + tail(err, 300);
   } else {
-    const auto first = out.find('{');
-    const auto last = out.rfind('}');
-    result.line = out.substr(first, last - first + 1);
+    std::istringstream lines(out);
+    std::string l;
+    while (std::getline(lines, l)) {
+      if (l.rfind("{", 0) == 0) result.line = l;
+      if (l.rfind("MD\t", 0) == 0) result.cells = l.substr(3);
+    }
+    while (!result.line.empty() && result.line.back() != '}') result.line.pop_back();
+    if (result.line.empty()) {
+      result.outcome_override = "crash";
+      result.message = "no JSON result line: " + tail(out + err, 300);
+    }
   }
   return result;
 }
@@ -304,6 +337,9 @@ void run_corpus(const CorpusArgs& a) {
     if (!output) throw IoError("corpus: cannot write " + a.output);
   }
   std::map<std::string, int> counts;
+  std::ostringstream md;
+  md << "| input | outcome | input faces | output faces | alpha mean | min angle | obtuse % | self-int. | "
+        "Hausdorff / input mean edge | wall s | peak RSS MB | first error |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n";
   for (std::size_t i = 0; i < items.size(); ++i) {
     const CorpusItem& item = items[i];
     std::vector<std::string> argv{exe, "corpus-one", item.path.string(), "--threads", std::to_string(a.threads)};
@@ -344,11 +380,34 @@ void run_corpus(const CorpusArgs& a) {
     line += ", \"wall_seconds\": " + json::number(child.wall_seconds) + ", \"max_rss_mb\": " +
             json::number(double(child.max_rss_kb) / 1024.0) + "}";
     ++counts[outcome];
+    {
+      std::string first_error = child.outcome_override.empty() ? "" : child.message;
+      if (first_error.empty()) {  // the child's "message" value, unescaped enough for a table
+        const auto key = line.find("\"message\": \"");
+        if (key != std::string::npos) {
+          for (std::size_t k = key + 12; k < line.size() && line[k] != '"'; ++k) {
+            if (line[k] == '\\' && k + 1 < line.size()) ++k;
+            first_error += line[k];
+          }
+        }
+      }
+      std::replace(first_error.begin(), first_error.end(), '|', '/');
+      std::replace(first_error.begin(), first_error.end(), '\n', ' ');
+      if (first_error.size() > 120) first_error = first_error.substr(0, 117) + "...";
+      md << "| " << label << " | " << outcome << " | " << (child.cells.empty() ? "- | - | - | - | - | - | -" : child.cells)
+         << " | " << fixed(child.wall_seconds, 1) << " | " << fixed(double(child.max_rss_kb) / 1024.0, 0) << " | "
+         << first_error << " |\n";
+    }
     std::cout << line << std::endl;
     if (output.is_open()) output << line << '\n' << std::flush;
     if (!a.quiet) std::cerr << " " << outcome << " (" << json::number(child.wall_seconds) << " s)\n";
   }
   fs::remove_all(scratch);
+  if (!a.markdown.empty()) {
+    std::ofstream file(a.markdown);
+    file << md.str();
+    if (!file) throw IoError("corpus: cannot write " + a.markdown);
+  }
   std::string summary = "corpus: " + std::to_string(items.size()) + " inputs:";
   for (const auto& [k, n] : counts) summary += " " + k + " " + std::to_string(n) + ",";
   summary.pop_back();
@@ -370,6 +429,7 @@ void add_corpus_command(CLI::App& app) {
   cmd->add_option("--timeout", args->timeout, "Seconds per input before the child is killed")->capture_default_str();
   cmd->add_option("--threads", args->threads, "Threads of each run")->capture_default_str();
   cmd->add_option("-o,--output", args->output, "Also write the JSON lines to this file");
+  cmd->add_option("--md", args->markdown, "Also write a Markdown table, one row per input");
   cmd->add_option("--out-dir", args->out_dir, "Write each remeshed surface there (<name>.ply)");
   cmd->add_flag("-q,--quiet", args->quiet, "No per-input progress on stderr");
   cmd->add_flag("--self-test-crash", args->self_test_crash, "Make every child abort (tests the crash detection)")
