@@ -1,0 +1,451 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// nurbsfront corpus DIR...: runs the remeshing pipeline on every mesh and volume under the
+// given directories, each in a child process (posix_spawn of this executable's hidden
+// `corpus-one` command) under a time limit, so a crash or a hang is an outcome, not an
+// assumption. One JSON line per input: outcome (ok, invalid_input, patch_failed,
+// broken_output, error, timeout, crash) and figures.
+//
+// nurbsfront corpus-one FILE [--volume --iso V]: the child side, one input, one JSON line
+// on stdout.
+#include <fcntl.h>
+#include <spawn.h>
+#include <sys/resource.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <chrono>
+#include <csignal>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <map>
+#include <memory>
+#include <optional>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "cli_util.h"
+#include "commands.h"
+#include "nurbsfront/core/error.h"
+#include "nurbsfront/core/stopwatch.h"
+#include "nurbsfront/io/mesh_io.h"
+#include "nurbsfront/isosurface/marching_cubes.h"
+#include "nurbsfront/isosurface/volume_io.h"
+#include "nurbsfront/pipeline/remesh.h"
+#include "nurbsfront/quality/json.h"
+
+extern char** environ;
+
+namespace nurbsfront::cli {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+// ---------------------------------------------------------------- child: one input
+
+struct OneArgs {
+  std::string input;
+  bool volume = false;
+  std::optional<double> iso;
+  unsigned threads = 1;
+  std::string output;  // optional: write the remeshed mesh
+  bool self_test_crash = false;  // abort, to test the parent's crash detection
+};
+
+std::string outcome_json(const OneArgs& a, const std::string& outcome, const std::string& message, double iso,
+                         const TriMesh* input, const RemeshReport* report, double seconds) {
+  json::Object o;
+  o.text("input", a.input).text("kind", a.volume ? "volume" : "mesh");
+  o.add("iso", a.volume ? json::number(iso) : "null");
+  o.text("outcome", outcome).text("message", message).num("seconds", seconds);
+  if (input != nullptr) o.count("input_vertices", input->n_vertices()).count("input_faces", input->n_faces());
+  if (report != nullptr) {
+    const MeshReport& out = report->output;
+    o.count("output_vertices", out.topology.n_vertices).count("output_faces", out.topology.n_faces);
+    o.count("patches", report->n_patches).count("failed_patches", report->n_failed_patches);
+    o.num("alpha_mean", out.quality.alpha_mean).num("alpha_min", out.quality.alpha_min);
+    o.num("min_angle_deg", out.quality.min_angle_deg).num("max_angle_deg", out.quality.max_angle_deg);
+    o.num("obtuse_fraction", out.quality.obtuse_fraction);
+    o.add("self_intersecting_pairs", out.topology.n_self_intersecting_pairs
+                                         ? std::to_string(*out.topology.n_self_intersecting_pairs)
+                                         : "null");
+    o.flag("closed", out.topology.is_closed).flag("manifold", out.topology.is_manifold);
+    o.integer("euler_characteristic", out.topology.euler_characteristic);
+    if (out.distance) {
+      o.num("hausdorff", out.distance->hausdorff).num("mean_distance", out.distance->mean);
+      o.num("input_mean_edge", report->input_mean_edge);
+    }
+    std::vector<std::string> errors;
+    for (std::size_t i = 0; i < std::min<std::size_t>(report->errors.size(), 5); ++i) {
+      errors.push_back(json::string(report->errors[i]));
+    }
+    o.count("n_errors", report->errors.size()).add("errors", json::array(errors));
+  }
+  return o.str();
+}
+
+std::string fixed(double x, int digits) {
+  if (!std::isfinite(x)) return "-";
+  char buffer[48];
+  std::snprintf(buffer, sizeof buffer, "%.*f", digits, x);
+  return buffer;
+}
+
+// The figures of the Markdown table row: input faces, output faces, alpha mean, min angle,
+// obtuse %, self-intersecting pairs, Hausdorff / input mean edge.
+std::string markdown_cells(const TriMesh* input, const RemeshReport* report) {
+  std::string row = (input != nullptr ? std::to_string(input->n_faces()) : "-") + " | ";
+  if (report == nullptr) return row + "- | - | - | - | - | -";
+  const MeshReport& out = report->output;
+  row += std::to_string(out.topology.n_faces) + " | " + fixed(out.quality.alpha_mean, 3) + " | " +
+         fixed(out.quality.min_angle_deg, 1) + " | " + fixed(100.0 * out.quality.obtuse_fraction, 2) + " | ";
+  row += (out.topology.n_self_intersecting_pairs ? std::to_string(*out.topology.n_self_intersecting_pairs) : "-") + " | ";
+  row += out.distance && report->input_mean_edge > 0.0 ? fixed(out.distance->hausdorff / report->input_mean_edge, 2) : "-";
+  return row;
+}
+
+void run_one(const OneArgs& a) {
+  if (a.self_test_crash) std::abort();
+  Stopwatch watch;
+  double iso = 0.0;
+  std::optional<TriMesh> input;
+  std::optional<RemeshResult> result;
+  std::string outcome = "ok";
+  std::string message;
+  try {
+    try {
+      TriangleSoup soup;
+      if (a.volume) {
+        const ScalarGrid grid = read_volume(a.input);
+        MarchingCubesOptions options;
+        options.inside_above = true;
+        options.pad = true;
+        const auto range = grid.value_range();
+        iso = a.iso ? *a.iso : 0.5 * (double(range[0]) + double(range[1]));
+        options.iso = iso;
+        soup = marching_cubes(grid, options);
+      } else {
+        soup = read_soup(a.input);
+      }
+      input = to_trimesh(clean(soup).soup);
+    } catch (const IoError& e) {
+      throw InvalidInput(std::string("cannot read the input: ") + e.what());
+    } catch (const TopologyError& e) {
+      throw InvalidInput(std::string("the input is not an oriented 2-manifold: ") + e.what());
+    }
+    RemeshOptions options;
+    options.set_threads(a.threads);
+    result = remesh(*input, options);
+    const RemeshReport& r = result->report;
+    if (r.n_failed_patches > 0) {
+      outcome = "patch_failed";
+    } else if (!r.ok()) {
+      outcome = "broken_output";
+    }
+    if (!r.ok()) message = r.errors.front();
+    if (!a.output.empty()) write_mesh(result->mesh, a.output);
+  } catch (const InvalidInput& e) {
+    outcome = "invalid_input";
+    message = e.what();
+  } catch (const std::exception& e) {
+    outcome = "error";
+    message = e.what();
+  }
+  std::cout << outcome_json(a, outcome, message, iso, input ? &*input : nullptr, result ? &result->report : nullptr,
+                            watch.seconds())
+            << '\n'
+            << "MD\t" << markdown_cells(input ? &*input : nullptr, result ? &result->report : nullptr) << std::endl;
+}
+
+// ---------------------------------------------------------------- parent: the corpus
+
+struct CorpusArgs {
+  std::vector<std::string> directories;
+  double timeout = 300.0;
+  unsigned threads = 1;
+  std::string output;
+  std::string markdown;
+  std::string out_dir;
+  bool quiet = false;
+  bool self_test_crash = false;
+};
+
+struct CorpusItem {
+  fs::path path;
+  bool volume = false;
+  std::optional<double> iso;
+};
+
+bool ends_with(const std::string& s, const std::string& suffix) {
+  return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
+}
+
+// A legacy VTK file holds a volume when its DATASET is STRUCTURED_POINTS.
+bool is_vtk_volume(const fs::path& path) {
+  std::ifstream f(path, std::ios::binary);
+  std::string line;
+  for (int i = 0; i < 6 && std::getline(f, line); ++i) {
+    if (line.find("STRUCTURED_POINTS") != std::string::npos) return true;
+  }
+  return false;
+}
+
+// The usual iso-values of the volumes in ../shared/data (SOURCES.md); other volumes get the
+// middle of their value range.
+std::vector<std::optional<double>> iso_values(const fs::path& path) {
+  const std::string name = path.filename().string();
+  if (name.rfind("headsq", 0) == 0) return {500.0, 1150.0};  // skin, bone
+  if (name.rfind("ironProt", 0) == 0) return {128.0};
+  if (name.rfind("liver", 0) == 0) return {127.5};           // the 255 label
+  return {std::nullopt};
+}
+
+std::vector<CorpusItem> collect(const std::vector<std::string>& directories) {
+  std::vector<CorpusItem> items;
+  for (const auto& dir : directories) {
+    if (!fs::is_directory(dir)) throw InvalidInput("corpus: not a directory: " + dir);
+    std::vector<fs::path> files;
+    for (const auto& entry : fs::recursive_directory_iterator(dir)) {
+      if (entry.is_regular_file()) files.push_back(entry.path());
+    }
+    std::sort(files.begin(), files.end());
+    for (const auto& p : files) {
+      const std::string s = p.string();
+      const bool volume_ext = ends_with(s, ".mha") || ends_with(s, ".mhd") || ends_with(s, ".inr") || ends_with(s, ".inr.gz");
+      const bool vtk = ends_with(s, ".vtk");
+      const bool mesh_ext = ends_with(s, ".off") || ends_with(s, ".obj") || ends_with(s, ".ply") || ends_with(s, ".stl");
+      if (volume_ext || (vtk && is_vtk_volume(p))) {
+        for (const auto& iso : iso_values(p)) items.push_back({p, true, iso});
+      } else if (mesh_ext || vtk) {
+        items.push_back({p, false, std::nullopt});
+      }
+    }
+  }
+  return items;
+}
+
+std::string read_text(const fs::path& path) {
+  std::ifstream f(path, std::ios::binary);
+  std::ostringstream s;
+  s << f.rdbuf();
+  return s.str();
+}
+
+std::string tail(const std::string& text, std::size_t n) {
+  return text.size() <= n ? text : "..." + text.substr(text.size() - n);
+}
+
+struct ChildResult {
+  std::string line;  // the child's JSON (empty when none)
+  std::string cells;  // the child's Markdown cells (empty when none)
+  std::string outcome_override;  // timeout / crash
+  std::string message;
+  double wall_seconds = 0.0;
+  long max_rss_kb = 0;
+};
+
+ChildResult run_child(const std::vector<std::string>& argv_strings, const fs::path& out_file, const fs::path& err_file,
+                      double timeout) {
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, out_file.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  posix_spawn_file_actions_addopen(&actions, STDERR_FILENO, err_file.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  std::vector<char*> argv;
+  for (const auto& s : argv_strings) argv.push_back(const_cast<char*>(s.c_str()));
+  argv.push_back(nullptr);
+  pid_t pid = 0;
+  const auto start = std::chrono::steady_clock::now();
+  const int rc = posix_spawn(&pid, argv[0], &actions, nullptr, argv.data(), environ);
+  posix_spawn_file_actions_destroy(&actions);
+  if (rc != 0) throw IoError(std::string("corpus: cannot start ") + argv[0] + ": " + std::strerror(rc));
+  ChildResult result;
+  int status = 0;
+  rusage usage{};
+  bool timed_out = false;
+  for (;;) {
+    const pid_t done = wait4(pid, &status, WNOHANG, &usage);
+    if (done == pid) break;
+    if (done < 0 && errno != EINTR) throw IoError(std::string("corpus: wait failed: ") + std::strerror(errno));
+    const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (!timed_out && elapsed > timeout) {
+      kill(pid, SIGKILL);
+      timed_out = true;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  result.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  result.max_rss_kb = usage.ru_maxrss;
+  const std::string out = read_text(out_file);
+  const std::string err = read_text(err_file);
+  if (timed_out) {
+    result.outcome_override = "timeout";
+    result.message = "killed after " + std::to_string(timeout) + " s";
+  } else if (WIFSIGNALED(status)) {
+    result.outcome_override = "crash";
+    result.message = std::string("signal ") + std::to_string(WTERMSIG(status)) + " (" + strsignal(WTERMSIG(status)) +
+                     "): " + tail(err, 300);
+  } else if (!WIFEXITED(status) || WEXITSTATUS(status) != 0 || out.find('{') == std::string::npos) {
+    result.outcome_override = "crash";
+    result.message = "exit status " + std::to_string(WIFEXITED(status) ? WEXITSTATUS(status) : -1) +
+                     " without a result: " + tail(err, 300);
+  } else {
+    std::istringstream lines(out);
+    std::string l;
+    while (std::getline(lines, l)) {
+      if (l.rfind("{", 0) == 0) result.line = l;
+      if (l.rfind("MD\t", 0) == 0) result.cells = l.substr(3);
+    }
+    while (!result.line.empty() && result.line.back() != '}') result.line.pop_back();
+    if (result.line.empty()) {
+      result.outcome_override = "crash";
+      result.message = "no JSON result line: " + tail(out + err, 300);
+    }
+  }
+  return result;
+}
+
+std::string self_executable() {
+  std::error_code ec;
+  const fs::path p = fs::read_symlink("/proc/self/exe", ec);
+  if (ec) throw IoError("corpus: cannot find this executable (/proc/self/exe): " + ec.message());
+  return p.string();
+}
+
+void run_corpus(const CorpusArgs& a) {
+  if (a.timeout <= 0.0) throw InvalidInput("corpus: --timeout must be positive");
+  if (a.threads == 0) throw InvalidInput("corpus: --threads must be at least 1");
+  const std::vector<CorpusItem> items = collect(a.directories);
+  if (items.empty()) throw InvalidInput("corpus: no mesh or volume files under the given directories");
+  const std::string exe = self_executable();
+  const fs::path scratch = fs::temp_directory_path() / ("nurbsfront-corpus-" + std::to_string(getpid()));
+  fs::create_directories(scratch);
+  if (!a.out_dir.empty()) fs::create_directories(a.out_dir);
+  std::ofstream output;
+  if (!a.output.empty()) {
+    output.open(a.output);
+    if (!output) throw IoError("corpus: cannot write " + a.output);
+  }
+  std::map<std::string, int> counts;
+  std::ostringstream md;
+  md << "| input | outcome | input faces | output faces | alpha mean | min angle | obtuse % | self-int. | "
+        "Hausdorff / input mean edge | wall s | peak RSS MB | first error |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+  for (std::size_t i = 0; i < items.size(); ++i) {
+    const CorpusItem& item = items[i];
+    std::vector<std::string> argv{exe, "corpus-one", item.path.string(), "--threads", std::to_string(a.threads)};
+    std::string label = item.path.filename().string();
+    if (item.volume) {
+      argv.push_back("--volume");
+      if (item.iso) {
+        argv.push_back("--iso");
+        argv.push_back(json::number(*item.iso));
+        label += "@" + json::number(*item.iso);
+      }
+    }
+    if (a.self_test_crash) argv.push_back("--self-test-crash");
+    if (!a.out_dir.empty()) {
+      argv.push_back("-o");
+      argv.push_back((fs::path(a.out_dir) / (label + ".ply")).string());
+    }
+    if (!a.quiet) std::cerr << "[" << (i + 1) << "/" << items.size() << "] " << label << " ..." << std::flush;
+    const ChildResult child = run_child(argv, scratch / "out.txt", scratch / "err.txt", a.timeout);
+    std::string line;
+    std::string outcome;
+    if (!child.outcome_override.empty()) {
+      outcome = child.outcome_override;
+      json::Object o;
+      o.text("input", item.path.string()).text("kind", item.volume ? "volume" : "mesh");
+      o.add("iso", item.iso ? json::number(*item.iso) : "null");
+      o.text("outcome", outcome).text("message", child.message);
+      line = o.str();
+    } else {
+      line = child.line;
+      const auto key = line.find("\"outcome\":");
+      const auto q1 = line.find('"', key + 10);
+      const auto q2 = line.find('"', q1 + 1);
+      outcome = line.substr(q1 + 1, q2 - q1 - 1);
+    }
+    // Append the parent's measurements to the object.
+    line.pop_back();
+    line += ", \"wall_seconds\": " + json::number(child.wall_seconds) + ", \"max_rss_mb\": " +
+            json::number(double(child.max_rss_kb) / 1024.0) + "}";
+    ++counts[outcome];
+    {
+      std::string first_error = child.outcome_override.empty() ? "" : child.message;
+      if (first_error.empty()) {  // the child's "message" value, unescaped enough for a table
+        const auto key = line.find("\"message\": \"");
+        if (key != std::string::npos) {
+          for (std::size_t k = key + 12; k < line.size() && line[k] != '"'; ++k) {
+            if (line[k] == '\\' && k + 1 < line.size()) ++k;
+            first_error += line[k];
+          }
+        }
+      }
+      std::replace(first_error.begin(), first_error.end(), '|', '/');
+      std::replace(first_error.begin(), first_error.end(), '\n', ' ');
+      if (first_error.size() > 120) first_error = first_error.substr(0, 117) + "...";
+      md << "| " << label << " | " << outcome << " | " << (child.cells.empty() ? "- | - | - | - | - | - | -" : child.cells)
+         << " | " << fixed(child.wall_seconds, 1) << " | " << fixed(double(child.max_rss_kb) / 1024.0, 0) << " | "
+         << first_error << " |\n";
+    }
+    std::cout << line << std::endl;
+    if (output.is_open()) output << line << '\n' << std::flush;
+    if (!a.quiet) std::cerr << " " << outcome << " (" << json::number(child.wall_seconds) << " s)\n";
+  }
+  fs::remove_all(scratch);
+  if (!a.markdown.empty()) {
+    std::ofstream file(a.markdown);
+    file << md.str();
+    if (!file) throw IoError("corpus: cannot write " + a.markdown);
+  }
+  std::string summary = "corpus: " + std::to_string(items.size()) + " inputs:";
+  for (const auto& [k, n] : counts) summary += " " + k + " " + std::to_string(n) + ",";
+  summary.pop_back();
+  std::cerr << summary << '\n';
+  const int bad = static_cast<int>(items.size()) - counts["ok"] - counts["invalid_input"];
+  if (bad > 0) throw std::runtime_error("corpus: " + std::to_string(bad) + " inputs neither ok nor a named invalid input");
+}
+
+}  // namespace
+
+void add_corpus_command(CLI::App& app) {
+  auto args = std::make_shared<CorpusArgs>();
+  auto* cmd = app.add_subcommand(
+      "corpus", "Remesh every mesh and volume under DIR... in child processes under a time limit; one JSON line each");
+  cmd->add_option("directories", args->directories,
+                  "Directories searched recursively: meshes (.off .obj .ply .stl .vtk POLYDATA) and volumes "
+                  "(.mha .mhd .inr .inr.gz .vtk STRUCTURED_POINTS)")
+      ->required();
+  cmd->add_option("--timeout", args->timeout, "Seconds per input before the child is killed")->capture_default_str();
+  cmd->add_option("--threads", args->threads, "Threads of each run")->capture_default_str();
+  cmd->add_option("-o,--output", args->output, "Also write the JSON lines to this file");
+  cmd->add_option("--md", args->markdown, "Also write a Markdown table, one row per input");
+  cmd->add_option("--out-dir", args->out_dir, "Write each remeshed surface there (<name>.ply)");
+  cmd->add_flag("-q,--quiet", args->quiet, "No per-input progress on stderr");
+  cmd->add_flag("--self-test-crash", args->self_test_crash, "Make every child abort (tests the crash detection)")
+      ->group("");
+  cmd->callback([args] { run_corpus(*args); });
+
+  auto one = std::make_shared<OneArgs>();
+  auto* child = app.add_subcommand("corpus-one", "One input of `corpus` (run in a child process): one JSON line");
+  child->group("");  // hidden from --help: an implementation detail of `corpus`
+  child->add_option("input", one->input, "Mesh or volume file")->required();
+  child->add_flag("--volume", one->volume, "The input is a volume: marching cubes first (inside above iso, padded)");
+  child->add_option("--iso", one->iso, "Iso-value of the volume (default: middle of the value range)");
+  child->add_option("--threads", one->threads, "Threads")->capture_default_str();
+  child->add_option("-o,--output", one->output, "Write the remeshed surface");
+  child->add_flag("--self-test-crash", one->self_test_crash, "Abort at once")->group("");
+  child->callback([one] { run_one(*one); });
+}
+
+}  // namespace nurbsfront::cli
