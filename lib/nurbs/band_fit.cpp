@@ -14,6 +14,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdint>
 #include <string>
 
 #include "nurbsfront/core/error.h"
@@ -148,6 +149,8 @@ void BandFitOptions::validate() const {
     throw InvalidInput("BandFitOptions: smoothing_length must be finite and >= 0, got " + std::to_string(smoothing_length));
   if (!(centre_weight >= 0.0 && centre_weight <= 1.0))
     throw InvalidInput("BandFitOptions: centre_weight must be in [0, 1], got " + std::to_string(centre_weight));
+  if (!(std::isfinite(band_weight) && band_weight >= 1.0))
+    throw InvalidInput("BandFitOptions: band_weight must be finite and >= 1, got " + std::to_string(band_weight));
   if (max_iterations < 1 || max_iterations > 1000)
     throw InvalidInput("BandFitOptions: max_iterations must be in [1, 1000], got " + std::to_string(max_iterations));
   if (domain) domain->validate();
@@ -202,7 +205,18 @@ BandFitResult fit_height_field_to_bands(const std::vector<BandSample>& samples, 
 
   // lambda: the energy integral of l^6 |D^3 f|^2 times the sample density (per area).
   const double length = options.smoothing_length > 0.0 ? options.smoothing_length : 1.5 * options.spacing;
-  const double density = static_cast<double>(samples.size()) / (domain.width() * domain.height());
+  // Density over the cells that hold samples, not over the rectangle: a ring-shaped patch
+  // covers a small part of its rectangle, and must be smoothed like a compact one.
+  std::vector<std::uint8_t> occupied(static_cast<std::size_t>(n_x) * static_cast<std::size_t>(n_y), 0);
+  for (const auto& s : samples) {
+    double u = 0.0;
+    const int i = locate(s.point.x(), domain.min.x(), field.spacing_x(), n_x, u);
+    const int j = locate(s.point.y(), domain.min.y(), field.spacing_y(), n_y, u);
+    occupied[static_cast<std::size_t>(j) * static_cast<std::size_t>(n_x) + static_cast<std::size_t>(i)] = 1;
+  }
+  const double covered = static_cast<double>(std::count(occupied.begin(), occupied.end(), std::uint8_t{1})) *
+                         field.spacing_x() * field.spacing_y();
+  const double density = static_cast<double>(samples.size()) / covered;
   const double lambda = density * std::pow(length, 6);
 
   // Fixed part: penalty, point samples (weight 1), band centres (centre_weight).
@@ -238,7 +252,7 @@ BandFitResult fit_height_field_to_bands(const std::vector<BandSample>& samples, 
     for (const auto& s : samples) {
       if (s.half_length == 0.0) continue;
       const int end = missed_end(s);
-      if (end > 0) f += std::pow(gap(field, band_end(s, end == 1 ? -1.0 : 1.0)), 2);
+      if (end > 0) f += options.band_weight * std::pow(gap(field, band_end(s, end == 1 ? -1.0 : 1.0)), 2);
     }
     return f;
   };
@@ -255,7 +269,7 @@ BandFitResult fit_height_field_to_bands(const std::vector<BandSample>& samples, 
         add_data(centre[i], s.point.z(), 1.0, a, rhs);
       } else {
         const Eigen::Vector3d e = band_end(s, active[i] == 1 ? -1.0 : 1.0);
-        add_data(stencil(field, e.x(), e.y()), e.z(), 1.0, a, rhs);
+        add_data(stencil(field, e.x(), e.y()), e.z(), options.band_weight, a, rhs);
       }
     }
     Eigen::SparseMatrix<double> matrix(n_coef, n_coef);

@@ -36,7 +36,8 @@ struct BandFitOptions {
   //! the smoothness comes from smoothing_length, not from a coarse lattice. Required.
   double spacing = 0.0;
   //! Length (unit of x, y) over which the third derivatives of f are penalised (the energy
-  //! integral of l^6 (f_xxx^2 + 3 f_xxy^2 + 3 f_xyy^2 + f_yyy^2) per sample density). Its null
+  //! integral of l^6 (f_xxx^2 + 3 f_xxy^2 + 3 f_xyy^2 + f_yyy^2) times the sample density over
+  //! the lattice cells holding samples). Its null
   //! space is the quadrics, so the fit continues curvature over a flat terrace instead of
   //! flattening it. >= 0. Default 0 = 1.5 x spacing (with spacing 1.5 cells: 2.25 cells,
   //! measured best on terraced sphere caps between 1.5 and 2.5 cells).
@@ -45,6 +46,10 @@ struct BandFitOptions {
   //! band the surface misses (and of a point sample). In [0, 1]. Small: the centres of a
   //! terraced input are biased; the bands carry the information. Default 0.02.
   double centre_weight = 0.02;
+  //! Weight of a missed band (its nearer end), relative to a point sample's 1: large, so
+  //! the bands act nearly as hard constraints where the smoothness prior is biased (the
+  //! steep flanks of a small tube). >= 1. Default 20.
+  double band_weight = 20.0;
   //! Active-set iterations at most (each one is a sparse least-squares solve). Default 20.
   int max_iterations = 20;
   //! The rectangle the field covers. Default: the bounding box of the sample centres.
@@ -72,7 +77,7 @@ struct BandFitResult {
 //! Fits z = f(x, y) (uniform bicubic B-spline) so that it crosses every band, stays near
 //! the point samples and is smooth.
 //!
-//! Minimises  sum_bands dist(f, band)^2 + sum_points (f - z)^2
+//! Minimises  band_weight sum_bands dist(f, band)^2 + sum_points (f - z)^2
 //!          + centre_weight sum_bands (f(x_c, y_c) - z_c)^2 + lambda E3(f),
 //! where dist(f, band) is 0 when the band's ends lie on opposite sides of the surface
 //! (z_end - f(x_end, y_end) changes sign) and otherwise the vertical residual at the nearer
