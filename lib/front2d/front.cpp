@@ -13,6 +13,7 @@
 #include <unordered_set>
 
 #include <Eigen/Cholesky>
+#include <Eigen/LU>
 
 #include "nurbsfront/core/error.h"
 #include "nurbsfront/core/stopwatch.h"
@@ -24,6 +25,7 @@ namespace nurbsfront {
 namespace {
 
 using Vec = Eigen::Vector2d;
+using Mat = Eigen::Matrix2d;
 using front2d::orient2d;
 
 // Named constants of the front (all relative to the local target side d of the ideal triangle).
@@ -53,6 +55,27 @@ double alpha(const Vec& a, const Vec& b, const Vec& c) {
   const double area2 = front2d::orient2d_naive(a, b, c);
   const double s = (b - a).squaredNorm() + (c - b).squaredNorm() + (a - c).squaredNorm();
   return s > 0 ? 2.0 * kSqrt3 * area2 / s : 0.0;
+}
+
+// alpha of the image of abc under M^{1/2}: lengths sqrt(e^T M e), area sqrt(det M) A.
+double alpha_in_metric(const Vec& a, const Vec& b, const Vec& c, const Mat& M) {
+  const Vec ab = b - a, bc = c - b, ca = a - c;
+  const double area2 = front2d::orient2d_naive(a, b, c);
+  const double s = ab.dot(M * ab) + bc.dot(M * bc) + ca.dot(M * ca);
+  return s > 0 ? 2.0 * kSqrt3 * std::sqrt(std::max(0.0, M.determinant())) * area2 / s : 0.0;
+}
+
+// Largest cosine of the three angles of abc measured in M (the cosine of its smallest angle).
+double max_cos_in_metric(const Vec& a, const Vec& b, const Vec& c, const Mat& M) {
+  const std::array<const Vec*, 3> p{&a, &b, &c};
+  double m = -1.0;
+  for (int i = 0; i < 3; ++i) {
+    const Vec u = *p[static_cast<std::size_t>((i + 1) % 3)] - *p[static_cast<std::size_t>(i)];
+    const Vec w = *p[static_cast<std::size_t>((i + 2) % 3)] - *p[static_cast<std::size_t>(i)];
+    const double n = std::sqrt(u.dot(M * u) * w.dot(M * w));
+    m = std::max(m, n > 0 ? u.dot(M * w) / n : 1.0);
+  }
+  return m;
 }
 
 // Evaluates a SizingField, gradation-limited.
@@ -166,39 +189,88 @@ class EdgeGrid {
   }
   [[nodiscard]] int cx(double x) const { return std::clamp(static_cast<int>((x - lo_.x()) * inv_), 0, nx_ - 1); }
   [[nodiscard]] int cy(double y) const { return std::clamp(static_cast<int>((y - lo_.y()) * inv_), 0, ny_ - 1); }
-  std::vector<int>& cell(int i, int j) { return cells_[static_cast<std::size_t>(j) * static_cast<std::size_t>(nx_) + static_cast<std::size_t>(i)]; }
+  // Each cell keeps up to kInline edges in place (one cache line, no allocation); more go
+  // to a linked overflow list in a shared pool with a free list.
   void insert(int e, const Vec& p, const Vec& q) {
     for (int j = cy(std::min(p.y(), q.y())); j <= cy(std::max(p.y(), q.y())); ++j)
-      for (int i = cx(std::min(p.x(), q.x())); i <= cx(std::max(p.x(), q.x())); ++i) cell(i, j).push_back(e);
+      for (int i = cx(std::min(p.x(), q.x())); i <= cx(std::max(p.x(), q.x())); ++i) {
+        Cell& c = cell(i, j);
+        if (c.n < kInline) {
+          c.e[static_cast<std::size_t>(c.n++)] = e;
+          continue;
+        }
+        int node = free_;
+        if (node >= 0) {
+          free_ = pool_[static_cast<std::size_t>(node)].next;
+        } else {
+          node = static_cast<int>(pool_.size());
+          pool_.emplace_back();
+        }
+        pool_[static_cast<std::size_t>(node)] = {e, c.overflow};
+        c.overflow = node;
+      }
   }
   void erase(int e, const Vec& p, const Vec& q) {
     for (int j = cy(std::min(p.y(), q.y())); j <= cy(std::max(p.y(), q.y())); ++j)
-      for (int i = cx(std::min(p.x(), q.x())); i <= cx(std::max(p.x(), q.x())); ++i) {
-        auto& c = cell(i, j);
-        auto it = std::find(c.begin(), c.end(), e);
-        if (it != c.end()) {
-          *it = c.back();
-          c.pop_back();
-        }
-      }
+      for (int i = cx(std::min(p.x(), q.x())); i <= cx(std::max(p.x(), q.x())); ++i) erase_in(cell(i, j), e);
   }
   //! Calls f(edge) for every edge in the cells meeting the box (an edge may come twice).
   template <class F>
-  void visit(const Vec& lo, const Vec& hi, F&& f) {
+  void visit(const Vec& lo, const Vec& hi, F&& f) const {
     const int i0 = cx(lo.x()), i1 = cx(hi.x()), j0 = cy(lo.y()), j1 = cy(hi.y());
     for (int j = j0; j <= j1; ++j)
-      for (int i = i0; i <= i1; ++i)
-        for (int e : cell(i, j)) f(e);
+      for (int i = i0; i <= i1; ++i) {
+        const Cell& c = cells_[static_cast<std::size_t>(j) * static_cast<std::size_t>(nx_) + static_cast<std::size_t>(i)];
+        for (int k = 0; k < c.n; ++k) f(c.e[static_cast<std::size_t>(k)]);
+        for (int node = c.overflow; node >= 0; node = pool_[static_cast<std::size_t>(node)].next) f(pool_[static_cast<std::size_t>(node)].edge);
+      }
   }
   [[nodiscard]] bool covers_all(const Vec& lo, const Vec& hi) const {
     return cx(lo.x()) == 0 && cy(lo.y()) == 0 && cx(hi.x()) == nx_ - 1 && cy(hi.y()) == ny_ - 1;
   }
 
  private:
+  static constexpr int kInline = 6;
+  struct Cell {
+    int n = 0;
+    int overflow = -1;
+    std::array<int, kInline> e{};
+  };
+  struct Node {
+    int edge = -1;
+    int next = -1;
+  };
+  Cell& cell(int i, int j) { return cells_[static_cast<std::size_t>(j) * static_cast<std::size_t>(nx_) + static_cast<std::size_t>(i)]; }
+  void erase_in(Cell& c, int e) {
+    for (int k = 0; k < c.n; ++k)
+      if (c.e[static_cast<std::size_t>(k)] == e) {
+        if (c.overflow >= 0) {  // refill the slot from the overflow list
+          const int node = c.overflow;
+          c.e[static_cast<std::size_t>(k)] = pool_[static_cast<std::size_t>(node)].edge;
+          c.overflow = pool_[static_cast<std::size_t>(node)].next;
+          pool_[static_cast<std::size_t>(node)].next = free_;
+          free_ = node;
+        } else {
+          c.e[static_cast<std::size_t>(k)] = c.e[static_cast<std::size_t>(--c.n)];
+        }
+        return;
+      }
+    for (int* link = &c.overflow; *link >= 0; link = &pool_[static_cast<std::size_t>(*link)].next)
+      if (pool_[static_cast<std::size_t>(*link)].edge == e) {
+        const int node = *link;
+        *link = pool_[static_cast<std::size_t>(node)].next;
+        pool_[static_cast<std::size_t>(node)].next = free_;
+        free_ = node;
+        return;
+      }
+  }
+
   Vec lo_;
   double cell_ = 1, inv_ = 1;
   int nx_ = 1, ny_ = 1;
-  std::vector<std::vector<int>> cells_;
+  std::vector<Cell> cells_;
+  std::vector<Node> pool_;
+  int free_ = -1;
 };
 
 struct FrontEdge {
@@ -293,8 +365,9 @@ class AdvancingFront {
     const Vec& A = pt(a);
     const Vec& B = pt(b);
     if (orient2d(A, B, q) <= 0) return false;
-    Vec lo = A.cwiseMin(B).cwiseMin(q);
-    Vec hi = A.cwiseMax(B).cwiseMax(q);
+    const Vec tlo = A.cwiseMin(B).cwiseMin(q);
+    const Vec thi = A.cwiseMax(B).cwiseMax(q);
+    Vec lo = tlo, hi = thi;
     const bool is_new = p < 0;
     if (is_new) {
       lo.array() -= std::max(cn, ce);
@@ -324,6 +397,26 @@ class AdvancingFront {
       const FrontEdge& f = E_[static_cast<std::size_t>(e)];
       const int s = f.a, t = f.b;
       if (s == a && t == b) return;
+      const Vec& S = pt(s);
+      const Vec& T = pt(t);
+      if (std::max(S.x(), T.x()) < tlo.x() || std::min(S.x(), T.x()) > thi.x() || std::max(S.y(), T.y()) < tlo.y() ||
+          std::min(S.y(), T.y()) > thi.y()) {
+        // Disjoint from the triangle's box: no containment, no crossing; only the clearance
+        // of a new point remains to check.
+        if (!is_new) return;
+        const bool s_free = s != a && s != b, t_free = t != a && t != b;
+        if ((s_free && (S - q).squaredNorm() < cn * cn) || (t_free && (T - q).squaredNorm() < cn * cn)) {
+          ok = false;
+          return;
+        }
+        if (s != t && s_free && t_free) {
+          const Vec d = T - S;
+          const double l2 = d.squaredNorm();
+          const double u = l2 > 0 ? std::clamp((q - S).dot(d) / l2, 0.0, 1.0) : 0.0;
+          if ((S + u * d - q).squaredNorm() < ce * ce) ok = false;
+        }
+        return;
+      }
       if (s == t) {
         if (s == p || s == a || s == b) return;
         if (inside(pt(s)) || (is_new && (pt(s) - q).squaredNorm() < cn * cn)) ok = false;
@@ -341,8 +434,7 @@ class AdvancingFront {
       if (!same_ap && conflict(a, A, p, q, s, t)) { ok = false; return; }
       if (!same_pb && conflict(p, q, b, B, s, t)) { ok = false; return; }
       if (is_new && s != a && s != b && t != a && t != b) {
-        const Vec& S = pt(s);
-        const Vec d = pt(t) - S;
+        const Vec d = T - S;
         const double l2 = d.squaredNorm();
         const double u = l2 > 0 ? std::clamp((q - S).dot(d) / l2, 0.0, 1.0) : 0.0;
         if ((S + u * d - q).squaredNorm() < ce * ce) ok = false;
@@ -356,7 +448,7 @@ class AdvancingFront {
     const int b = E_[static_cast<std::size_t>(e)].b;
     tris_.push_back({a, b, p});
     kill(e);
-    if (auto it = iso_edge_.find(p); it != iso_edge_.end()) {
+    if (auto it = iso_edge_.empty() ? iso_edge_.end() : iso_edge_.find(p); it != iso_edge_.end()) {
       kill(it->second);
       iso_edge_.erase(it);
     }
@@ -476,11 +568,19 @@ class AdvancingFront {
   std::vector<std::pair<double, int>> near_;
 };
 
-// Triangles with adjacency, for swaps and smoothing.
+// Triangles with adjacency, for swaps and smoothing. With a metric, every quality measure
+// (swap criterion, smoothing acceptance, angles of the relocation) is evaluated in the
+// metric: per triangle, the mean of its vertices' tensors (cached per vertex, refreshed when
+// a vertex moves).
 class Optimiser {
  public:
-  Optimiser(std::vector<Vec>& pts, std::vector<std::array<int, 3>>& tris, const std::unordered_set<std::uint64_t>& constraints)
-      : P_(pts), T_(tris) {
+  Optimiser(std::vector<Vec>& pts, std::vector<std::array<int, 3>>& tris, const std::unordered_set<std::uint64_t>& constraints,
+            int first_free, const Metric* metric)
+      : P_(pts), T_(tris), metric_(metric) {
+    if (metric_) {
+      Mv_.resize(P_.size());
+      for (std::size_t i = 0; i < P_.size(); ++i) Mv_[i] = metric_->tensor(P_[i]);
+    }
     N_.assign(3 * T_.size(), -1);
     C_.assign(3 * T_.size(), false);
     // Slots grouped by their first vertex (CSR); the twin of a->b is the slot b->a.
@@ -503,7 +603,8 @@ class Optimiser {
       }
       if (N_[s] < 0) C_[s] = true;  // boundary edges
       else if (b < a) continue;
-      else C_[s] = C_[static_cast<std::size_t>(N_[s])] = constraints.count(ukey(a, b)) > 0;
+      // Constraint edges join segment nodes, which all precede first_free.
+      else C_[s] = C_[static_cast<std::size_t>(N_[s])] = a < first_free && b < first_free && constraints.count(ukey(a, b)) > 0;
     }
   }
 
@@ -523,10 +624,8 @@ class Optimiser {
       const int o = N_[static_cast<std::size_t>(s)];
       if (o < 0 || C_[static_cast<std::size_t>(s)]) continue;
       const int a = v(s), b = v(nxt(s)), c = v(prv(s)), d = v(prv(o));
-      const Vec &A = P_[static_cast<std::size_t>(a)], &B = P_[static_cast<std::size_t>(b)],
-                &Cc = P_[static_cast<std::size_t>(c)], &D = P_[static_cast<std::size_t>(d)];
-      const double scale = std::max({(A - B).squaredNorm(), (Cc - D).squaredNorm()});
-      if (front2d::incircle(A, B, Cc, D) <= kIncircleRelative * scale * scale) continue;
+      if (!should_swap(a, b, c, d)) continue;
+      const Vec &A = pt(a), &B = pt(b), &Cc = pt(c), &D = pt(d);
       if (orient2d(A, D, Cc) <= 0 || orient2d(D, B, Cc) <= 0) continue;
       flip(s);
       ++n;
@@ -540,38 +639,40 @@ class Optimiser {
   }
 
   void smooth(int passes, int first_free) {
-    // Vertex -> triangle incidence (CSR).
-    std::vector<int> start(P_.size() + 1, 0);
-    for (const auto& t : T_)
-      for (int x : t) ++start[static_cast<std::size_t>(x) + 1];
-    for (std::size_t i = 0; i < P_.size(); ++i) start[i + 1] += start[i];
-    std::vector<int> inc(static_cast<std::size_t>(start.back()));
-    std::vector<int> fill(start.begin(), start.end() - 1);
-    for (std::size_t t = 0; t < T_.size(); ++t)
-      for (int x : T_[t]) inc[static_cast<std::size_t>(fill[static_cast<std::size_t>(x)]++)] = static_cast<int>(t);
+    const Incidence inc = incidence();
     for (int pass = 0; pass < passes; ++pass) {
       for (std::size_t vtx = static_cast<std::size_t>(first_free); vtx < P_.size(); ++vtx) {
-        const int b0 = start[vtx], b1 = start[vtx + 1];
+        const int b0 = inc.start[vtx], b1 = inc.start[vtx + 1];
         if (b0 == b1) continue;
-        Vec sum = Vec::Zero();
-        double worst = 2.0;
-        for (int k = b0; k < b1; ++k) {
-          const auto& t = T_[static_cast<std::size_t>(inc[static_cast<std::size_t>(k)])];
-          for (int x : t)
-            if (static_cast<std::size_t>(x) != vtx) sum += P_[static_cast<std::size_t>(x)];
-          worst = std::min(worst, alpha(P_[static_cast<std::size_t>(t[0])], P_[static_cast<std::size_t>(t[1])], P_[static_cast<std::size_t>(t[2])]));
-        }
         const Vec old = P_[vtx];
-        P_[vtx] = sum / (2.0 * (b1 - b0));
+        const Mat old_m = metric_ ? Mv_[vtx] : Mat::Identity();
+        move(static_cast<int>(vtx), smoothing_target(static_cast<int>(vtx), inc));
+        // Kept if every triangle stays counter-clockwise and the worst alpha stays above
+        // min(old worst, kSmoothAcceptAlpha); the old worst is needed only below that.
         bool ok = true;
         double worst_new = 2.0;
         for (int k = b0; k < b1 && ok; ++k) {
-          const auto& t = T_[static_cast<std::size_t>(inc[static_cast<std::size_t>(k)])];
-          const Vec &X = P_[static_cast<std::size_t>(t[0])], &Y = P_[static_cast<std::size_t>(t[1])], &Z = P_[static_cast<std::size_t>(t[2])];
-          ok = orient2d(X, Y, Z) > 0;
-          worst_new = std::min(worst_new, alpha(X, Y, Z));
+          const auto& t = T_[static_cast<std::size_t>(inc.tri[static_cast<std::size_t>(k)])];
+          ok = orient2d(pt(t[0]), pt(t[1]), pt(t[2])) > 0;
+          worst_new = std::min(worst_new, quality(t));
         }
-        if (!ok || worst_new < std::min(worst, kSmoothAcceptAlpha)) P_[vtx] = old;
+        if (ok && worst_new < kSmoothAcceptAlpha) {
+          const Vec moved = P_[vtx];
+          const Mat moved_m = metric_ ? Mv_[vtx] : Mat::Identity();
+          P_[vtx] = old;
+          if (metric_) Mv_[vtx] = old_m;
+          double worst = 2.0;
+          for (int k = b0; k < b1; ++k) worst = std::min(worst, quality(T_[static_cast<std::size_t>(inc.tri[static_cast<std::size_t>(k)])]));
+          ok = worst_new >= worst;
+          if (ok) {
+            P_[vtx] = moved;
+            if (metric_) Mv_[vtx] = moved_m;
+          }
+        }
+        if (!ok) {
+          P_[vtx] = old;
+          if (metric_) Mv_[vtx] = old_m;
+        }
       }
     }
   }
@@ -593,26 +694,18 @@ class Optimiser {
     if (todo.empty()) return 0;
     std::sort(todo.begin(), todo.end());
     todo.erase(std::unique(todo.begin(), todo.end()), todo.end());
-    std::vector<int> start(P_.size() + 1, 0);
-    for (const auto& t : T_)
-      for (int x : t) ++start[static_cast<std::size_t>(x) + 1];
-    for (std::size_t i = 0; i < P_.size(); ++i) start[i + 1] += start[i];
-    std::vector<int> inc(static_cast<std::size_t>(start.back()));
-    std::vector<int> fill(start.begin(), start.end() - 1);
-    for (std::size_t t = 0; t < T_.size(); ++t)
-      for (int x : T_[t]) inc[static_cast<std::size_t>(fill[static_cast<std::size_t>(x)]++)] = static_cast<int>(t);
+    const Incidence inc = incidence();
     std::size_t moved = 0;
     for (int vtx : todo) {
       const auto vi = static_cast<std::size_t>(vtx);
-      const int b0 = start[vi], b1 = start[vi + 1];
+      const int b0 = inc.start[vi], b1 = inc.start[vi + 1];
       // The star's quality: the largest cosine of its angles (smaller is better), or
       // +inf if a triangle is not positively oriented.
       auto star = [&]() {
         double worst = -1.0;
         for (int k = b0; k < b1; ++k) {
-          const auto& t = T_[static_cast<std::size_t>(inc[static_cast<std::size_t>(k)])];
-          if (orient2d(P_[static_cast<std::size_t>(t[0])], P_[static_cast<std::size_t>(t[1])], P_[static_cast<std::size_t>(t[2])]) <= 0)
-            return std::numeric_limits<double>::infinity();
+          const auto& t = T_[static_cast<std::size_t>(inc.tri[static_cast<std::size_t>(k)])];
+          if (orient2d(pt(t[0]), pt(t[1]), pt(t[2])) <= 0) return std::numeric_limits<double>::infinity();
           worst = std::max(worst, max_cos(t));
         }
         return worst;
@@ -620,16 +713,16 @@ class Optimiser {
       double best = star();
       double step = std::numeric_limits<double>::infinity();
       for (int k = b0; k < b1; ++k)
-        for (int x : T_[static_cast<std::size_t>(inc[static_cast<std::size_t>(k)])])
-          if (x != vtx) step = std::min(step, (P_[static_cast<std::size_t>(x)] - P_[vi]).norm());
+        for (int x : T_[static_cast<std::size_t>(inc.tri[static_cast<std::size_t>(k)])])
+          if (x != vtx) step = std::min(step, (pt(x) - P_[vi]).norm());
       step *= kRelocateFirstStep;
       const Vec start_pos = P_[vi];
       const bool on_segment = vtx < first_free;
       Vec sa = Vec::Zero(), sd = Vec::Zero();
       double t_cur = 0.0, seg_len = 1.0;
       if (on_segment) {
-        sa = P_[static_cast<std::size_t>(slide[vi][0])];
-        sd = P_[static_cast<std::size_t>(slide[vi][1])] - sa;
+        sa = pt(slide[vi][0]);
+        sd = pt(slide[vi][1]) - sa;
         seg_len = sd.norm();
         t_cur = (P_[vi] - sa).dot(sd) / (seg_len * seg_len);
       }
@@ -637,13 +730,14 @@ class Optimiser {
         bool improved = false;
         for (int d = 0; d < (on_segment ? 2 : 8); ++d) {
           const Vec old = P_[vi];
+          const Mat old_m = metric_ ? Mv_[vi] : Mat::Identity();
           double t_new = t_cur;
           if (on_segment) {
             t_new = t_cur + (d == 0 ? step : -step) / seg_len;
-            P_[vi] = sa + t_new * sd;
+            move(vtx, sa + t_new * sd);
           } else {
             const double ang = d * std::numbers::pi / 4.0;
-            P_[vi] = old + step * Vec(std::cos(ang), std::sin(ang));
+            move(vtx, old + step * Vec(std::cos(ang), std::sin(ang)));
           }
           const double q = star();
           if (q < best) {
@@ -652,6 +746,7 @@ class Optimiser {
             improved = true;
           } else {
             P_[vi] = old;
+            if (metric_) Mv_[vi] = old_m;
           }
         }
         if (!improved) step *= 0.5;
@@ -664,6 +759,7 @@ class Optimiser {
   // Region marker per triangle by flood fill from the boundary sides.
   std::vector<int> regions(const std::unordered_map<std::uint64_t, int>& side_marker) const {
     std::vector<int> r(T_.size(), 0);
+    if (std::all_of(side_marker.begin(), side_marker.end(), [](const auto& kv) { return kv.second == 0; })) return r;
     std::vector<bool> done(T_.size(), false);
     std::vector<int> stack;
     for (std::size_t s = 0; s < N_.size(); ++s) {
@@ -691,28 +787,98 @@ class Optimiser {
   }
 
  private:
+  // Vertex -> incident triangles (CSR).
+  struct Incidence {
+    std::vector<int> start;
+    std::vector<int> tri;
+  };
+  [[nodiscard]] Incidence incidence() const {
+    Incidence inc;
+    inc.start.assign(P_.size() + 1, 0);
+    for (const auto& t : T_)
+      for (int x : t) ++inc.start[static_cast<std::size_t>(x) + 1];
+    for (std::size_t i = 0; i < P_.size(); ++i) inc.start[i + 1] += inc.start[i];
+    inc.tri.resize(static_cast<std::size_t>(inc.start.back()));
+    std::vector<int> fill(inc.start.begin(), inc.start.end() - 1);
+    for (std::size_t t = 0; t < T_.size(); ++t)
+      for (int x : T_[t]) inc.tri[static_cast<std::size_t>(fill[static_cast<std::size_t>(x)]++)] = static_cast<int>(t);
+    return inc;
+  }
+
+  [[nodiscard]] const Vec& pt(int i) const { return P_[static_cast<std::size_t>(i)]; }
+  [[nodiscard]] const Mat& mv(int i) const { return Mv_[static_cast<std::size_t>(i)]; }
+  void move(int i, const Vec& x) {
+    P_[static_cast<std::size_t>(i)] = x;
+    if (metric_) Mv_[static_cast<std::size_t>(i)] = metric_->tensor(x);
+  }
+  [[nodiscard]] Mat tri_metric(const std::array<int, 3>& t) const { return (mv(t[0]) + mv(t[1]) + mv(t[2])) / 3.0; }
+
+  [[nodiscard]] double quality(const std::array<int, 3>& t) const {
+    if (metric_) return alpha_in_metric(pt(t[0]), pt(t[1]), pt(t[2]), tri_metric(t));
+    return alpha(pt(t[0]), pt(t[1]), pt(t[2]));
+  }
+  [[nodiscard]] double max_cos(const std::array<int, 3>& t) const {
+    if (metric_) return max_cos_in_metric(pt(t[0]), pt(t[1]), pt(t[2]), tri_metric(t));
+    return max_cos_in_metric(pt(t[0]), pt(t[1]), pt(t[2]), Mat::Identity());
+  }
   // Whether t has an angle whose cosine exceeds sqrt(cos2) (cheap: no square roots).
   [[nodiscard]] bool has_small_angle(const std::array<int, 3>& t, double cos2) const {
-    const Vec& a = P_[static_cast<std::size_t>(t[0])];
-    const Vec& b = P_[static_cast<std::size_t>(t[1])];
-    const Vec& c = P_[static_cast<std::size_t>(t[2])];
+    const Vec& a = pt(t[0]);
+    const Vec& b = pt(t[1]);
+    const Vec& c = pt(t[2]);
     const Vec ab = b - a, bc = c - b, ca = a - c;
+    if (metric_) {
+      const Mat M = tri_metric(t);
+      const Vec Mab = M * ab, Mbc = M * bc, Mca = M * ca;
+      const double lab = ab.dot(Mab), lbc = bc.dot(Mbc), lca = ca.dot(Mca);
+      const double da = -ca.dot(Mab), db = -ab.dot(Mbc), dc = -bc.dot(Mca);
+      return (da > 0 && da * da > cos2 * lca * lab) || (db > 0 && db * db > cos2 * lab * lbc) ||
+             (dc > 0 && dc * dc > cos2 * lbc * lca);
+    }
     const double lab = ab.squaredNorm(), lbc = bc.squaredNorm(), lca = ca.squaredNorm();
     const double da = -ca.dot(ab), db = -ab.dot(bc), dc = -bc.dot(ca);
     return (da > 0 && da * da > cos2 * lca * lab) || (db > 0 && db * db > cos2 * lab * lbc) ||
            (dc > 0 && dc * dc > cos2 * lbc * lca);
   }
-  // Largest cosine of the three angles of t (the cosine of its smallest angle).
-  [[nodiscard]] double max_cos(const std::array<int, 3>& t) const {
-    double m = -1.0;
-    for (int i = 0; i < 3; ++i) {
-      const Vec& p = P_[static_cast<std::size_t>(t[static_cast<std::size_t>(i)])];
-      const Vec u = P_[static_cast<std::size_t>(t[static_cast<std::size_t>((i + 1) % 3)])] - p;
-      const Vec w = P_[static_cast<std::size_t>(t[static_cast<std::size_t>((i + 2) % 3)])] - p;
-      const double n = u.norm() * w.norm();
-      m = std::max(m, n > 0 ? u.dot(w) / n : 1.0);
+  // Delaunay criterion of the edge ab shared by (a, b, c) and (b, a, d): d strictly inside
+  // the circumcircle of abc; with a metric, in the image of the quad under the Cholesky
+  // factor of the mean tensor of its four vertices.
+  [[nodiscard]] bool should_swap(int a, int b, int c, int d) const {
+    if (!metric_) {
+      const Vec &A = pt(a), &B = pt(b), &Cc = pt(c), &D = pt(d);
+      const double scale = std::max({(A - B).squaredNorm(), (Cc - D).squaredNorm()});
+      return front2d::incircle(A, B, Cc, D) > kIncircleRelative * scale * scale;
     }
-    return m;
+    const Mat R = ((mv(a) + mv(b) + mv(c) + mv(d)) * 0.25).llt().matrixU();
+    const Vec A = R * pt(a), B = R * pt(b), Cc = R * pt(c), D = R * pt(d);
+    const double scale = std::max({(A - B).squaredNorm(), (Cc - D).squaredNorm()});
+    return front2d::incircle(A, B, Cc, D) > kIncircleRelative * scale * scale;
+  }
+  // The smoothing target of vtx: the mean of its neighbours (each counted once per incident
+  // triangle). With a metric that varies over the star, the point x minimising
+  // sum_j |x - x_j|^2 in the tensors (M_v + M_j) / 2, which is the mean for a constant one.
+  [[nodiscard]] Vec smoothing_target(int vtx, const Incidence& inc) const {
+    const auto vi = static_cast<std::size_t>(vtx);
+    const int b0 = inc.start[vi], b1 = inc.start[vi + 1];
+    bool constant = true;
+    Vec sum = Vec::Zero();
+    for (int k = b0; k < b1; ++k)
+      for (int x : T_[static_cast<std::size_t>(inc.tri[static_cast<std::size_t>(k)])])
+        if (x != vtx) {
+          sum += pt(x);
+          if (metric_) constant = constant && mv(x) == mv(vtx);
+        }
+    if (constant) return sum / (2.0 * (b1 - b0));
+    Mat S = Mat::Zero();
+    Vec rhs = Vec::Zero();
+    for (int k = b0; k < b1; ++k)
+      for (int x : T_[static_cast<std::size_t>(inc.tri[static_cast<std::size_t>(k)])])
+        if (x != vtx) {
+          const Mat W = 0.5 * (mv(x) + mv(vtx));
+          S += W;
+          rhs += W * pt(x);
+        }
+    return S.llt().solve(rhs);
   }
   void set_nb(int s, int o) {
     N_[static_cast<std::size_t>(s)] = o;
@@ -741,6 +907,8 @@ class Optimiser {
 
   std::vector<Vec>& P_;
   std::vector<std::array<int, 3>>& T_;
+  const Metric* metric_;
+  std::vector<Mat> Mv_;  // per vertex tensor (empty without a metric)
   std::vector<int> N_;
   std::vector<bool> C_;
 };
@@ -755,6 +923,16 @@ void FrontOptions::validate() const {
 }
 
 double triangle_alpha_2d(const Vec& a, const Vec& b, const Vec& c) { return alpha(a, b, c); }
+
+double triangle_alpha_in_metric(const Vec& a, const Vec& b, const Vec& c, const Mat& M) { return alpha_in_metric(a, b, c, M); }
+
+double triangle_min_angle_in_metric_deg(const Vec& a, const Vec& b, const Vec& c, const Mat& M) {
+  return std::acos(std::clamp(max_cos_in_metric(a, b, c, M), -1.0, 1.0)) * 180.0 / std::numbers::pi;
+}
+
+Mat triangle_metric(const Metric& metric, const Vec& a, const Vec& b, const Vec& c) {
+  return (metric.tensor(a) + metric.tensor(b) + metric.tensor(c)) / 3.0;
+}
 
 Mesh2d mesh_pslg(const Pslg& pslg, const FrontOptions& options) {
   options.validate();
@@ -872,7 +1050,7 @@ Mesh2d mesh_pslg(const Pslg& pslg, const FrontOptions& options) {
 
   clock.restart();
   report_progress(options.progress, "front2d: optimise", 0.0);
-  Optimiser opt(P, mesh.triangles, constraints);
+  Optimiser opt(P, mesh.triangles, constraints, first_free, metric);
   if (options.swap_edges) mesh.report.n_swaps += opt.delaunay_swaps();
   if (options.smoothing_passes > 0) {
     opt.smooth(options.smoothing_passes, first_free);

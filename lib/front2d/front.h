@@ -119,6 +119,22 @@ struct Mesh2d {
 [[nodiscard]] double triangle_alpha_2d(const Eigen::Vector2d& a, const Eigen::Vector2d& b,
                                        const Eigen::Vector2d& c);
 
+//! Quality (Lo) of triangle abc measured in the constant metric M (SPD): alpha of the image
+//! of abc under M^{1/2}, i.e. lengths sqrt(e^T M e) and area sqrt(det M) A; signed by A.
+//! With M = identity this is triangle_alpha_2d. The optimiser of mesh_pslg uses it with
+//! M = triangle_metric(...), so a surface mesher can report the same figure.
+[[nodiscard]] double triangle_alpha_in_metric(const Eigen::Vector2d& a, const Eigen::Vector2d& b,
+                                              const Eigen::Vector2d& c, const Eigen::Matrix2d& M);
+
+//! Smallest angle of triangle abc in degrees, angles measured in the constant metric M
+//! (cos = u^T M w / (|u|_M |w|_M)). For a non-degenerate triangle in [0, 60].
+[[nodiscard]] double triangle_min_angle_in_metric_deg(const Eigen::Vector2d& a, const Eigen::Vector2d& b,
+                                                      const Eigen::Vector2d& c, const Eigen::Matrix2d& M);
+
+//! The tensor the optimiser uses for a triangle: the mean of the metric at its vertices.
+[[nodiscard]] Eigen::Matrix2d triangle_metric(const Metric& metric, const Eigen::Vector2d& a, const Eigen::Vector2d& b,
+                                              const Eigen::Vector2d& c);
+
 //! Writes Triangle's .node and .ele files (0-based, the .ele with one region attribute).
 //! `stem` is the path without extension.
 //! \throw IoError if a file cannot be written.

@@ -8,10 +8,6 @@
 namespace nurbsfront::front2d {
 namespace {
 
-constexpr double kEpsilon = std::numeric_limits<double>::epsilon() / 2.0;  // 2^-53
-// Shewchuk's bound for the first, double-only stage of orient2d.
-constexpr double kOrientErrBound = (3.0 + 16.0 * kEpsilon) * kEpsilon;
-
 // Knuth's TwoSum: s + e == a + b exactly.
 inline void two_sum(double a, double b, double& s, double& e) {
   s = a + b;
@@ -37,10 +33,6 @@ inline int grow_expansion(double* h, int n, double b) {
 
 }  // namespace
 
-double orient2d_naive(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& c) {
-  return (a.x() - c.x()) * (b.y() - c.y()) - (a.y() - c.y()) * (b.x() - c.x());
-}
-
 int orient2d_exact(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& c) {
   // det = ax*by - ax*cy - cx*by - ay*bx + ay*cx + cy*bx  (the cx*cy terms cancel).
   const std::array<std::array<double, 2>, 6> products = {{{a.x(), b.y()},
@@ -59,16 +51,6 @@ int orient2d_exact(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eig
   }
   if (n == 0) return 0;
   return h[static_cast<std::size_t>(n - 1)] > 0.0 ? 1 : -1;
-}
-
-int orient2d(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& c) {
-  const double left = (a.x() - c.x()) * (b.y() - c.y());
-  const double right = (a.y() - c.y()) * (b.x() - c.x());
-  const double det = left - right;
-  const double bound = kOrientErrBound * (std::abs(left) + std::abs(right));
-  if (det > bound) return 1;
-  if (-det > bound) return -1;
-  return orient2d_exact(a, b, c);
 }
 
 double incircle(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& c,

@@ -5,6 +5,8 @@
 #include <cmath>
 #include <cstdint>
 #include <string>
+#include <tuple>
+#include <utility>
 
 #include <Eigen/Dense>
 
@@ -31,22 +33,43 @@ struct LatticePoint {
   double v;
 };
 
-struct CellWeights {
-  std::size_t offset;  // index of phi_{i-1, j-1}
-  double bx[4];
-  double by[4];
+// Cell offsets and cubic B-spline weights of a block of consecutive points at one level,
+// stored by weight index so that the loops computing them vectorise.
+constexpr std::size_t kBlock = 64;
+struct WeightBlock {
+  std::size_t offset[kBlock];  // index of phi_{i-1, j-1}
+  double bx[4][kBlock];
+  double by[4][kBlock];
 };
 
-inline CellWeights cell_weights(const LatticePoint& p, double scale, const Lattice& lattice) {
-  const double u = p.u * scale;
-  const double v = p.v * scale;
-  const int i = std::min(static_cast<int>(u), lattice.n_x - 1);
-  const int j = std::min(static_cast<int>(v), lattice.n_y - 1);
-  CellWeights w{};
-  w.offset = static_cast<std::size_t>(j) * lattice.stride() + static_cast<std::size_t>(i);
-  detail::cubic_weights(u - i, w.bx);
-  detail::cubic_weights(v - j, w.by);
-  return w;
+inline void block_weights(const LatticePoint* p, std::size_t n, double scale, const Lattice& lattice, WeightBlock& w) {
+  double s[kBlock];
+  double t[kBlock];
+  const int last_x = lattice.n_x - 1, last_y = lattice.n_y - 1;
+  for (std::size_t q = 0; q < n; ++q) {
+    const double u = p[q].u * scale;
+    const double v = p[q].v * scale;
+    const int i = std::min(static_cast<int>(u), last_x);
+    const int j = std::min(static_cast<int>(v), last_y);
+    s[q] = u - i;
+    t[q] = v - j;
+    w.offset[q] = static_cast<std::size_t>(j) * lattice.stride() + static_cast<std::size_t>(i);
+  }
+  constexpr double kSixth = 1.0 / 6.0;
+  for (std::size_t q = 0; q < n; ++q) {  // detail::cubic_weights, written out per array
+    const double s2 = s[q] * s[q], s3 = s2 * s[q], r = 1.0 - s[q];
+    w.bx[0][q] = r * r * r * kSixth;
+    w.bx[1][q] = (3.0 * s3 - 6.0 * s2 + 4.0) * kSixth;
+    w.bx[2][q] = (-3.0 * s3 + 3.0 * s2 + 3.0 * s[q] + 1.0) * kSixth;
+    w.bx[3][q] = s3 * kSixth;
+  }
+  for (std::size_t q = 0; q < n; ++q) {
+    const double t2 = t[q] * t[q], t3 = t2 * t[q], r = 1.0 - t[q];
+    w.by[0][q] = r * r * r * kSixth;
+    w.by[1][q] = (3.0 * t3 - 6.0 * t2 + 4.0) * kSixth;
+    w.by[2][q] = (-3.0 * t3 + 3.0 * t2 + 3.0 * t[q] + 1.0) * kSixth;
+    w.by[3][q] = t3 * kSixth;
+  }
 }
 
 // One level of B-spline approximation (BA) of the residuals r: every point proposes
@@ -59,18 +82,31 @@ Lattice approximate_level(const std::vector<LatticePoint>& pts, const std::vecto
   // delta (sum of w^2 phi_c) and omega (sum of w^2) side by side: one cache line per update.
   std::vector<double> acc(2 * size, 0.0);
   const std::size_t stride = lattice.stride();
-  for (std::size_t c = 0; c < pts.size(); ++c) {
-    const CellWeights w = cell_weights(pts[c], scale, lattice);
-    const double sx = w.bx[0] * w.bx[0] + w.bx[1] * w.bx[1] + w.bx[2] * w.bx[2] + w.bx[3] * w.bx[3];
-    const double sy = w.by[0] * w.by[0] + w.by[1] * w.by[1] + w.by[2] * w.by[2] + w.by[3] * w.by[3];
-    const double factor = r[c] / (sx * sy);
-    for (int l = 0; l < 4; ++l) {
-      double* a = acc.data() + 2 * (w.offset + static_cast<std::size_t>(l) * stride);
+  // Per point, the update of coefficient (k, l) is (w^3 r / sum w^2, w^2) with
+  // w = bx_k by_l: the product of the pairs (bx_k^3, bx_k^2) and (by_l^3 r / sum w^2, by_l^2),
+  // one row of four (delta, omega) pairs at a time (vectorised, two doubles per instruction).
+  using Row = Eigen::Array<double, 8, 1>;
+  WeightBlock w;
+  double factor[kBlock];
+  for (std::size_t first = 0; first < pts.size(); first += kBlock) {
+    const std::size_t n = std::min(kBlock, pts.size() - first);
+    block_weights(pts.data() + first, n, scale, lattice, w);
+    for (std::size_t q = 0; q < n; ++q) {
+      const double sx = w.bx[0][q] * w.bx[0][q] + w.bx[1][q] * w.bx[1][q] + w.bx[2][q] * w.bx[2][q] + w.bx[3][q] * w.bx[3][q];
+      const double sy = w.by[0][q] * w.by[0][q] + w.by[1][q] * w.by[1][q] + w.by[2][q] * w.by[2][q] + w.by[3][q] * w.by[3][q];
+      factor[q] = r[first + q] / (sx * sy);
+    }
+    for (std::size_t q = 0; q < n; ++q) {
+      Row x;
       for (int k = 0; k < 4; ++k) {
-        const double wkl = w.bx[k] * w.by[l];
-        const double w2 = wkl * wkl;
-        a[2 * k] += w2 * wkl * factor;
-        a[2 * k + 1] += w2;
+        const double b2 = w.bx[k][q] * w.bx[k][q];
+        x[2 * k] = b2 * w.bx[k][q];
+        x[2 * k + 1] = b2;
+      }
+      for (int l = 0; l < 4; ++l) {
+        const double b2 = w.by[l][q] * w.by[l][q];
+        Eigen::Map<Row> a(acc.data() + 2 * (w.offset[q] + static_cast<std::size_t>(l) * stride));
+        a += x * Eigen::Array2d(b2 * w.by[l][q] * factor[q], b2).replicate<4, 1>();
       }
     }
   }
@@ -81,15 +117,29 @@ Lattice approximate_level(const std::vector<LatticePoint>& pts, const std::vecto
   return lattice;
 }
 
-inline double evaluate(const Lattice& lattice, const LatticePoint& p, double scale) {
-  const CellWeights w = cell_weights(p, scale, lattice);
-  const double* c = lattice.phi.data() + w.offset;
+// Subtracts the lattice's function from the residuals r; returns (max |r|, sum r^2).
+std::pair<double, double> subtract_level(const Lattice& lattice, const std::vector<LatticePoint>& pts, double scale,
+                                         std::vector<double>& r) {
   const std::size_t stride = lattice.stride();
-  double z = 0.0;
-  for (int l = 0; l < 4; ++l, c += stride) {
-    z += w.by[l] * (w.bx[0] * c[0] + w.bx[1] * c[1] + w.bx[2] * c[2] + w.bx[3] * c[3]);
+  double max_residual = 0.0;
+  double sum_sq = 0.0;
+  WeightBlock w;
+  for (std::size_t first = 0; first < pts.size(); first += kBlock) {
+    const std::size_t n = std::min(kBlock, pts.size() - first);
+    block_weights(pts.data() + first, n, scale, lattice, w);
+    for (std::size_t q = 0; q < n; ++q) {
+      // Rows weighted by by_l summed first (vectorised), then one dot product with bx.
+      const double* c = lattice.phi.data() + w.offset[q];
+      Eigen::Array4d column = w.by[0][q] * Eigen::Map<const Eigen::Array4d>(c);
+      for (int l = 1; l < 4; ++l) column += w.by[l][q] * Eigen::Map<const Eigen::Array4d>(c + l * stride);
+      const double z = w.bx[0][q] * column[0] + w.bx[1][q] * column[1] + w.bx[2][q] * column[2] + w.bx[3][q] * column[3];
+      double& rc = r[first + q];
+      rc -= z;
+      max_residual = std::max(max_residual, std::abs(rc));
+      sum_sq += rc * rc;
+    }
   }
-  return z;
+  return {max_residual, sum_sq};
 }
 
 struct Bilinear {
@@ -293,13 +343,8 @@ FitResult fit_height_field(const std::vector<Eigen::Vector3d>& points, const Fit
     const int n_x = static_cast<int>(n_xd);
     const int n_y = static_cast<int>(n_yd);
     const Lattice lattice = approximate_level(pts, r, n_x, n_y, scale);
-    max_residual = 0.0;
     double sum_sq = 0.0;
-    for (std::size_t c = 0; c < pts.size(); ++c) {
-      r[c] -= evaluate(lattice, pts[c], scale);
-      max_residual = std::max(max_residual, std::abs(r[c]));
-      sum_sq += r[c] * r[c];
-    }
+    std::tie(max_residual, sum_sq) = subtract_level(lattice, pts, scale, r);
     FitLevel report;
     report.level = level;
     report.n_cells_x = n_x;
@@ -331,11 +376,7 @@ FitResult fit_height_field(const std::vector<Eigen::Vector3d>& points, const Fit
     const double scale = static_cast<double>(n_x / n_x0);
     for (int pass = 0; pass < options.final_passes && max_residual > result.tolerance; ++pass) {
       const Lattice lattice = approximate_level(pts, r, n_x, n_y, scale);
-      max_residual = 0.0;
-      for (std::size_t c = 0; c < pts.size(); ++c) {
-        r[c] -= evaluate(lattice, pts[c], scale);
-        max_residual = std::max(max_residual, std::abs(r[c]));
-      }
+      max_residual = subtract_level(lattice, pts, scale, r).first;
       auto& coefficients = field.mutable_coefficients();
       for (std::size_t k = 0; k < coefficients.size(); ++k) coefficients[k] += lattice.phi[k];
       result.final_pass_max_residual.push_back(max_residual);

@@ -2,17 +2,20 @@
 #include "nurbsfront/quality/aabb_tree.h"
 
 #include <algorithm>
+#include <bit>
+#include <cmath>
 #include <limits>
 
 #include <Eigen/Geometry>
 
+#include "nurbsfront/quality/internal.h"
+
 namespace nurbsfront::quality_detail {
 namespace {
+
 constexpr std::uint32_t kLeafSize = 4;
 constexpr std::uint32_t kNoFace = std::numeric_limits<std::uint32_t>::max();
-}  // namespace
-
-namespace {
+constexpr int kMaxDepth = 128;  // 63 Morton bits + log2 of a run of equal codes, with margin
 
 // Spreads the low 21 bits of x so that two zero bits follow each bit (for Morton codes).
 std::uint64_t spread_bits(std::uint64_t x) {
@@ -27,68 +30,107 @@ std::uint64_t spread_bits(std::uint64_t x) {
 
 constexpr double kMortonCells = 2097151.0;  // 2^21 - 1 cells per axis
 
+// Largest float <= x and smallest float >= x (the largest finite float or infinity
+// beyond the float range). One step of the bit pattern moves to the neighbouring float.
+float float_below(double x) {
+  const auto f = static_cast<float>(x);
+  if (!(static_cast<double>(f) > x)) return f;
+  if (f == 0.0f) return -std::numeric_limits<float>::denorm_min();
+  const auto bits = std::bit_cast<std::uint32_t>(f);
+  return std::bit_cast<float>(f > 0.0f ? bits - 1 : bits + 1);
+}
+float float_above(double x) { return -float_below(-x); }
+
+Box3f merge(const Box3f& a, const Box3f& b) {
+  Box3f r;
+  for (int k = 0; k < 3; ++k) {
+    r.lo[k] = std::min(a.lo[k], b.lo[k]);
+    r.hi[k] = std::max(a.hi[k], b.hi[k]);
+  }
+  return r;
+}
+
 }  // namespace
 
 AabbTree::AabbTree(const TriangleSoup& soup, std::vector<std::uint32_t> faces) : soup_(&soup) {
   if (faces.empty()) return;
   const std::size_t n = faces.size();
-  // Faces sorted along a Morton (Z-order) curve of their centroids, then split at the
-  // middle of the range: a balanced tree built with one sort and sequential passes
-  // (as in Karras's linear BVH, with midpoint instead of bit splits).
-  std::vector<Box3> boxes(n);
+  // Faces sorted along a Morton (Z-order) curve of their centroids; each range is split
+  // where the codes of its first and last face first differ (a linear BVH, Karras 2012),
+  // so sibling boxes follow octree cells.
   BoundingBox centroid_box;
   std::vector<Eigen::Vector3d> centroids(n);
   for (std::size_t i = 0; i < n; ++i) {
     const auto& t = soup.triangles[faces[i]];
-    const Eigen::Vector3d& a = soup.points[t[0]];
-    const Eigen::Vector3d& b = soup.points[t[1]];
-    const Eigen::Vector3d& c = soup.points[t[2]];
-    boxes[i] = Box3{a.cwiseMin(b).cwiseMin(c), a.cwiseMax(b).cwiseMax(c)};
-    centroids[i] = (a + b + c) / 3.0;
+    centroids[i] = (soup.points[t[0]] + soup.points[t[1]] + soup.points[t[2]]) / 3.0;
     centroid_box.extend(centroids[i]);
   }
   const Eigen::Vector3d extent = (centroid_box.max - centroid_box.min).cwiseMax(std::numeric_limits<double>::min());
-  std::vector<std::pair<std::uint64_t, std::uint32_t>> keys(n);
+  std::vector<std::uint64_t> codes(n);
+  std::vector<std::uint32_t> order(n);
   for (std::size_t i = 0; i < n; ++i) {
     const Eigen::Vector3d q = (centroids[i] - centroid_box.min).cwiseQuotient(extent) * kMortonCells;
-    keys[i] = {spread_bits(static_cast<std::uint64_t>(q.x())) << 2 | spread_bits(static_cast<std::uint64_t>(q.y())) << 1 |
-                   spread_bits(static_cast<std::uint64_t>(q.z())),
-               static_cast<std::uint32_t>(i)};
+    codes[i] = spread_bits(static_cast<std::uint64_t>(q.x())) << 2 | spread_bits(static_cast<std::uint64_t>(q.y())) << 1 |
+               spread_bits(static_cast<std::uint64_t>(q.z()));
+    order[i] = static_cast<std::uint32_t>(i);
   }
   centroids = {};
-  std::sort(keys.begin(), keys.end());
+  radix_sort(codes, order);
   faces_.resize(n);
   boxes_.resize(n);
   for (std::size_t i = 0; i < n; ++i) {
-    faces_[i] = faces[keys[i].second];
-    boxes_[i] = boxes[keys[i].second];
+    faces_[i] = faces[order[i]];
+    const auto& t = soup.triangles[faces_[i]];
+    const Eigen::Vector3d& a = soup.points[t[0]];
+    const Eigen::Vector3d& b = soup.points[t[1]];
+    const Eigen::Vector3d& c = soup.points[t[2]];
+    const Eigen::Vector3d lo = a.cwiseMin(b).cwiseMin(c), hi = a.cwiseMax(b).cwiseMax(c);
+    for (int k = 0; k < 3; ++k) {
+      boxes_[i].lo[k] = float_below(lo[k]);
+      boxes_[i].hi[k] = float_above(hi[k]);
+    }
   }
-  nodes_.reserve(n + 1);  // midpoint splits: leaves of 2..kLeafSize faces, fewer than n nodes
+  nodes_.reserve(2 * n);  // a binary tree with at most n leaves
+  parent_.reserve(2 * n);
+  leaf_of_.assign(soup.triangles.size(), kNoFace);
   nodes_.emplace_back();
-  build(0, 0, static_cast<std::uint32_t>(n));
+  parent_.push_back(0);
+  build(0, 0, static_cast<std::uint32_t>(n), codes);
 }
 
-void AabbTree::build(std::uint32_t node, std::uint32_t begin, std::uint32_t end) {
+void AabbTree::build(std::uint32_t node, std::uint32_t begin, std::uint32_t end, const std::vector<std::uint64_t>& codes) {
   if (end - begin <= kLeafSize) {
-    Box3 box = boxes_[begin];
-    for (std::uint32_t i = begin + 1; i < end; ++i) {
-      box.lo = box.lo.cwiseMin(boxes_[i].lo);
-      box.hi = box.hi.cwiseMax(boxes_[i].hi);
-    }
-    nodes_[node].box = box;
-    nodes_[node].begin = begin;
-    nodes_[node].count = end - begin;
+    Box3f box = boxes_[begin];
+    for (std::uint32_t i = begin + 1; i < end; ++i) box = merge(box, boxes_[i]);
+    nodes_[node] = Node{box, begin, end - begin};
+    for (std::uint32_t i = begin; i < end; ++i) leaf_of_[faces_[i]] = node;
     return;
   }
-  const std::uint32_t mid = begin + (end - begin) / 2;
+  std::uint32_t mid = begin + (end - begin) / 2;
+  const std::uint64_t first = codes[begin], last = codes[end - 1];
+  if (first != last) {
+    // Last position whose code shares more leading bits with `first` than `last` does.
+    const int common = std::countl_zero(first ^ last);
+    std::uint32_t lo = begin, hi = end - 1;  // codes[lo] shares more, codes[hi] does not
+    while (hi - lo > 1) {
+      const std::uint32_t m = lo + (hi - lo) / 2;
+      if (std::countl_zero(first ^ codes[m]) > common) {
+        lo = m;
+      } else {
+        hi = m;
+      }
+    }
+    mid = hi;
+  }
   const auto left = static_cast<std::uint32_t>(nodes_.size());
-  nodes_[node].left = left;
+  nodes_[node].index = left;
   nodes_.emplace_back();
   nodes_.emplace_back();
-  build(left, begin, mid);
-  build(left + 1, mid, end);
-  nodes_[node].box = Box3{nodes_[left].box.lo.cwiseMin(nodes_[left + 1].box.lo),
-                          nodes_[left].box.hi.cwiseMax(nodes_[left + 1].box.hi)};
+  parent_.push_back(node);
+  parent_.push_back(node);
+  build(left, begin, mid, codes);
+  build(left + 1, mid, end, codes);
+  nodes_[node].box = merge(nodes_[left].box, nodes_[left + 1].box);
 }
 
 Eigen::Vector3d closest_point_on_triangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a,
@@ -119,8 +161,7 @@ Eigen::Vector3d closest_point_on_triangle(const Eigen::Vector3d& p, const Eigen:
   return a + ab * (vb * denom) + ac * (vc * denom);
 }
 
-AabbTree::Closest AabbTree::closest(const Eigen::Vector3d& p, std::uint32_t hint) const {
-  Closest best{std::numeric_limits<double>::infinity(), kNoFace};
+void AabbTree::search(const Eigen::Vector3d& p, std::uint32_t start, Closest& best) const {
   auto test_face = [&](std::uint32_t face) {
     const auto& t = soup_->triangles[face];
     const Eigen::Vector3d q =
@@ -128,32 +169,50 @@ AabbTree::Closest AabbTree::closest(const Eigen::Vector3d& p, std::uint32_t hint
     const double d = (q - p).squaredNorm();
     if (d < best.squared_distance || (d == best.squared_distance && face < best.face)) best = {d, face};
   };
-  if (hint != kNoFace) test_face(hint);
-  if (nodes_.empty()) return best;
-  // Stack of (node, squared distance to its box), nearer child popped first.
-  std::pair<std::uint32_t, double> stack[64];
+  // Stack of (node, squared distance to its box), nearer child popped first. Subtrees
+  // whose box is farther than the best face so far are skipped: every face at the best
+  // distance is still tested, so ties go to the lowest face index whatever the order.
+  struct Entry {
+    std::uint32_t node;
+    double box_distance;
+  };
+  Entry stack[kMaxDepth + 1];
   int top = 0;
-  stack[top++] = {0u, nodes_[0].box.squared_distance(p)};
+  stack[top++] = {start, nodes_[start].box.squared_distance(p)};
   while (top > 0) {
-    const auto [index, box_distance] = stack[--top];
-    if (box_distance > best.squared_distance) continue;
-    const Node& node = nodes_[index];
+    const Entry entry = stack[--top];
+    if (entry.box_distance > best.squared_distance) continue;
+    const Node& node = nodes_[entry.node];
     if (node.is_leaf()) {
-      for (std::uint32_t i = node.begin; i < node.begin + node.count; ++i) {
+      for (std::uint32_t i = node.begin(); i < node.end(); ++i) {
         if (boxes_[i].squared_distance(p) <= best.squared_distance) test_face(faces_[i]);
       }
       continue;
     }
-    const double dl = nodes_[node.left].box.squared_distance(p);
-    const double dr = nodes_[node.left + 1].box.squared_distance(p);
+    const double dl = nodes_[node.left()].box.squared_distance(p);
+    const double dr = nodes_[node.right()].box.squared_distance(p);
     if (dl <= dr) {
-      if (dr <= best.squared_distance) stack[top++] = {node.left + 1, dr};
-      if (dl <= best.squared_distance) stack[top++] = {node.left, dl};
+      if (dr <= best.squared_distance) stack[top++] = {node.right(), dr};
+      if (dl <= best.squared_distance) stack[top++] = {node.left(), dl};
     } else {
-      if (dl <= best.squared_distance) stack[top++] = {node.left, dl};
-      if (dr <= best.squared_distance) stack[top++] = {node.left + 1, dr};
+      if (dl <= best.squared_distance) stack[top++] = {node.left(), dl};
+      if (dr <= best.squared_distance) stack[top++] = {node.right(), dr};
     }
   }
+}
+
+AabbTree::Closest AabbTree::closest(const Eigen::Vector3d& p, std::uint32_t hint) const {
+  Closest best{std::numeric_limits<double>::infinity(), kNoFace};
+  if (nodes_.empty()) return best;
+  if (hint < leaf_of_.size() && leaf_of_[hint] != kNoFace) {
+    // Bottom-up from the hint's leaf: its faces give a tight bound at once, then the
+    // sibling of every ancestor is searched (usually pruned by its box alone).
+    std::uint32_t node = leaf_of_[hint];
+    search(p, node, best);
+    for (; node != 0; node = parent_[node]) search(p, node % 2 == 1 ? node + 1 : node - 1, best);
+    return best;
+  }
+  search(p, 0, best);
   return best;
 }
 

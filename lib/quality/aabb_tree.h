@@ -2,10 +2,14 @@
 #pragma once
 //! \file
 //! A static bounding-volume hierarchy of axis-aligned boxes over triangles (internal to
-//! the quality module): faces ordered along a Morton curve of their centroids, split at
-//! the middle, small leaves, nodes in one array. Used for self-intersection candidate pairs and
-//! closest-point queries.
+//! the quality module): faces ordered along a Morton curve of their centroids, split where
+//! the Morton codes first differ (Karras's linear BVH), small leaves, nodes of 32 bytes in
+//! one array. Boxes are stored in single precision, rounded outwards, so they always
+//! contain the exact double-precision boxes: they only prune, every decision on a
+//! candidate is taken in double precision (closest points) or exactly (intersections).
+//! Used for self-intersection candidate pairs and closest-point queries.
 
+#include <algorithm>
 #include <cstdint>
 #include <vector>
 
@@ -15,27 +19,42 @@
 
 namespace nurbsfront::quality_detail {
 
-struct Box3 {
-  Eigen::Vector3d lo;
-  Eigen::Vector3d hi;
-  [[nodiscard]] bool overlaps(const Box3& other) const {
-    return (lo.array() <= other.hi.array()).all() && (other.lo.array() <= hi.array()).all();
+//! Axis-aligned box in single precision (outward-rounded from double).
+struct Box3f {
+  float lo[3];
+  float hi[3];
+  [[nodiscard]] bool overlaps(const Box3f& other) const {
+    return lo[0] <= other.hi[0] && other.lo[0] <= hi[0] && lo[1] <= other.hi[1] && other.lo[1] <= hi[1] &&
+           lo[2] <= other.hi[2] && other.lo[2] <= hi[2];
   }
-  //! Squared distance from p to the box (0 inside).
+  //! Squared distance from p to the box (0 inside), in double precision; never more than
+  //! the distance to the exact box the float box encloses.
   [[nodiscard]] double squared_distance(const Eigen::Vector3d& p) const {
-    const Eigen::Vector3d d = (lo - p).cwiseMax(p - hi).cwiseMax(0.0);
-    return d.squaredNorm();
+    double s = 0.0;
+    for (int k = 0; k < 3; ++k) {
+      const double d = std::max({static_cast<double>(lo[k]) - p[k], p[k] - static_cast<double>(hi[k]), 0.0});
+      s += d * d;
+    }
+    return s;
+  }
+  //! Squared length of the diagonal (a size measure for traversal decisions).
+  [[nodiscard]] float squared_extent() const {
+    const float dx = hi[0] - lo[0], dy = hi[1] - lo[1], dz = hi[2] - lo[2];
+    return dx * dx + dy * dy + dz * dz;
   }
 };
 
 class AabbTree {
  public:
   struct Node {
-    Box3 box;
-    std::uint32_t left = 0;   //!< index of the left child (right = left + 1) for inner nodes
-    std::uint32_t begin = 0;  //!< first entry in faces() for leaves
+    Box3f box;
+    std::uint32_t index = 0;  //!< left child (right = left + 1) for inner nodes, first entry in faces() for leaves
     std::uint32_t count = 0;  //!< number of faces for leaves, 0 for inner nodes
     [[nodiscard]] bool is_leaf() const { return count > 0; }
+    [[nodiscard]] std::uint32_t left() const { return index; }
+    [[nodiscard]] std::uint32_t right() const { return index + 1; }
+    [[nodiscard]] std::uint32_t begin() const { return index; }
+    [[nodiscard]] std::uint32_t end() const { return index + count; }
   };
 
   //! Builds the tree over the given faces of the soup (indices must be valid).
@@ -45,23 +64,29 @@ class AabbTree {
   //! Face indices in leaf order.
   [[nodiscard]] const std::vector<std::uint32_t>& faces() const { return faces_; }
   //! Box of faces()[i].
-  [[nodiscard]] const Box3& face_box(std::size_t i) const { return boxes_[i]; }
+  [[nodiscard]] const Box3f& face_box(std::size_t i) const { return boxes_[i]; }
   [[nodiscard]] bool empty() const { return faces_.empty(); }
 
   struct Closest {
     double squared_distance;
     std::uint32_t face;
   };
-  //! Closest face to p; `hint` (a face index or UINT32_MAX) seeds the search bound.
+  //! Closest face of the tree to p (ties: the lowest face index). `hint` (a face index or
+  //! UINT32_MAX) only speeds the search up: with a face of the tree near p (e.g. the
+  //! previous answer for coherent queries) the search starts at its leaf.
   [[nodiscard]] Closest closest(const Eigen::Vector3d& p, std::uint32_t hint) const;
 
  private:
-  void build(std::uint32_t node, std::uint32_t begin, std::uint32_t end);
+  void build(std::uint32_t node, std::uint32_t begin, std::uint32_t end, const std::vector<std::uint64_t>& codes);
+  //! Improves `best` by the faces of the subtree at `start` closer than best.squared_distance.
+  void search(const Eigen::Vector3d& p, std::uint32_t start, Closest& best) const;
 
   const TriangleSoup* soup_;
-  std::vector<Node> nodes_;
+  std::vector<Node> nodes_;         //!< root first; siblings at (odd, odd + 1)
+  std::vector<std::uint32_t> parent_;   //!< per node (the root's is 0)
+  std::vector<std::uint32_t> leaf_of_;  //!< per soup face: its leaf, or UINT32_MAX if not in the tree
   std::vector<std::uint32_t> faces_;
-  std::vector<Box3> boxes_;
+  std::vector<Box3f> boxes_;
 };
 
 //! Closest point of triangle (a, b, c) to p (Ericson, Real-Time Collision Detection 5.1.5).

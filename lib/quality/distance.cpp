@@ -95,18 +95,17 @@ OneSided one_sided(const std::vector<Eigen::Vector3d>& samples, const quality_de
   return r;
 }
 
-std::vector<std::uint32_t> all_faces(const TriangleSoup& soup) {
-  std::vector<std::uint32_t> faces(soup.triangles.size());
-  std::iota(faces.begin(), faces.end(), 0u);
-  return faces;
-}
-
 }  // namespace
 
 DistanceReport mesh_distance(const TriangleSoup& mesh, const TriangleSoup& reference, const DistanceOptions& options) {
   options.validate();
   quality_detail::validate_soup(mesh, "mesh_distance (mesh)");
   quality_detail::validate_soup(reference, "mesh_distance (reference)");
+  return quality_detail::mesh_distance_with(mesh, reference, options, nullptr);
+}
+
+DistanceReport quality_detail::mesh_distance_with(const TriangleSoup& mesh, const TriangleSoup& reference,
+                                                  const DistanceOptions& options, const quality_detail::AabbTree* given_tree) {
   if (mesh.triangles.empty() || reference.triangles.empty()) {
     throw InvalidInput("nurbsfront: mesh_distance needs two surfaces with at least one triangle each");
   }
@@ -117,16 +116,16 @@ DistanceReport mesh_distance(const TriangleSoup& mesh, const TriangleSoup& refer
   report_progress(options.progress, "distance", 0.0);
   // The two trees and the two sample sets are independent: with two or more threads the
   // reference's are prepared on a second thread (deterministic, no shared writes).
-  std::optional<quality_detail::AabbTree> mesh_tree;
+  std::optional<quality_detail::AabbTree> own_mesh_tree;
   std::optional<quality_detail::AabbTree> reference_tree;
   std::vector<Eigen::Vector3d> mesh_samples;
   std::vector<Eigen::Vector3d> reference_samples;
   auto prepare_reference = [&] {
-    reference_tree.emplace(reference, all_faces(reference));
+    reference_tree.emplace(quality_detail::all_faces_tree(reference));
     mesh_samples = sample_surface(mesh, spacing, options.max_samples);
   };
   auto prepare_mesh = [&] {
-    mesh_tree.emplace(mesh, all_faces(mesh));
+    if (given_tree == nullptr) own_mesh_tree.emplace(quality_detail::all_faces_tree(mesh));
     reference_samples = sample_surface(reference, spacing, options.max_samples);
   };
   if (options.n_threads >= 2) {
@@ -147,7 +146,8 @@ DistanceReport mesh_distance(const TriangleSoup& mesh, const TriangleSoup& refer
   report_progress(options.progress, "distance", 0.1);
   const OneSided forward = one_sided(mesh_samples, *reference_tree, options.n_threads);
   report_progress(options.progress, "distance", 0.55);
-  const OneSided backward = one_sided(reference_samples, *mesh_tree, options.n_threads);
+  const OneSided backward =
+      one_sided(reference_samples, given_tree != nullptr ? *given_tree : *own_mesh_tree, options.n_threads);
   r.mesh_to_reference_max = forward.max;
   r.mesh_to_reference_mean = forward.mean;
   r.reference_to_mesh_max = backward.max;

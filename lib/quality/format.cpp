@@ -5,40 +5,14 @@
 #include <sstream>
 #include <string>
 
+#include "nurbsfront/quality/json.h"
 #include "nurbsfront/quality/report.h"
 
 namespace nurbsfront {
 namespace {
 
-std::string number(double x) {
-  if (!std::isfinite(x)) return "null";
-  char buffer[32];
-  std::snprintf(buffer, sizeof buffer, "%.10g", x);
-  return buffer;
-}
-
-// A tiny writer for flat JSON objects: key/value pairs joined by commas.
-class JsonObject {
- public:
-  JsonObject& add(const char* key, const std::string& raw) {
-    out_ << (first_ ? "" : ", ") << '"' << key << "\": " << raw;
-    first_ = false;
-    return *this;
-  }
-  JsonObject& num(const char* key, double x) { return add(key, number(x)); }
-  JsonObject& count(const char* key, std::size_t n) { return add(key, std::to_string(n)); }
-  JsonObject& flag(const char* key, bool b) { return add(key, b ? "true" : "false"); }
-  [[nodiscard]] std::string str() const {
-    std::string s(1, '{');
-    s += out_.str();
-    s += '}';
-    return s;
-  }
-
- private:
-  std::ostringstream out_;
-  bool first_ = true;
-};
+using json::number;
+using JsonObject = json::Object;
 
 std::string components_json(const TopologyReport& t) {
   std::string s = "[";

@@ -4,9 +4,11 @@
 #include <algorithm>
 #include <cmath>
 #include <exception>
+#include <functional>
 #include <limits>
 #include <numbers>
 #include <numeric>
+#include <optional>
 #include <string>
 #include <thread>
 
@@ -14,6 +16,7 @@
 
 #include "nurbsfront/core/error.h"
 #include "nurbsfront/core/tolerances.h"
+#include "nurbsfront/quality/aabb_tree.h"
 #include "nurbsfront/quality/internal.h"
 
 namespace nurbsfront {
@@ -103,7 +106,7 @@ bool is_closed_surface(const TriangleSoup& soup) {
       keys.push_back(lo << 32 | hi);
     }
   }
-  std::sort(keys.begin(), keys.end());
+  bucket_sort(keys, soup.points.size(), [](std::uint64_t key) { return key >> 32; }, std::less<>());
   for (std::size_t i = 0; i < keys.size();) {
     std::size_t j = i;
     while (j < keys.size() && keys[j] == keys[i]) ++j;
@@ -203,7 +206,7 @@ TopologyReport compute_topology(const TriangleSoup& soup, std::vector<EdgeEntry>
       std::sort(key.begin(), key.end());
       keys[f] = {key, static_cast<std::uint32_t>(f)};
     }
-    std::sort(keys.begin(), keys.end());
+    quality_detail::bucket_sort(keys, n_points, [](const auto& key) { return key.first[0]; }, std::less<>());
     for (std::size_t i = 1; i < keys.size(); ++i) {
       if (keys[i].first == keys[i - 1].first) ++r.n_duplicate_faces;
     }
@@ -221,9 +224,9 @@ TopologyReport compute_topology(const TriangleSoup& soup, std::vector<EdgeEntry>
       edges.push_back({lo << 32 | hi, static_cast<std::uint32_t>(f), from < to ? 1u : 0u});
     }
   }
-  std::sort(edges.begin(), edges.end(), [](const EdgeEntry& x, const EdgeEntry& y) {
-    return x.key < y.key || (x.key == y.key && x.face < y.face);
-  });
+  quality_detail::bucket_sort(
+      edges, n_points, [](const EdgeEntry& e) { return e.key >> 32; },
+      [](const EdgeEntry& x, const EdgeEntry& y) { return x.key < y.key || (x.key == y.key && x.face < y.face); });
 
   // Components through shared vertices; numbered by their lowest face.
   DisjointSets vertex_sets(n_points);
@@ -392,11 +395,19 @@ QualityReport compute_quality(const TriangleSoup& soup, const std::vector<double
 
 }  // namespace
 
-MeshReport mesh_report(const TriangleSoup& soup, const ReportOptions& options) {
-  options.validate();
-  quality_detail::validate_soup(soup, "mesh_report");
+namespace {
+
+// The report; with `tree` given, the self-intersection count builds the soup's tree over
+// all faces into it (for the distance stage to reuse).
+MeshReport report_with(const TriangleSoup& soup, const ReportOptions& options, std::optional<quality_detail::AabbTree>* tree) {
   MeshReport report;
   report_progress(options.progress, "topology", 0.0);
+  std::optional<quality_detail::AabbTree> own_tree;
+  if (tree == nullptr) tree = &own_tree;
+  auto count = [&] {
+    tree->emplace(quality_detail::all_faces_tree(soup));
+    return quality_detail::count_self_intersections_with(soup, **tree, options.n_threads);
+  };
   // With two or more threads the self-intersection count starts on a helper thread while
   // this one computes topology and quality (its serial set-up overlaps them). Progress is
   // still reported from this thread in the same stage order; the count does not depend on
@@ -407,7 +418,7 @@ MeshReport mesh_report(const TriangleSoup& soup, const ReportOptions& options) {
   if (options.self_intersections && options.n_threads >= 2) {
     helper = std::thread([&] {
       try {
-        n_pairs = count_self_intersections(soup, options.n_threads);
+        n_pairs = count();
       } catch (...) {
         helper_error = std::current_exception();
       }
@@ -430,7 +441,7 @@ MeshReport mesh_report(const TriangleSoup& soup, const ReportOptions& options) {
       helper.join();
       if (helper_error) std::rethrow_exception(helper_error);
     } else {
-      n_pairs = count_self_intersections(soup, options.n_threads);
+      n_pairs = count();
     }
     report.topology.n_self_intersecting_pairs = n_pairs;
     report_progress(options.progress, "self-intersections", 1.0);
@@ -438,13 +449,23 @@ MeshReport mesh_report(const TriangleSoup& soup, const ReportOptions& options) {
   return report;
 }
 
+}  // namespace
+
+MeshReport mesh_report(const TriangleSoup& soup, const ReportOptions& options) {
+  options.validate();
+  quality_detail::validate_soup(soup, "mesh_report");
+  return report_with(soup, options, nullptr);
+}
+
 MeshReport mesh_report(const TriangleSoup& soup, const TriangleSoup& reference, const ReportOptions& options) {
   options.validate();
+  quality_detail::validate_soup(soup, "mesh_report");
   quality_detail::validate_soup(reference, "mesh_report (reference)");
-  MeshReport report = mesh_report(soup, options);
+  std::optional<quality_detail::AabbTree> tree;  // the soup's, shared by both stages
+  MeshReport report = report_with(soup, options, &tree);
   DistanceOptions distance_options = options.distance;
   if (!distance_options.progress) distance_options.progress = options.progress;
-  report.distance = mesh_distance(soup, reference, distance_options);
+  report.distance = quality_detail::mesh_distance_with(soup, reference, distance_options, tree ? &*tree : nullptr);
   return report;
 }
 

@@ -11,6 +11,7 @@
 
 #include <array>
 #include <cstddef>
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <vector>
@@ -181,6 +182,12 @@ struct MeshReport {
 //! Number of intersecting face pairs (see TopologyReport::n_self_intersecting_pairs).
 //! \throw InvalidInput for out-of-range indices or non-finite points.
 [[nodiscard]] std::size_t count_self_intersections(const TriangleSoup& soup, unsigned n_threads = 2);
+
+//! The intersecting face pairs themselves (the ones count_self_intersections() counts), as
+//! (smaller, larger) face indices in ascending order; the result does not depend on n_threads.
+//! \throw InvalidInput for out-of-range indices, non-finite points or n_threads == 0.
+[[nodiscard]] std::vector<std::array<std::uint32_t, 2>> self_intersecting_pairs(const TriangleSoup& soup,
+                                                                                unsigned n_threads = 2);
 
 //! Two-sided distance by dense sampling: every vertex plus area-proportional samples
 //! (spacing sample_spacing_relative * reference diagonal) on both surfaces, exact

@@ -3,8 +3,10 @@
 
 #include <algorithm>
 #include <atomic>
+#include <bit>
 #include <cmath>
 #include <numeric>
+#include <string>
 #include <thread>
 #include <vector>
 
@@ -144,24 +146,56 @@ namespace {
 
 // Maps every point to the lowest index of a point at exactly the same position, so that
 // unwelded copies of a vertex count as shared corners and not as a touching contact.
+// Points are grouped by a hash of their coordinates (radix-sorted, stable, so each group
+// lists its points in index order); inside a group, exact comparisons decide.
 std::vector<std::uint32_t> canonical_ids(const TriangleSoup& soup) {
-  std::vector<std::uint32_t> order(soup.points.size());
-  std::iota(order.begin(), order.end(), 0u);
-  auto less = [&](std::uint32_t a, std::uint32_t b) {
-    const auto& p = soup.points[a];
-    const auto& q = soup.points[b];
-    if (p.x() != q.x()) return p.x() < q.x();
-    if (p.y() != q.y()) return p.y() < q.y();
-    if (p.z() != q.z()) return p.z() < q.z();
-    return a < b;
-  };
-  std::sort(order.begin(), order.end(), less);
-  std::vector<std::uint32_t> id(soup.points.size());
-  for (std::size_t i = 0; i < order.size(); ++i) {
-    id[order[i]] = (i > 0 && soup.points[order[i]] == soup.points[order[i - 1]]) ? id[order[i - 1]] : order[i];
+  const std::size_t n = soup.points.size();
+  std::vector<std::uint64_t> hashes(n);
+  std::vector<std::uint32_t> order(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    std::uint64_t h = 0x9e3779b97f4a7c15ULL;
+    for (int k = 0; k < 3; ++k) {
+      // + 0.0 turns -0.0 into 0.0: equal coordinates hash equally.
+      h = (h ^ std::bit_cast<std::uint64_t>(soup.points[i][k] + 0.0)) * 0xff51afd7ed558ccdULL;
+      h ^= h >> 33;
+    }
+    hashes[i] = h;
+    order[i] = static_cast<std::uint32_t>(i);
+  }
+  quality_detail::radix_sort(hashes, order);
+  std::vector<std::uint32_t> id(n);
+  std::vector<std::uint32_t> distinct;  // first point of each distinct position in the group
+  for (std::size_t i = 0; i < n;) {
+    std::size_t j = i;
+    while (j < n && hashes[j] == hashes[i]) ++j;
+    distinct.clear();
+    for (std::size_t k = i; k < j; ++k) {
+      const std::uint32_t v = order[k];
+      auto same = std::find_if(distinct.begin(), distinct.end(),
+                               [&](std::uint32_t u) { return soup.points[u] == soup.points[v]; });
+      if (same == distinct.end()) {
+        distinct.push_back(v);
+        id[v] = v;
+      } else {
+        id[v] = *same;
+      }
+    }
+    i = j;
   }
   return id;
 }
+
+using FacePair = std::array<std::uint32_t, 2>;
+
+// Intersecting pairs found by one traversal: counted, and listed when `pairs` is set.
+struct Hits {
+  std::size_t count = 0;
+  std::vector<FacePair>* pairs = nullptr;
+  void add(std::uint32_t f, std::uint32_t g) {
+    ++count;
+    if (pairs != nullptr) pairs->push_back({std::min(f, g), std::max(f, g)});
+  }
+};
 
 struct NodePair {
   std::uint32_t a;
@@ -170,17 +204,19 @@ struct NodePair {
 
 class SelfIntersectionCounter {
  public:
-  SelfIntersectionCounter(const TriangleSoup& soup, const quality_detail::AabbTree& tree, const std::vector<std::uint32_t>& ids)
-      : soup_(soup), tree_(tree), ids_(ids) {}
+  SelfIntersectionCounter(const TriangleSoup& soup, const quality_detail::AabbTree& tree, const std::vector<std::uint32_t>& ids,
+                          const std::vector<char>& usable)
+      : soup_(soup), tree_(tree), ids_(ids), usable_(usable) {}
 
-  std::size_t run(NodePair task) const {
-    std::size_t count = 0;
+  std::size_t run(NodePair task, std::vector<FacePair>* pairs = nullptr) const {
+    Hits count;
+    count.pairs = pairs;
     if (task.a == task.b) {
       self(task.a, count);
     } else {
       pair(task.a, task.b, count);
     }
-    return count;
+    return count.count;
   }
 
   // Splits the top of the traversal into independent tasks.
@@ -198,9 +234,9 @@ class SelfIntersectionCounter {
             next.push_back(t);
             continue;
           }
-          next.push_back({a.left, a.left});
-          next.push_back({a.left + 1, a.left + 1});
-          next.push_back({a.left, a.left + 1});
+          next.push_back({a.left(), a.left()});
+          next.push_back({a.right(), a.right()});
+          next.push_back({a.left(), a.right()});
           changed = true;
           continue;
         }
@@ -210,14 +246,14 @@ class SelfIntersectionCounter {
         }
         if (a.is_leaf() && b.is_leaf()) {
           next.push_back(t);
-        } else if (b.is_leaf() || (!a.is_leaf() && (a.box.hi - a.box.lo).squaredNorm() >=
-                                                        (b.box.hi - b.box.lo).squaredNorm())) {
-          next.push_back({a.left, t.b});
-          next.push_back({a.left + 1, t.b});
+        } else if (b.is_leaf() || (!a.is_leaf() && a.box.squared_extent() >=
+                                                        b.box.squared_extent())) {
+          next.push_back({a.left(), t.b});
+          next.push_back({a.right(), t.b});
           changed = true;
         } else {
-          next.push_back({t.a, b.left});
-          next.push_back({t.a, b.left + 1});
+          next.push_back({t.a, b.left()});
+          next.push_back({t.a, b.right()});
           changed = true;
         }
       }
@@ -228,94 +264,122 @@ class SelfIntersectionCounter {
   }
 
  private:
-  void self(std::uint32_t n, std::size_t& count) const {
+  void self(std::uint32_t n, Hits& count) const {
     const auto& node = tree_.nodes()[n];
     if (node.is_leaf()) {
-      for (std::uint32_t i = node.begin; i < node.begin + node.count; ++i) {
-        for (std::uint32_t j = i + 1; j < node.begin + node.count; ++j) test(i, j, count);
+      for (std::uint32_t i = node.begin(); i < node.end(); ++i) {
+        for (std::uint32_t j = i + 1; j < node.end(); ++j) test(i, j, count);
       }
       return;
     }
-    self(node.left, count);
-    self(node.left + 1, count);
-    pair(node.left, node.left + 1, count);
+    self(node.left(), count);
+    self(node.right(), count);
+    pair(node.left(), node.right(), count);
   }
 
-  void pair(std::uint32_t na, std::uint32_t nb, std::size_t& count) const {
+  void pair(std::uint32_t na, std::uint32_t nb, Hits& count) const {
     const auto& a = tree_.nodes()[na];
     const auto& b = tree_.nodes()[nb];
     if (!a.box.overlaps(b.box)) return;
     if (a.is_leaf() && b.is_leaf()) {
-      for (std::uint32_t i = a.begin; i < a.begin + a.count; ++i) {
-        for (std::uint32_t j = b.begin; j < b.begin + b.count; ++j) test(i, j, count);
+      for (std::uint32_t i = a.begin(); i < a.end(); ++i) {
+        for (std::uint32_t j = b.begin(); j < b.end(); ++j) test(i, j, count);
       }
       return;
     }
     // Descend the inner node with the larger box (the non-leaf if one is a leaf).
-    const bool split_a = b.is_leaf() || (!a.is_leaf() && (a.box.hi - a.box.lo).squaredNorm() >=
-                                                             (b.box.hi - b.box.lo).squaredNorm());
+    const bool split_a = b.is_leaf() || (!a.is_leaf() && a.box.squared_extent() >=
+                                                             b.box.squared_extent());
     if (split_a) {
-      pair(a.left, nb, count);
-      pair(a.left + 1, nb, count);
+      pair(a.left(), nb, count);
+      pair(a.right(), nb, count);
     } else {
-      pair(na, b.left, count);
-      pair(na, b.left + 1, count);
+      pair(na, b.left(), count);
+      pair(na, b.right(), count);
     }
   }
 
-  void test(std::uint32_t i, std::uint32_t j, std::size_t& count) const {
-    if (!tree_.face_box(i).overlaps(tree_.face_box(j))) return;
+  void test(std::uint32_t i, std::uint32_t j, Hits& count) const {
+    if (!usable_[i] || !usable_[j] || !tree_.face_box(i).overlaps(tree_.face_box(j))) return;
     const auto& fi = soup_.triangles[tree_.faces()[i]];
     const auto& fj = soup_.triangles[tree_.faces()[j]];
     const std::array<std::uint32_t, 3> ids_i{ids_[fi[0]], ids_[fi[1]], ids_[fi[2]]};
     const std::array<std::uint32_t, 3> ids_j{ids_[fj[0]], ids_[fj[1]], ids_[fj[2]]};
     const std::array<Eigen::Vector3d, 3> ti{soup_.points[fi[0]], soup_.points[fi[1]], soup_.points[fi[2]]};
     const std::array<Eigen::Vector3d, 3> tj{soup_.points[fj[0]], soup_.points[fj[1]], soup_.points[fj[2]]};
-    if (quality_detail::triangles_intersect(ids_i, ti, ids_j, tj)) ++count;
+    if (quality_detail::triangles_intersect(ids_i, ti, ids_j, tj)) count.add(tree_.faces()[i], tree_.faces()[j]);
   }
 
   const TriangleSoup& soup_;
   const quality_detail::AabbTree& tree_;
   const std::vector<std::uint32_t>& ids_;
+  const std::vector<char>& usable_;  //!< by tree position: not degenerate
 };
 
 }  // namespace
 
-std::size_t count_self_intersections(const TriangleSoup& soup, unsigned n_threads) {
-  quality_detail::validate_soup(soup, "count_self_intersections");
-  if (n_threads == 0) throw InvalidInput("nurbsfront: count_self_intersections needs at least one thread");
+namespace quality_detail {
+
+AabbTree all_faces_tree(const TriangleSoup& soup) {
+  std::vector<std::uint32_t> faces(soup.triangles.size());
+  std::iota(faces.begin(), faces.end(), 0u);
+  return AabbTree(soup, std::move(faces));
+}
+
+std::size_t count_self_intersections_with(const TriangleSoup& soup, const AabbTree& tree, unsigned n_threads,
+                                          std::vector<std::array<std::uint32_t, 2>>* pairs) {
+  if (tree.empty()) return 0;
   const std::vector<std::uint32_t> ids = canonical_ids(soup);
   // Degenerate faces (repeated corner, or area at the degenerate tolerance) are counted
   // elsewhere and skipped here: the predicates need a proper plane per triangle.
   const double diagonal = bounding_box(soup).diagonal();
   const double area_floor = tolerance::kDegenerateAreaRelative * diagonal * diagonal;
-  std::vector<std::uint32_t> faces;
-  faces.reserve(soup.triangles.size());
-  for (std::size_t f = 0; f < soup.triangles.size(); ++f) {
-    const auto& t = soup.triangles[f];
+  std::vector<char> usable(tree.faces().size());  // by position in the tree
+  for (std::size_t i = 0; i < usable.size(); ++i) {
+    const auto& t = soup.triangles[tree.faces()[i]];
     if (ids[t[0]] == ids[t[1]] || ids[t[1]] == ids[t[2]] || ids[t[2]] == ids[t[0]]) continue;
     const double area =
         0.5 * (soup.points[t[1]] - soup.points[t[0]]).cross(soup.points[t[2]] - soup.points[t[0]]).norm();
-    if (area <= area_floor) continue;
-    faces.push_back(static_cast<std::uint32_t>(f));
+    usable[i] = area > area_floor;
   }
-  const quality_detail::AabbTree tree(soup, std::move(faces));
-  if (tree.empty()) return 0;
-  const SelfIntersectionCounter counter(soup, tree, ids);
-  if (n_threads == 1) return counter.run({0, 0});
+  const SelfIntersectionCounter counter(soup, tree, ids, usable);
+  if (n_threads == 1) return counter.run({0, 0}, pairs);
   // Independent subtree pairs, handed out dynamically; the total does not depend on
-  // which thread counted which pair.
+  // which thread counted which pair (listed pairs are sorted by the caller).
   const std::vector<NodePair> tasks = counter.split(256 * static_cast<std::size_t>(n_threads));
   std::atomic<std::size_t> next{0};
   std::vector<std::size_t> counts(n_threads, 0);
+  std::vector<std::vector<FacePair>> found(n_threads);
   auto work = [&](unsigned thread) {
-    for (std::size_t k = next++; k < tasks.size(); k = next++) counts[thread] += counter.run(tasks[k]);
+    for (std::size_t k = next++; k < tasks.size(); k = next++) {
+      counts[thread] += counter.run(tasks[k], pairs != nullptr ? &found[thread] : nullptr);
+    }
   };
   std::vector<std::thread> workers;
   for (unsigned t = 1; t < n_threads; ++t) workers.emplace_back(work, t);
   work(0);
   for (auto& w : workers) w.join();
+  if (pairs != nullptr) {
+    for (const auto& f : found) pairs->insert(pairs->end(), f.begin(), f.end());
+  }
   return std::accumulate(counts.begin(), counts.end(), std::size_t{0});
+}
+
+}  // namespace quality_detail
+
+std::size_t count_self_intersections(const TriangleSoup& soup, unsigned n_threads) {
+  quality_detail::validate_soup(soup, "count_self_intersections");
+  if (n_threads == 0) throw InvalidInput("nurbsfront: count_self_intersections needs at least one thread");
+  return quality_detail::count_self_intersections_with(soup, quality_detail::all_faces_tree(soup), n_threads);
+}
+
+std::vector<std::array<std::uint32_t, 2>> self_intersecting_pairs(const TriangleSoup& soup, unsigned n_threads) {
+  quality_detail::validate_soup(soup, "self_intersecting_pairs");
+  if (n_threads == 0) throw InvalidInput("nurbsfront: self_intersecting_pairs needs at least one thread");
+  std::vector<FacePair> pairs;
+  quality_detail::count_self_intersections_with(soup, quality_detail::all_faces_tree(soup), n_threads, &pairs);
+  std::sort(pairs.begin(), pairs.end());
+  return pairs;
 }
 
 }  // namespace nurbsfront

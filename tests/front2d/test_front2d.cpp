@@ -11,6 +11,8 @@
 #include <sstream>
 #include <string>
 
+#include <Eigen/Geometry>
+
 #include "nurbsfront/core/error.h"
 #include "nurbsfront/front2d/front.h"
 #include "nurbsfront/front2d/predicates.h"
@@ -44,6 +46,28 @@ TEST(Front2dPredicates, Orient2dIsExactWhereNaiveFails) {
       if ((n > 0 ? 1 : (n < 0 ? -1 : 0)) != exact) ++naive_wrong;
     }
   EXPECT_GT(naive_wrong, 0) << "the test must contain cases where double evaluation fails";
+}
+
+TEST(Front2dPredicates, Orient2dShortcutForEqualCoordinates) {
+  // Points sharing an x or a y coordinate (axis-parallel boundaries) are decided without
+  // the expansion; the answer must equal the exact one, also a few ulps off the line.
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> u(-1, 1);
+  int decided_zero = 0;
+  for (int i = 0; i < 20000; ++i) {
+    const double x = u(rng), y = u(rng);
+    Vec a(x, u(rng)), b(x, u(rng)), c(x, u(rng));  // on the line x = const
+    const int which = i % 3;
+    Vec& m = which == 0 ? a : (which == 1 ? b : c);
+    const int k = static_cast<int>(i / 3 % 5) - 2;  // move one point by -2..2 ulps
+    m.x() = k == 0 ? m.x() : std::nextafter(m.x(), k > 0 ? 2.0 : -2.0);
+    if (std::abs(k) == 2) m.x() = std::nextafter(m.x(), k > 0 ? 2.0 : -2.0);
+    ASSERT_EQ(front2d::orient2d(a, b, c), front2d::orient2d_exact(a, b, c)) << i;
+    const Vec p(a.y(), y), q(b.y(), y), r(c.y(), y);  // on the line y = const
+    ASSERT_EQ(front2d::orient2d(p, q, r), front2d::orient2d_exact(p, q, r)) << i;
+    decided_zero += front2d::orient2d(a, b, c) == 0;
+  }
+  EXPECT_GT(decided_zero, 1000);
 }
 
 TEST(Front2dPredicates, SegmentsIntersect) {
@@ -152,6 +176,8 @@ void add_loop(Pslg& p, const std::vector<Vec>& pts) {
   }
 }
 
+double loop_area(const std::vector<Vec>& p);
+
 FrontOptions uniform(double h) {
   FrontOptions o;
   o.sizing = SizingField::uniform(h);
@@ -254,6 +280,236 @@ TEST(Front2d, GradedAndAnisotropicSizing) {
   // In the metric, lengths in y count double: the mesh has about twice the triangles.
   const Mesh2d iso = mesh_pslg(sq, uniform(0.1));
   EXPECT_GT(mc.triangles.size(), 1.5 * iso.triangles.size());
+}
+
+// ---------------------------------------------------------------- metric
+
+struct ConstantMetric : Metric {
+  Eigen::Matrix2d m;
+  explicit ConstantMetric(Eigen::Matrix2d t) : m(std::move(t)) {}
+  Eigen::Matrix2d tensor(const Vec&) const override { return m; }
+};
+
+// First fundamental form of the height field f(x, y) = c (x^2 + y^2).
+struct ParaboloidMetric : Metric {
+  double c;
+  explicit ParaboloidMetric(double cc) : c(cc) {}
+  Eigen::Matrix2d tensor(const Vec& x) const override {
+    const Vec g = 2.0 * c * x;
+    return Eigen::Matrix2d::Identity() + g * g.transpose();
+  }
+};
+
+// Quality of the mesh mapped by a linear map L (e.g. M^{1/2} of a constant metric).
+Stats mapped_stats(const Mesh2d& m, const Eigen::Matrix2d& L) {
+  Stats s;
+  double sum = 0;
+  for (const auto& t : m.triangles) {
+    const Vec a = L * m.points[t[0]], b = L * m.points[t[1]], c = L * m.points[t[2]];
+    const double al = triangle_alpha_2d(a, b, c);
+    sum += al;
+    s.min_alpha = std::min(s.min_alpha, al);
+    s.min_angle_deg = std::min({s.min_angle_deg, angle_at(a, b, c), angle_at(b, c, a), angle_at(c, a, b)});
+  }
+  s.mean_alpha = sum / static_cast<double>(m.triangles.size());
+  return s;
+}
+
+TEST(Front2dMetric, QualityInMetricHandComputed) {
+  // Under M = diag(1, 4), y-lengths double: (0,0), (1,0), (1/2, sqrt(3)/4) is equilateral.
+  const Eigen::Matrix2d M = Eigen::Vector2d(1.0, 4.0).asDiagonal();
+  const Vec a(0, 0), b(1, 0), c(0.5, std::sqrt(3.0) / 4);
+  EXPECT_NEAR(triangle_alpha_in_metric(a, b, c, M), 1.0, 1e-14);
+  EXPECT_NEAR(triangle_min_angle_in_metric_deg(a, b, c, M), 60.0, 1e-9);
+  EXPECT_NEAR(triangle_alpha_in_metric(a, c, b, M), -1.0, 1e-14);
+  // Euclidean: sides 1, l, l with l^2 = 1/4 + 3/16 = 7/16; area sqrt(3)/8.
+  EXPECT_NEAR(triangle_alpha_in_metric(a, b, c, Eigen::Matrix2d::Identity()),
+              4 * std::sqrt(3.0) * (std::sqrt(3.0) / 8) / (1 + 2 * 7.0 / 16), 1e-14);
+  EXPECT_DOUBLE_EQ(triangle_alpha_in_metric(a, b, c, Eigen::Matrix2d::Identity()), triangle_alpha_2d(a, b, c));
+  // Right isosceles triangle in the identity: smallest angle 45 deg, alpha = sqrt(3)/2.
+  EXPECT_NEAR(triangle_min_angle_in_metric_deg({0, 0}, {1, 0}, {0, 1}, Eigen::Matrix2d::Identity()), 45.0, 1e-9);
+  const ParaboloidMetric par(0.5);
+  const Eigen::Matrix2d tm = triangle_metric(par, a, b, c);
+  EXPECT_NEAR(tm(0, 0), 1.0 + (0.0 + 1.0 + 0.25) / 3, 1e-14);
+  EXPECT_NEAR(tm(1, 1), 1.0 + (0.0 + 0.0 + 3.0 / 16) / 3, 1e-14);
+}
+
+TEST(Front2dMetric, IdentityMetricGivesTheSameMesh) {
+  Pslg p = polygon({{0, 0}, {3, 0}, {3, 2}, {0, 2}});
+  add_loop(p, {{1, 0.5}, {2, 0.7}, {1.6, 1.4}});
+  p.holes.push_back({1.5, 0.9});
+  for (const Pslg& dom : {p, read_pslg(test::test_data("pslg/fish.poly"))}) {
+    FrontOptions o;
+    const Mesh2d plain = mesh_pslg(dom, o);
+    o.metric = std::make_shared<ConstantMetric>(Eigen::Matrix2d::Identity());
+    const Mesh2d ident = mesh_pslg(dom, o);
+    ASSERT_EQ(plain.points.size(), ident.points.size());
+    EXPECT_EQ(plain.points, ident.points);
+    EXPECT_EQ(plain.triangles, ident.triangles);
+    EXPECT_EQ(plain.report.n_swaps, ident.report.n_swaps);
+  }
+}
+
+TEST(Front2dMetric, ConstantAnisotropicMetricGivesIsotropicImage) {
+  // M = diag(1, 4): the mesh mapped by M^{1/2} = diag(1, 2) is a mesh of the 1 x 2 rectangle
+  // at h, and must be as good as an isotropic mesh of that rectangle.
+  const Eigen::Matrix2d M = Eigen::Vector2d(1.0, 4.0).asDiagonal();
+  const Eigen::Matrix2d L = Eigen::Vector2d(1.0, 2.0).asDiagonal();
+  Pslg p = polygon({{0, 0}, {1, 0}, {1, 1}, {0, 1}});
+  add_loop(p, {{0.3, 0.3}, {0.3, 0.45}, {0.6, 0.45}, {0.6, 0.3}});
+  p.holes.push_back({0.4, 0.4});
+  FrontOptions o = uniform(0.05);
+  o.metric = std::make_shared<ConstantMetric>(M);
+  const Mesh2d m = mesh_pslg(p, o);
+  EXPECT_EQ(check_mesh(p, m, 1.0 - 0.3 * 0.15), "");
+  const Stats s = mapped_stats(m, L);
+  // The isotropic reference: the image domain meshed without a metric.
+  Pslg q = p;
+  for (auto& x : q.points) x = L * x;
+  for (auto& x : q.holes) x = L * x;
+  const Mesh2d iso = mesh_pslg(q, uniform(0.05));
+  const Stats r = mapped_stats(iso, Eigen::Matrix2d::Identity());
+  EXPECT_GE(s.mean_alpha, 0.9);
+  // Comparable to the isotropic mesh (a Euclidean optimiser left 17 deg here).
+  EXPECT_GE(s.min_angle_deg, std::min(25.0, r.min_angle_deg - 5.0));
+  EXPECT_NEAR(static_cast<double>(m.triangles.size()), static_cast<double>(iso.triangles.size()), 0.1 * static_cast<double>(iso.triangles.size()));
+}
+
+TEST(Front2dMetric, ParaboloidHeightFieldMetric) {
+  // f = c (x^2 + y^2) over the unit disk with slope 60 deg at its rim (2 c = tan 60 deg).
+  const double c = std::sqrt(3.0) / 2.0;
+  std::vector<Vec> circle;
+  for (int i = 0; i < 64; ++i) circle.emplace_back(std::cos(2 * std::numbers::pi * i / 64), std::sin(2 * std::numbers::pi * i / 64));
+  const Pslg p = polygon(circle);
+  FrontOptions o = uniform(0.08);
+  o.metric = std::make_shared<ParaboloidMetric>(c);
+  const Mesh2d m = mesh_pslg(p, o);
+  EXPECT_EQ(check_mesh(p, m, m.report.domain_area), "");
+  auto lift = [&](const Vec& x) { return Eigen::Vector3d(x.x(), x.y(), c * x.squaredNorm()); };
+  double sum = 0, min_angle = 180, sum_plain = 0;
+  for (const auto& t : m.triangles) {
+    const Eigen::Vector3d a = lift(m.points[t[0]]), b = lift(m.points[t[1]]), d = lift(m.points[t[2]]);
+    const double area = 0.5 * (b - a).cross(d - a).norm();
+    sum += 4 * std::sqrt(3.0) * area / ((b - a).squaredNorm() + (d - b).squaredNorm() + (a - d).squaredNorm());
+    for (int i = 0; i < 3; ++i) {
+      const Eigen::Vector3d& x = i == 0 ? a : (i == 1 ? b : d);
+      const Eigen::Vector3d& y = i == 0 ? b : (i == 1 ? d : a);
+      const Eigen::Vector3d& z = i == 0 ? d : (i == 1 ? a : b);
+      min_angle = std::min(min_angle, std::acos((y - x).normalized().dot((z - x).normalized())) * 180 / std::numbers::pi);
+    }
+    sum_plain += triangle_alpha_2d(m.points[t[0]], m.points[t[1]], m.points[t[2]]);
+  }
+  const double mean = sum / static_cast<double>(m.triangles.size());
+  EXPECT_GE(mean, 0.9);
+  EXPECT_GE(min_angle, 25.0);  // a Euclidean optimiser left 19 deg here
+  // In the plane the triangles are stretched along the slope: worse than on the surface.
+  EXPECT_LT(sum_plain / static_cast<double>(m.triangles.size()), mean);
+}
+
+// ---------------------------------------------------------------- touching loops
+
+// Points along the closed polyline `corners` (the first point not repeated), about `step`
+// apart on each side; returns their indices appended to p.points (the corners included).
+std::vector<int> discretise(Pslg& p, const std::vector<Vec>& corners, double step, std::vector<int> fixed = {}) {
+  std::vector<int> idx;
+  for (std::size_t i = 0; i < corners.size(); ++i) {
+    const Vec a = corners[i], b = corners[(i + 1) % corners.size()];
+    const int n = std::max(1, static_cast<int>(std::lround((b - a).norm() / step)));
+    for (int k = 0; k < n; ++k) {
+      if (k == 0 && i < fixed.size() && fixed[i] >= 0) {
+        idx.push_back(fixed[i]);
+        continue;
+      }
+      idx.push_back(static_cast<int>(p.points.size()));
+      p.points.push_back(a + (b - a) * (static_cast<double>(k) / n));
+    }
+  }
+  for (std::size_t i = 0; i < idx.size(); ++i) p.segments.push_back({idx[i], idx[(i + 1) % idx.size()]});
+  return idx;
+}
+
+// Mesh with split_segments on and off; both must be valid, oriented, conforming, of the area.
+void expect_touching_domain(const Pslg& p, double area, double h) {
+  for (bool split : {false, true}) {
+    SCOPED_TRACE(split ? "split_segments" : "segments final");
+    FrontOptions o = uniform(h);
+    o.split_segments = split;
+    const Mesh2d m = mesh_pslg(p, o);
+    Stats s;
+    EXPECT_EQ(check_mesh(p, m, area, &s), "");
+    EXPECT_NEAR(m.report.domain_area, area, 1e-12);
+    EXPECT_GE(s.mean_alpha, 0.85);
+  }
+}
+
+TEST(Front2dTouching, OuterLoopTouchesHoleAtOneVertex) {
+  // The square [0, 4]^2 and a diamond hole whose bottom vertex is the point (2, 0) of the
+  // square's bottom side: that point has 4 incident segments.
+  const double h = 0.25;
+  Pslg p;
+  const std::vector<int> outer = discretise(p, {{0, 0}, {2, 0}, {4, 0}, {4, 4}, {0, 4}}, h);
+  const int touch = outer[8];
+  ASSERT_EQ(p.points[touch], Vec(2, 0));
+  discretise(p, {{2, 0}, {1, 1}, {2, 2}, {3, 1}}, h, {touch});
+  p.holes.push_back({2, 1});
+  expect_touching_domain(p, 16.0 - 2.0, h);
+  // A hole touching the outer loop at a corner of both (the outer corner of 90 deg is split
+  // into angles of about 26.6 deg, the hole's own and 26.6 deg).
+  Pslg q;
+  const std::vector<int> o2 = discretise(q, {{0, 0}, {4, 0}, {4, 4}, {0, 4}}, h);
+  discretise(q, {{0, 0}, {1, 2}, {1.5, 1.5}, {2, 1}}, h, {o2[0]});
+  q.holes.push_back({1.2, 1.2});
+  expect_touching_domain(q, 16.0 - 1.5, h);
+}
+
+TEST(Front2dTouching, TwoLobesJoinedAtOneVertex) {
+  const double h = 0.2;
+  Pslg p;
+  const std::vector<int> a = discretise(p, {{0, 0}, {2, 0}, {2, 2}, {0, 2}}, h);
+  discretise(p, {{2, 2}, {4, 2}, {4, 4}, {2, 4}}, h, {a[20]});
+  ASSERT_EQ(p.points[a[20]], Vec(2, 2));
+  expect_touching_domain(p, 8.0, h);
+  // Lobes meeting at a sharp vertex (input angles 30 deg on both sides).
+  Pslg q;
+  const std::vector<int> b = discretise(q, {{0, 0}, {2, -0.5}, {2, 0.5}}, 0.1);
+  const int apex = b[0];
+  discretise(q, {{0, 0}, {-2, 0.5}, {-2, -0.5}}, 0.1, {apex});
+  expect_touching_domain(q, 2.0, 0.1);
+}
+
+TEST(Front2dTouching, VeryNonUniformFinalBoundary) {
+  // Border nodes spaced 0.2 h .. 3 h (random), segments final (split_segments = false).
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> u(0.2, 3.0);
+  const double h = 0.05;
+  for (int shape = 0; shape < 2; ++shape) {
+    SCOPED_TRACE(shape);
+    std::vector<Vec> pts;
+    if (shape == 0) {  // circle of radius 1
+      double t = 0;
+      while (t < 2 * std::numbers::pi - 0.2 * h) {
+        pts.emplace_back(std::cos(t), std::sin(t));
+        t += u(rng) * h;
+      }
+    } else {  // unit square with random spacing on each side
+      const std::vector<Vec> c = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+      for (int side = 0; side < 4; ++side) {
+        double t = 0;
+        while (t < 1.0 - 0.2 * h) {
+          pts.push_back(c[side] + t * (c[(side + 1) % 4] - c[side]));
+          t += u(rng) * h;
+        }
+      }
+    }
+    const Pslg p = polygon(pts);
+    FrontOptions o = uniform(h);
+    o.split_segments = false;
+    const Mesh2d m = mesh_pslg(p, o);
+    Stats s;
+    EXPECT_EQ(check_mesh(p, m, loop_area(pts), &s), "");
+    for (const auto& ch : m.segment_chains) EXPECT_EQ(ch.size(), 2u);
+    EXPECT_GE(s.mean_alpha, 0.85);
+  }
 }
 
 // ---------------------------------------------------------------- files

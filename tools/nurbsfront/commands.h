@@ -12,6 +12,8 @@ void add_stats_command(CLI::App& app);
 void add_mc_command(CLI::App& app);
 void add_mesh2d_command(CLI::App& app);
 void add_fit_command(CLI::App& app);
+void add_remesh_command(CLI::App& app);
+void add_patch_command(CLI::App& app);
 
 //! Registers every subcommand (called once by main).
 inline void add_all_commands(CLI::App& app) {
@@ -21,6 +23,8 @@ inline void add_all_commands(CLI::App& app) {
   add_mc_command(app);
   add_mesh2d_command(app);
   add_fit_command(app);
+  add_remesh_command(app);
+  add_patch_command(app);
 }
 
 }  // namespace nurbsfront::cli

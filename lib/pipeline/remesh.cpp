@@ -1,0 +1,135 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// remesh(): the stages in order, their timings and counts, and the output's report.
+#include "nurbsfront/pipeline/remesh.h"
+
+#include <string>
+#include <utility>
+
+#include "nurbsfront/core/error.h"
+#include "nurbsfront/core/stopwatch.h"
+
+namespace nurbsfront {
+
+void RemeshOptions::set_threads(unsigned n) {
+  if (n == 0) throw InvalidInput("remesh: the thread count must be >= 1");
+  surfmesh.threads = static_cast<int>(n);
+  stitch.n_threads = n;
+  distance.n_threads = n;
+}
+
+void RemeshOptions::validate() const {
+  segment.validate();
+  surfmesh.validate();
+  stitch.validate();
+  if (compute_distances) distance.validate();
+}
+
+const char* to_string(PatchStatus status) {
+  switch (status) {
+    case PatchStatus::Ok: return "ok";
+    case PatchStatus::FitFailed: return "fit_failed";
+    case PatchStatus::MeshFailed: return "mesh_failed";
+  }
+  return "unknown";
+}
+
+namespace {
+
+// Input checks before any work: what segment() and mesh_surface() assume.
+void check_input(const TriMesh& input) {
+  if (input.n_faces() == 0) throw InvalidInput("remesh: the input mesh has no faces");
+  if (input.has_vertex_status() && input.has_face_status()) {
+    for (auto v : input.all_vertices()) {
+      if (input.status(v).deleted()) throw InvalidInput("remesh: the input mesh has deleted elements (call garbage_collection())");
+    }
+    for (auto f : input.all_faces()) {
+      if (input.status(f).deleted()) throw InvalidInput("remesh: the input mesh has deleted elements (call garbage_collection())");
+    }
+  }
+  std::size_t n_non_finite = 0, n_non_manifold = 0;
+  for (auto v : input.vertices()) {
+    if (!to_eigen(input.point(v)).allFinite()) ++n_non_finite;
+    if (!input.is_manifold(v)) ++n_non_manifold;
+  }
+  if (n_non_finite > 0) {
+    throw InvalidInput("remesh: the input mesh has " + std::to_string(n_non_finite) +
+                       " vertices with non-finite (NaN or infinite) coordinates");
+  }
+  if (n_non_manifold > 0) {
+    throw InvalidInput("remesh: the input mesh has " + std::to_string(n_non_manifold) +
+                       " non-manifold vertices (several face fans meet at one vertex)");
+  }
+}
+
+// A stage's callback that also feeds the run's callback (both must agree to go on).
+ProgressCallback chained(const ProgressCallback& top, const ProgressCallback& own) {
+  if (!top) return own;
+  return [top, own](std::string_view stage, double fraction) {
+    const bool go_on = !own || own(stage, fraction);
+    return top(stage, fraction) && go_on;
+  };
+}
+
+}  // namespace
+
+RemeshResult remesh(const TriMesh& input, const RemeshOptions& options) {
+  options.validate();
+  check_input(input);
+  Stopwatch total;
+  RemeshResult result;
+  RemeshReport& report = result.report;
+  report.n_input_vertices = input.n_vertices();
+  report.n_input_faces = input.n_faces();
+
+  SegmentOptions segment_options = options.segment;
+  segment_options.progress = chained(options.progress, options.segment.progress);
+  SurfMeshOptions surfmesh_options = options.surfmesh;
+  surfmesh_options.crease_angle_deg = options.segment.crease_angle_deg;
+  surfmesh_options.progress = chained(options.progress, options.surfmesh.progress);
+  StitchOptions stitch_options = options.stitch;
+  stitch_options.progress = chained(options.progress, options.stitch.progress);
+
+  Stopwatch watch;
+  const Segmentation segmentation = segment(input, segment_options);
+  report.seconds_segment = watch.seconds();
+  report.n_patches = segmentation.patches.size();
+  report.n_curves = segmentation.curves.size();
+  report.n_corners = segmentation.corners.size();
+
+  watch.restart();
+  const SurfaceMesh surface = mesh_surface(input, segmentation, surfmesh_options);
+  report.seconds_surfmesh = watch.seconds();
+  report.n_nodes = surface.nodes.size();
+  report.target_size = surface.target_size;
+  report.input_mean_edge = surface.input_mean_edge;
+  report.patches = surface.patches;
+  for (std::size_t p = 0; p < surface.patches.size(); ++p) {
+    const PatchMeshReport& patch = surface.patches[p];
+    if (patch.status == PatchStatus::Ok) continue;
+    ++report.n_failed_patches;
+    report.errors.push_back("patch " + std::to_string(p) + " (" + std::to_string(patch.n_input_faces) +
+                            " input faces): " + to_string(patch.status) + ": " + patch.message);
+  }
+
+  watch.restart();
+  StitchResult stitched = stitch(surface, input, stitch_options);
+  report.seconds_stitch = watch.seconds();
+  for (const auto& e : stitched.report.errors) report.errors.push_back("stitch: " + e);
+  report.output = stitched.report.output;
+  report.stitch = std::move(stitched.report);
+  result.mesh = std::move(stitched.mesh);
+  result.face_patch = std::move(stitched.face_patch);
+  report.n_triangles = result.mesh.n_faces();
+
+  watch.restart();
+  if (options.compute_distances && result.mesh.n_faces() > 0) {
+    DistanceOptions distance = options.distance;
+    distance.progress = chained(options.progress, options.distance.progress);
+    report.output.distance = mesh_distance(to_soup(result.mesh), to_soup(input), distance);
+  }
+  report.seconds_distance = watch.seconds();
+  report.seconds_total = total.seconds();
+  return result;
+}
+
+}  // namespace nurbsfront

@@ -1,0 +1,101 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#pragma once
+//! \file
+//! The remeshing pipeline, the library's main entry point (DESIGN.md, "Pipeline"):
+//! segment -> surfmesh (border discretisation, fit, 2D front per patch) -> stitch ->
+//! report (quality of the output and its distance to the input).
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "nurbsfront/core/mesh_types.h"
+#include "nurbsfront/core/progress.h"
+#include "nurbsfront/quality/report.h"
+#include "nurbsfront/segment/segment.h"
+#include "nurbsfront/stitch/stitch.h"
+#include "nurbsfront/surfmesh/surfmesh.h"
+
+namespace nurbsfront {
+
+//! Options of remesh(): one sub-struct per stage.
+struct RemeshOptions {
+  //! Segmentation into slope-bounded patches (max slope, crease angle, ...).
+  SegmentOptions segment;
+  //! Sizing, fit and per-patch meshing (target edge length, threads, ...).
+  //! surfmesh.crease_angle_deg is replaced by segment.crease_angle_deg.
+  SurfMeshOptions surfmesh;
+  //! Assembly, cross-border optimisation and verification.
+  StitchOptions stitch;
+  //! Measure the two-sided distance of the output to the input (Hausdorff, mean,
+  //! relative volume change) into the report. Default true.
+  bool compute_distances = true;
+  //! Options of that measurement (sample spacing, threads).
+  DistanceOptions distance;
+  //! Progress and cancellation for the whole run. When set, it receives every stage's
+  //! progress (stages "segment", "surfmesh: ...", "stitch: ...", "distance"); a stage's own
+  //! callback, if set too, is called as well. Returning false cancels (Cancelled).
+  ProgressCallback progress;
+  //! The same thread count for every stage (surfmesh workers, checks, distances); n >= 1.
+  void set_threads(unsigned n);
+  //! \throw InvalidInput if any stage's options are invalid.
+  void validate() const;
+};
+
+//! Counts and timings of a run, the per-patch status, the output's quality and distances.
+struct RemeshReport {
+  std::size_t n_input_vertices = 0;
+  std::size_t n_input_faces = 0;
+  std::size_t n_patches = 0;
+  std::size_t n_curves = 0;
+  std::size_t n_corners = 0;
+  std::size_t n_nodes = 0;        //!< nodes of the surface mesh (before stitching)
+  std::size_t n_triangles = 0;    //!< triangles of the output
+  std::size_t n_failed_patches = 0;  //!< patches whose status is not Ok
+  double target_size = 0.0;       //!< resolved uniform target edge length (length units)
+  double input_mean_edge = 0.0;   //!< mean edge length of the input
+  double seconds_segment = 0.0;
+  double seconds_surfmesh = 0.0;
+  double seconds_stitch = 0.0;
+  double seconds_distance = 0.0;
+  double seconds_total = 0.0;
+  std::vector<PatchMeshReport> patches;  //!< one per patch (SurfaceMesh::patches)
+  //! The stitch stage's counts (flips, moves, rejected triangles, components).
+  StitchReport stitch;
+  //! Topology and quality of the output, and (compute_distances) its distance to the
+  //! input. (stitch.output holds the same report without the distance.)
+  MeshReport output;
+  //! Contract violations and failed patches, one line each.
+  std::vector<std::string> errors;
+  [[nodiscard]] bool ok() const { return errors.empty(); }
+};
+
+//! The remeshed surface, the patch of each of its faces, and the report.
+struct RemeshResult {
+  TriMesh mesh;
+  std::vector<int> face_patch;
+  RemeshReport report;
+};
+
+//! Remeshes a triangle surface (DESIGN.md, "Pipeline"): segment(), mesh_surface(),
+//! stitch() against the input, then the output's quality and distance report.
+//! Contract violations of the output and failed patches are errors in the report
+//! (RemeshReport::ok() is false), never exceptions.
+//! \param input a 2-manifold triangle mesh (open or closed, any number of components),
+//!        without deleted elements; weld and clean it first (io's clean()).
+//! \throw InvalidInput for invalid options, an empty mesh, non-finite coordinates, deleted
+//!        elements or non-manifold vertices (the message names the problem).
+//! \throw Cancelled if a progress callback returns false.
+[[nodiscard]] RemeshResult remesh(const TriMesh& input, const RemeshOptions& options = {});
+
+//! JSON object: counts, seconds, patches (status counts and the failed ones), stitch,
+//! output (the quality module's MeshReport JSON), errors.
+[[nodiscard]] std::string to_json(const RemeshReport& report);
+
+//! A short human-readable summary (a few lines).
+[[nodiscard]] std::string to_summary(const RemeshReport& report);
+
+//! Name of a patch status ("ok", "fit_failed", "mesh_failed").
+[[nodiscard]] const char* to_string(PatchStatus status);
+
+}  // namespace nurbsfront

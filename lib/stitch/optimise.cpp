@@ -1,0 +1,221 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Cross-border optimisation of the stitched mesh: edge flips and smoothing constrained to
+// the fitted patch surfaces. Both sweeps run in index order (Gauss-Seidel), so the
+// result depends only on the input.
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <numbers>
+
+#include <Eigen/Geometry>
+
+#include "nurbsfront/core/tolerances.h"
+#include "nurbsfront/stitch/stitch_internal.h"
+
+namespace nurbsfront::stitch_detail {
+
+namespace {
+
+using Vec = Eigen::Vector3d;
+
+Vec point(const TriMesh& mesh, TriMesh::VertexHandle v) { return to_eigen(mesh.point(v)); }
+
+// Twice the area vector (a, b, c counter-clockwise).
+Vec area_vector(const Vec& a, const Vec& b, const Vec& c) { return (b - a).cross(c - a); }
+
+// What the optimisation may do with a vertex.
+struct NodeInfo {
+  bool is_movable = false;  // inner node, or border node of a non-feature curve between two patches
+  int patch0 = -1;          // inner: its patch; border: the two patches it lies between
+  int patch1 = -1;
+  int curve = -1;           // border: its curve; -1 otherwise
+  bool is_corner = false;
+};
+
+class Optimiser {
+ public:
+  Optimiser(const SurfaceMesh& surface, const StitchOptions& options, StitchResult& result)
+      : surface_(surface), options_(options), mesh_(result.mesh), face_patch_(result.face_patch) {
+    const double diagonal = bounding_box(mesh_).diagonal();
+    min_double_area_ = 2.0 * tolerance::kDegenerateAreaRelative * diagonal * diagonal;
+    cos_dihedral_ = std::cos(options.max_flip_dihedral_deg * std::numbers::pi / 180.0);
+    classify_nodes(result.vertex_node);
+  }
+
+  std::size_t flip_sweep() {
+    std::size_t n_flips = 0;
+    for (auto e : mesh_.edges()) {
+      if (mesh_.is_boundary(e) || is_locked(e) || !mesh_.is_flip_ok(e)) continue;
+      const auto h0 = mesh_.halfedge_handle(e, 0);
+      const auto h1 = mesh_.halfedge_handle(e, 1);
+      const auto va = mesh_.from_vertex_handle(h0);
+      const auto vb = mesh_.to_vertex_handle(h0);
+      const auto vc = mesh_.to_vertex_handle(mesh_.next_halfedge_handle(h0));
+      const auto vd = mesh_.to_vertex_handle(mesh_.next_halfedge_handle(h1));
+      const Vec a = point(mesh_, va), b = point(mesh_, vb), c = point(mesh_, vc), d = point(mesh_, vd);
+      // Old triangles (a, b, c), (b, a, d); new ones (a, d, c), (d, b, c).
+      const Vec n0 = area_vector(a, b, c), n1 = area_vector(b, a, d);
+      const Vec n2 = area_vector(a, d, c), n3 = area_vector(d, b, c);
+      if (n2.norm() <= min_double_area_ || n3.norm() <= min_double_area_) continue;
+      if (!within_dihedral(n0, n1) || !within_dihedral(n2, n3)) continue;
+      const Vec old_normal = n0.normalized() + n1.normalized();
+      if (n2.dot(old_normal) <= 0.0 || n3.dot(old_normal) <= 0.0) continue;
+      const double old_min = std::min(triangle_alpha(a, b, c), triangle_alpha(b, a, d));
+      const double new_min = std::min(triangle_alpha(a, d, c), triangle_alpha(d, b, c));
+      if (!(new_min > (1.0 + options_.flip_gain) * old_min)) continue;
+      mesh_.flip(e);
+      ++n_flips;
+    }
+    return n_flips;
+  }
+
+  // Returns {accepted, rejected}.
+  std::array<std::size_t, 2> smoothing_sweep() {
+    std::array<std::size_t, 2> counts{0, 0};
+    for (auto v : mesh_.vertices()) {
+      const NodeInfo& info = nodes_[static_cast<std::size_t>(v.idx())];
+      if (!info.is_movable || mesh_.is_boundary(v)) continue;
+      const Vec p = point(mesh_, v);
+      // Area-weighted centroid of the incident triangles.
+      Vec centroid = Vec::Zero();
+      double total = 0.0;
+      ring_.clear();
+      for (auto h : mesh_.voh_range(v)) {
+        const auto vb = mesh_.to_vertex_handle(h);
+        const auto vc = mesh_.to_vertex_handle(mesh_.next_halfedge_handle(h));
+        const Vec b = point(mesh_, vb), c = point(mesh_, vc);
+        const double area = area_vector(p, b, c).norm();
+        centroid += area * (p + b + c) / 3.0;
+        total += area;
+        ring_.push_back({b, c});
+      }
+      if (!(total > 0.0) || ring_.empty()) continue;
+      centroid /= total;
+      const Vec target = p + options_.smoothing_relaxation * (centroid - p);
+      Vec q;
+      if (info.curve < 0) {
+        q = surface_.surfaces[static_cast<std::size_t>(info.patch0)].project(target);
+      } else {
+        q = 0.5 * (surface_.surfaces[static_cast<std::size_t>(info.patch0)].project(target) +
+                   surface_.surfaces[static_cast<std::size_t>(info.patch1)].project(target));
+      }
+      if (!q.allFinite()) continue;
+      double old_min = 1.0, new_min = 1.0;
+      bool ok = true;
+      for (const auto& [b, c] : ring_) {
+        const Vec n_old = area_vector(p, b, c);
+        const Vec n_new = area_vector(q, b, c);
+        const double l_old = n_old.norm(), l_new = n_new.norm();
+        if (l_new <= min_double_area_ || (l_old > 0.0 && n_new.dot(n_old) <= options_.min_normal_dot * l_old * l_new)) {
+          ok = false;
+          break;
+        }
+        old_min = std::min(old_min, triangle_alpha(p, b, c));
+        new_min = std::min(new_min, triangle_alpha(q, b, c));
+      }
+      if (ok && new_min >= std::min(old_min, options_.alpha_floor)) {
+        mesh_.set_point(v, to_openmesh(q));
+        ++counts[0];
+      } else {
+        ++counts[1];
+      }
+    }
+    return counts;
+  }
+
+ private:
+  void classify_nodes(const std::vector<int>& vertex_node) {
+    nodes_.assign(mesh_.n_vertices(), NodeInfo{});
+    for (auto v : mesh_.vertices()) {
+      const auto node = static_cast<std::size_t>(vertex_node[static_cast<std::size_t>(v.idx())]);
+      NodeInfo& info = nodes_[static_cast<std::size_t>(v.idx())];
+      switch (surface_.node_kind[node]) {
+        case NodeKind::Corner:
+          info.is_corner = true;
+          break;
+        case NodeKind::Inner:
+          info.patch0 = surface_.node_owner[node];
+          info.is_movable = true;
+          break;
+        case NodeKind::Border: {
+          info.curve = surface_.node_owner[node];
+          // The patches of its triangles, before any flip: exactly two for a node that may move.
+          int p0 = -1, p1 = -1;
+          bool more = false;
+          for (auto f : mesh_.vf_range(v)) {
+            const int p = face_patch_[static_cast<std::size_t>(f.idx())];
+            if (p0 < 0 || p == p0) {
+              p0 = p;
+            } else if (p1 < 0 || p == p1) {
+              p1 = p;
+            } else {
+              more = true;
+            }
+          }
+          info.patch0 = p0;
+          info.patch1 = p1;
+          info.is_movable = !more && p1 >= 0 && !surface_.curve_is_feature[static_cast<std::size_t>(info.curve)];
+          break;
+        }
+      }
+    }
+  }
+
+  // An edge between two patches lies on a border curve; it may flip only when the curve
+  // is known (one end is a border node) and is not a feature.
+  bool is_locked(TriMesh::EdgeHandle e) const {
+    const auto h = mesh_.halfedge_handle(e, 0);
+    const int pf = face_patch_[static_cast<std::size_t>(mesh_.face_handle(h).idx())];
+    const int pg = face_patch_[static_cast<std::size_t>(mesh_.opposite_face_handle(h).idx())];
+    const NodeInfo& a = nodes_[static_cast<std::size_t>(mesh_.from_vertex_handle(h).idx())];
+    const NodeInfo& b = nodes_[static_cast<std::size_t>(mesh_.to_vertex_handle(h).idx())];
+    // Both ends on one feature curve (or a corner and a feature curve's node): a crease edge.
+    const int curve = a.curve >= 0 ? a.curve : b.curve;
+    const bool on_curve = (a.curve >= 0 || a.is_corner) && (b.curve >= 0 || b.is_corner) &&
+                          (a.curve < 0 || b.curve < 0 || a.curve == b.curve);
+    if (on_curve && curve >= 0 && surface_.curve_is_feature[static_cast<std::size_t>(curve)]) return true;
+    if (pf == pg) return false;
+    return !on_curve || curve < 0;
+  }
+
+  bool within_dihedral(const Vec& n0, const Vec& n1) const {
+    return n0.dot(n1) >= cos_dihedral_ * n0.norm() * n1.norm();
+  }
+
+  const SurfaceMesh& surface_;
+  const StitchOptions& options_;
+  TriMesh& mesh_;
+  const std::vector<int>& face_patch_;
+  std::vector<NodeInfo> nodes_;
+  std::vector<std::array<Vec, 2>> ring_;
+  double min_double_area_ = 0.0;
+  double cos_dihedral_ = 1.0;
+};
+
+}  // namespace
+
+std::vector<double> face_alphas(const TriMesh& mesh) {
+  std::vector<double> alpha;
+  alpha.reserve(mesh.n_faces());
+  for (auto f : mesh.faces()) {
+    std::array<Vec, 3> p;
+    int k = 0;
+    for (auto v : mesh.fv_range(f)) p[static_cast<std::size_t>(k++)] = point(mesh, v);
+    alpha.push_back(triangle_alpha(p[0], p[1], p[2]));
+  }
+  return alpha;
+}
+
+void optimise(const SurfaceMesh& surface, const StitchOptions& options, StitchResult& result, StitchReport& report) {
+  Optimiser optimiser(surface, options, result);
+  for (int pass = 0; pass < options.optimisation_passes; ++pass) {
+    report_progress(options.progress, "stitch: optimise", double(pass) / options.optimisation_passes);
+    report.n_flips += optimiser.flip_sweep();
+    const auto counts = optimiser.smoothing_sweep();
+    report.n_smoothing_moves += counts[0];
+    report.n_smoothing_rejected += counts[1];
+  }
+  report_progress(options.progress, "stitch: optimise", 1.0);
+}
+
+}  // namespace nurbsfront::stitch_detail

@@ -1,0 +1,348 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// stitch(): assembly by global node id, optimisation (optimise.cpp), verification.
+#include "nurbsfront/stitch/stitch.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+
+#include "nurbsfront/core/error.h"
+#include "nurbsfront/core/stopwatch.h"
+#include "nurbsfront/stitch/stitch_internal.h"
+
+namespace nurbsfront {
+
+void StitchOptions::validate() const {
+  auto fail = [](const std::string& what) { throw InvalidInput("stitch: " + what); };
+  if (optimisation_passes < 0) fail("optimisation_passes must be >= 0");
+  if (!(max_flip_dihedral_deg >= 0.0 && max_flip_dihedral_deg < 180.0)) fail("max_flip_dihedral_deg must be in [0, 180)");
+  if (!(flip_gain >= 0.0) || !std::isfinite(flip_gain)) fail("flip_gain must be finite and >= 0");
+  if (!(smoothing_relaxation > 0.0 && smoothing_relaxation <= 1.0)) fail("smoothing_relaxation must be in (0, 1]");
+  if (!(min_normal_dot >= -1.0 && min_normal_dot < 1.0)) fail("min_normal_dot must be in [-1, 1)");
+  if (!(alpha_floor >= 0.0 && alpha_floor <= 1.0)) fail("alpha_floor must be in [0, 1]");
+  if (n_threads == 0) fail("n_threads must be >= 1");
+}
+
+namespace {
+
+void validate_surface(const SurfaceMesh& s) {
+  auto fail = [](const std::string& what) { throw InvalidInput("stitch: invalid SurfaceMesh: " + what); };
+  const std::size_t n = s.nodes.size();
+  if (s.node_kind.size() != n) fail("node_kind has " + std::to_string(s.node_kind.size()) + " entries for " + std::to_string(n) + " nodes");
+  if (s.node_owner.size() != n) fail("node_owner has " + std::to_string(s.node_owner.size()) + " entries for " + std::to_string(n) + " nodes");
+  if (s.triangle_patch.size() != s.triangles.size()) {
+    fail("triangle_patch has " + std::to_string(s.triangle_patch.size()) + " entries for " +
+         std::to_string(s.triangles.size()) + " triangles");
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!s.nodes[i].allFinite()) fail("node " + std::to_string(i) + " has non-finite coordinates");
+    const int owner = s.node_owner[i];
+    switch (s.node_kind[i]) {
+      case NodeKind::Corner:
+        break;
+      case NodeKind::Border:
+        if (owner < 0 || static_cast<std::size_t>(owner) >= s.curve_is_feature.size()) {
+          fail("border node " + std::to_string(i) + " names curve " + std::to_string(owner) + " of " +
+               std::to_string(s.curve_is_feature.size()));
+        }
+        break;
+      case NodeKind::Inner:
+        if (owner < 0 || static_cast<std::size_t>(owner) >= s.surfaces.size()) {
+          fail("inner node " + std::to_string(i) + " names patch " + std::to_string(owner) + " of " +
+               std::to_string(s.surfaces.size()));
+        }
+        break;
+      default:
+        fail("node " + std::to_string(i) + " has an unknown kind");
+    }
+  }
+  for (std::size_t t = 0; t < s.triangles.size(); ++t) {
+    for (int k : s.triangles[t]) {
+      if (k < 0 || static_cast<std::size_t>(k) >= n) fail("triangle " + std::to_string(t) + " names node " + std::to_string(k));
+    }
+    const int patch = s.triangle_patch[t];
+    if (patch < 0 || static_cast<std::size_t>(patch) >= s.surfaces.size()) {
+      fail("triangle " + std::to_string(t) + " names patch " + std::to_string(patch) + " of " + std::to_string(s.surfaces.size()));
+    }
+  }
+}
+
+// OpenMesh's add_face prints to std::cerr before refusing a face; the library is silent,
+// so the cases it refuses are tested first: a repeated vertex, an edge already used in
+// the same direction (a duplicated or flipped face), or a vertex whose fan is closed.
+bool can_add_face(const TriMesh& mesh, const std::array<TriMesh::VertexHandle, 3>& v) {
+  if (v[0] == v[1] || v[1] == v[2] || v[2] == v[0]) return false;
+  for (int k = 0; k < 3; ++k) {
+    if (!mesh.is_boundary(v[k])) return false;
+    const auto h = mesh.find_halfedge(v[k], v[(k + 1) % 3]);
+    if (h.is_valid() && !mesh.is_boundary(h)) return false;
+  }
+  return true;
+}
+
+double mean_of(const std::vector<double>& x) {
+  double sum = 0.0;
+  for (double a : x) sum += a;
+  return x.empty() ? std::numeric_limits<double>::quiet_NaN() : sum / double(x.size());
+}
+
+std::string component_text(std::size_t index, const ComponentSignature& c) {
+  return "component " + std::to_string(index) + " (" + std::to_string(c.n_faces) + " faces, chi " +
+         std::to_string(c.euler_characteristic) + (c.is_closed ? ", closed)" : ", open)");
+}
+
+void compare_with_input(StitchReport& report) {
+  const auto& in = report.input_components;
+  const auto& out = report.output_components;
+  bool in_closed = true, out_closed = true;
+  for (const auto& c : in) in_closed = in_closed && c.is_closed;
+  for (const auto& c : out) out_closed = out_closed && c.is_closed;
+  if (in_closed && !out_closed) {
+    report.errors.push_back("output is open (" + std::to_string(report.output.topology.n_boundary_edges) +
+                            " boundary edges) but the input is closed");
+  }
+  if (!in_closed && out_closed) report.errors.push_back("output is closed but the input is open");
+  if (in.size() != out.size()) {
+    report.errors.push_back("output has " + std::to_string(out.size()) + " components, the input " + std::to_string(in.size()));
+  }
+  // Each output component goes to the input component with the nearest bounding box.
+  std::vector<std::vector<std::size_t>> matched(in.size());
+  for (std::size_t o = 0; o < out.size() && !in.empty(); ++o) {
+    std::size_t best = 0;
+    double best_cost = std::numeric_limits<double>::infinity();
+    for (std::size_t i = 0; i < in.size(); ++i) {
+      const double cost = (out[o].box.min - in[i].box.min).norm() + (out[o].box.max - in[i].box.max).norm();
+      if (cost < best_cost) {
+        best_cost = cost;
+        best = i;
+      }
+    }
+    matched[best].push_back(o);
+  }
+  for (std::size_t i = 0; i < in.size(); ++i) {
+    if (matched[i].empty()) {
+      report.errors.push_back("input " + component_text(i, in[i]) + " has no counterpart in the output");
+    } else if (matched[i].size() > 1) {
+      report.errors.push_back("input " + component_text(i, in[i]) + " became " + std::to_string(matched[i].size()) +
+                              " output components");
+    } else {
+      const auto& o = out[matched[i][0]];
+      if (o.euler_characteristic != in[i].euler_characteristic || o.is_closed != in[i].is_closed) {
+        report.errors.push_back("input " + component_text(i, in[i]) + " became output " +
+                                component_text(matched[i][0], o));
+      }
+    }
+  }
+}
+
+StitchResult stitch_impl(const SurfaceMesh& surface, const TriMesh* input, const StitchOptions& options) {
+  options.validate();
+  validate_surface(surface);
+  StitchResult result;
+  StitchReport& report = result.report;
+  report.n_input_nodes = surface.nodes.size();
+  report.n_input_triangles = surface.triangles.size();
+  report_progress(options.progress, "stitch: assemble", 0.0);
+  Stopwatch watch;
+
+  // 1. Assembly by id.
+  std::vector<char> used(surface.nodes.size(), 0);
+  for (const auto& t : surface.triangles) {
+    for (int k : t) used[static_cast<std::size_t>(k)] = 1;
+  }
+  TriMesh& mesh = result.mesh;
+  std::vector<TriMesh::VertexHandle> handle(surface.nodes.size());
+  for (std::size_t i = 0; i < surface.nodes.size(); ++i) {
+    if (!used[i]) {
+      ++report.n_unused_nodes;
+      continue;
+    }
+    handle[i] = mesh.add_vertex(to_openmesh(surface.nodes[i]));
+    result.vertex_node.push_back(static_cast<int>(i));
+  }
+  for (std::size_t t = 0; t < surface.triangles.size(); ++t) {
+    const auto& tri = surface.triangles[t];
+    const std::array<TriMesh::VertexHandle, 3> v{handle[tri[0]], handle[tri[1]], handle[tri[2]]};
+    if (!can_add_face(mesh, v) || !mesh.add_face(v[0], v[1], v[2]).is_valid()) {
+      ++report.n_rejected_triangles;
+      continue;
+    }
+    result.face_patch.push_back(surface.triangle_patch[t]);
+  }
+  if (report.n_rejected_triangles > 0) {
+    report.errors.push_back(std::to_string(report.n_rejected_triangles) +
+                            " triangles could not be added by node id (a repeated node, an edge used twice in one "
+                            "direction, or a closed vertex fan: duplicated, flipped or overlapping triangles)");
+  }
+  {
+    const std::vector<double> alpha = stitch_detail::face_alphas(mesh);
+    report.alpha_mean_before = mean_of(alpha);
+    double min_alpha = std::numeric_limits<double>::quiet_NaN();
+    for (double a : alpha) min_alpha = std::isnan(min_alpha) ? a : std::min(min_alpha, a);
+    report.alpha_min_before = min_alpha;
+  }
+  report.seconds_assemble = watch.seconds();
+
+  // 2. Cross-border optimisation.
+  watch.restart();
+  const bool optimise = options.optimisation_passes > 0 && mesh.n_faces() > 0;
+  TriMesh assembled;
+  std::vector<int> assembled_patch;
+  if (optimise) {
+    assembled = mesh;
+    assembled_patch = result.face_patch;
+    stitch_detail::optimise(surface, options, result, report);
+  }
+  report.seconds_optimise = watch.seconds();
+
+  // 3. Verification.
+  watch.restart();
+  report_progress(options.progress, "stitch: verify", 0.0);
+  ReportOptions check;
+  check.self_intersections = options.check_self_intersections;
+  check.n_threads = options.n_threads;
+  if (options.progress) {
+    check.progress = [&options](std::string_view, double fraction) { return options.progress("stitch: verify", fraction); };
+  }
+  report.output = mesh_report(to_soup(mesh), check);
+  auto n_intersections = [&report] {
+    return report.output.topology.n_self_intersecting_pairs.value_or(0);
+  };
+  if (optimise && n_intersections() > 0) {
+    // The optimisation may have pushed a node through a nearby sheet (thin walls): move
+    // the nodes of the intersecting triangles back (flips keep vertex indices), then undo
+    // everything if that is not enough. Pairs of two faces the optimisation did not touch
+    // (same vertices, same positions as assembled) were there before and stay reported.
+    auto is_untouched = [&](std::uint32_t f) {
+      const TriMesh::FaceHandle now(static_cast<int>(f));
+      std::array<int, 3> a{}, b{};
+      int k = 0;
+      for (auto v : mesh.fv_range(now)) {
+        if (mesh.point(v) != assembled.point(v)) return false;
+        a[static_cast<std::size_t>(k++)] = v.idx();
+      }
+      k = 0;
+      for (auto v : assembled.fv_range(now)) b[static_cast<std::size_t>(k++)] = v.idx();
+      std::sort(a.begin(), a.end());
+      std::sort(b.begin(), b.end());
+      return a == b;
+    };
+    auto new_pairs = [&] {
+      std::vector<std::array<std::uint32_t, 2>> pairs = self_intersecting_pairs(to_soup(mesh), options.n_threads);
+      std::erase_if(pairs, [&](const auto& p) { return is_untouched(p[0]) && is_untouched(p[1]); });
+      return pairs;
+    };
+    std::vector<std::array<std::uint32_t, 2>> pairs = new_pairs();
+    const bool changed = !pairs.empty();
+    for (int round = 0; round < 3 && !pairs.empty(); ++round) {
+      for (const auto& pair : pairs) {
+        for (const std::uint32_t f : pair) {
+          for (auto v : mesh.fv_range(TriMesh::FaceHandle(static_cast<int>(f)))) {
+            if (mesh.point(v) != assembled.point(v)) {
+              mesh.set_point(v, assembled.point(v));
+              ++report.n_reverted_moves;
+            }
+          }
+        }
+      }
+      pairs = new_pairs();
+    }
+    if (!pairs.empty()) {
+      mesh = std::move(assembled);
+      result.face_patch = std::move(assembled_patch);
+      report.optimisation_undone = true;
+    }
+    if (changed) report.output = mesh_report(to_soup(mesh), check);
+  }
+  const TopologyReport& topo = report.output.topology;
+  if (!topo.is_manifold) {
+    report.errors.push_back("output is not 2-manifold (" + std::to_string(topo.n_nonmanifold_edges) + " edges, " +
+                            std::to_string(topo.n_nonmanifold_vertices) + " vertices)");
+  }
+  if (!topo.is_consistently_oriented) {
+    report.errors.push_back("output is not consistently oriented (" + std::to_string(topo.n_misoriented_edges) +
+                            " misoriented edges)");
+  }
+  if (topo.n_degenerate_faces > 0) {
+    report.errors.push_back("output has " + std::to_string(topo.n_degenerate_faces) + " degenerate triangles");
+  }
+  if (topo.n_duplicate_faces > 0) {
+    report.errors.push_back("output has " + std::to_string(topo.n_duplicate_faces) + " duplicate triangles");
+  }
+  if (topo.n_self_intersecting_pairs && *topo.n_self_intersecting_pairs > 0) {
+    report.errors.push_back("output has " + std::to_string(*topo.n_self_intersecting_pairs) +
+                            " self-intersecting triangle pairs");
+  }
+  if (mesh.n_faces() == 0 && !surface.triangles.empty()) report.errors.push_back("output has no triangles");
+  report.output_components = component_signatures(mesh);
+  if (input != nullptr) {
+    report.input_components = component_signatures(*input);
+    compare_with_input(report);
+  }
+  report.seconds_verify = watch.seconds();
+  report_progress(options.progress, "stitch: verify", 1.0);
+  return result;
+}
+
+}  // namespace
+
+std::vector<ComponentSignature> component_signatures(const TriMesh& mesh) {
+  std::vector<ComponentSignature> components;
+  std::vector<int> face_component(mesh.n_faces(), -1);
+  std::vector<int> vertex_component(mesh.n_vertices(), -1);
+  std::vector<TriMesh::FaceHandle> stack;
+  for (auto seed : mesh.faces()) {
+    if (face_component[seed.idx()] >= 0) continue;
+    const int id = static_cast<int>(components.size());
+    ComponentSignature c;
+    face_component[seed.idx()] = id;
+    stack.assign(1, seed);
+    while (!stack.empty()) {
+      const TriMesh::FaceHandle f = stack.back();
+      stack.pop_back();
+      ++c.n_faces;
+      for (auto h : mesh.fh_range(f)) {
+        const auto opposite = mesh.opposite_halfedge_handle(h);
+        const auto g = mesh.face_handle(opposite);
+        if (!g.is_valid()) {
+          ++c.n_edges;  // boundary edge, counted from its only face
+        } else if (f.idx() < g.idx()) {
+          ++c.n_edges;
+        }
+        const auto v = mesh.to_vertex_handle(h);
+        if (vertex_component[v.idx()] != id) {
+          vertex_component[v.idx()] = id;
+          ++c.n_vertices;
+          c.box.extend(to_eigen(mesh.point(v)));
+          for (auto w : mesh.vf_range(v)) {
+            if (face_component[w.idx()] < 0) {
+              face_component[w.idx()] = id;
+              stack.push_back(w);
+            }
+          }
+        }
+      }
+    }
+    c.euler_characteristic = static_cast<long>(c.n_vertices) - static_cast<long>(c.n_edges) + static_cast<long>(c.n_faces);
+    components.push_back(c);
+  }
+  // Closedness: a component is closed when none of its halfedges is a boundary halfedge.
+  for (auto& c : components) c.is_closed = true;
+  for (auto h : mesh.halfedges()) {
+    if (!mesh.is_boundary(h)) continue;
+    const auto g = mesh.face_handle(mesh.opposite_halfedge_handle(h));
+    if (g.is_valid()) components[static_cast<std::size_t>(face_component[g.idx()])].is_closed = false;
+  }
+  return components;
+}
+
+StitchResult stitch(const SurfaceMesh& surface, const StitchOptions& options) {
+  return stitch_impl(surface, nullptr, options);
+}
+
+StitchResult stitch(const SurfaceMesh& surface, const TriMesh& input, const StitchOptions& options) {
+  return stitch_impl(surface, &input, options);
+}
+
+}  // namespace nurbsfront

@@ -1,0 +1,145 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#pragma once
+//! \file
+//! Stitching: the last stage of the remeshing pipeline (DESIGN.md, "Pipeline", stitch).
+//! The meshed patches (a SurfaceMesh with global node ids) become one OpenMesh TriMesh,
+//! joined by id and never by distance; a cross-border optimisation (edge flips and
+//! smoothing constrained to the fitted surfaces) follows, and the result is verified
+//! against the contract of DESIGN.md ("Contracts: Stitch"). A violation is an error in
+//! the report, never an exception and never hidden.
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "nurbsfront/core/mesh_types.h"
+#include "nurbsfront/core/progress.h"
+#include "nurbsfront/quality/report.h"
+#include "nurbsfront/surfmesh/surfmesh.h"
+
+namespace nurbsfront {
+
+//! Options of stitch().
+struct StitchOptions {
+  //! Rounds of the cross-border optimisation; each round is one sweep of edge flips and
+  //! one of smoothing (>= 0; 0 switches the optimisation off). Default 3.
+  int optimisation_passes = 3;
+  //! Largest angle (deg) between the normals of the two triangles of an edge, before and
+  //! after a flip, for the flip to be allowed, in [0, 180). Default 30.
+  double max_flip_dihedral_deg = 30.0;
+  //! Relative gain a flip must bring: the smaller alpha of the two new triangles must
+  //! exceed (1 + flip_gain) times the smaller of the two old ones (>= 0). Default 1e-3.
+  double flip_gain = 1e-3;
+  //! Relaxation factor of a smoothing move towards the area-weighted centroid of the
+  //! node's triangles, in (0, 1]. Default 0.5.
+  double smoothing_relaxation = 0.5;
+  //! A smoothing move is accepted only if no incident triangle's normal turns by more than
+  //! acos(min_normal_dot) (in [-1, 1)) and the smallest alpha of the incident triangles
+  //! does not drop below min(its old value, alpha_floor) (in [0, 1]). Defaults 0.5 and 0.5.
+  double min_normal_dot = 0.5;
+  double alpha_floor = 0.5;
+  //! Run the exact self-intersection check on the result (the most expensive check).
+  //! Default true.
+  bool check_self_intersections = true;
+  //! Worker threads of the checks (results do not depend on it); >= 1. Default 2.
+  unsigned n_threads = 2;
+  //! Progress and cancellation (stages "stitch: assemble", "stitch: optimise",
+  //! "stitch: verify").
+  ProgressCallback progress;
+  //! \throw InvalidInput if a field is out of range.
+  void validate() const;
+};
+
+//! Topology of one connected component (faces joined through shared vertices).
+struct ComponentSignature {
+  std::size_t n_vertices = 0;
+  std::size_t n_edges = 0;
+  std::size_t n_faces = 0;
+  long euler_characteristic = 0;  //!< V - E + F
+  bool is_closed = false;         //!< no boundary edge
+  BoundingBox box;
+};
+
+//! Components of a mesh in order of their lowest face index (deleted faces skipped).
+[[nodiscard]] std::vector<ComponentSignature> component_signatures(const TriMesh& mesh);
+
+//! What stitch() did and found.
+struct StitchReport {
+  std::size_t n_input_nodes = 0;       //!< SurfaceMesh::nodes
+  std::size_t n_unused_nodes = 0;      //!< nodes no triangle uses (dropped)
+  std::size_t n_input_triangles = 0;   //!< SurfaceMesh::triangles
+  //! Triangles OpenMesh cannot add (repeated node, complex edge or vertex: a duplicated,
+  //! flipped or overlapping triangle). Each is a contract violation (an error below).
+  std::size_t n_rejected_triangles = 0;
+  std::size_t n_flips = 0;             //!< edge flips made
+  std::size_t n_smoothing_moves = 0;   //!< node moves accepted
+  std::size_t n_smoothing_rejected = 0;  //!< node moves refused by the quality/normal bounds
+  //! Nodes moved back to their assembled position because a triangle of theirs intersected
+  //! another after the optimisation.
+  std::size_t n_reverted_moves = 0;
+  //! True when reverting moves did not remove the intersections the optimisation made, so
+  //! the whole optimisation was undone (the assembled mesh is returned).
+  bool optimisation_undone = false;
+  double alpha_mean_before = 0.0;      //!< mean alpha after assembly, before optimisation
+  double alpha_min_before = 0.0;       //!< min alpha after assembly, before optimisation
+  //! Topology and quality of the result (no distances), from the quality module.
+  MeshReport output;
+  //! Components of the result, and of the input when stitch() was given one.
+  std::vector<ComponentSignature> output_components;
+  std::vector<ComponentSignature> input_components;
+  double seconds_assemble = 0.0;
+  double seconds_optimise = 0.0;
+  double seconds_verify = 0.0;
+  //! Contract violations, one human-readable line each. Empty when the contract holds.
+  std::vector<std::string> errors;
+  [[nodiscard]] bool ok() const { return errors.empty(); }
+};
+
+//! The stitched mesh and its report. face_patch and vertex_node give the provenance of
+//! every face (patch id) and vertex (global node id of the SurfaceMesh), by index.
+struct StitchResult {
+  TriMesh mesh;
+  std::vector<int> face_patch;
+  std::vector<int> vertex_node;
+  StitchReport report;
+};
+
+//! Joins the patch meshes into one TriMesh, optimises across the borders and verifies.
+//!
+//! Algorithm:
+//! 1. Assembly by global node id: every node used by a triangle becomes a vertex (in node
+//!    order); triangles are added in order. A triangle OpenMesh cannot take (repeated
+//!    node, an edge already used in that direction, a closed vertex fan) is counted and
+//!    reported as an error; it is never silently dropped.
+//! 2. `optimisation_passes` rounds of
+//!    a. edge flips: an interior edge whose two triangles are within the dihedral bound
+//!       (before and after), whose new edge does not exist yet, and whose flip raises the
+//!       smaller alpha of the pair by the gain. Never an edge of a feature curve
+//!       (SurfaceMesh::curve_is_feature), of the input's boundary or between two patches
+//!       when its curve cannot be identified (both ends corners);
+//!    b. smoothing: an inner node moves towards the area-weighted centroid of its
+//!       triangles and back onto its patch surface (PatchSurface::project); a border node
+//!       of a non-feature curve onto the mean of its two patch surfaces' projections.
+//!       Corners, feature and boundary nodes never move. A move is kept only if it turns
+//!       no incident triangle's normal too far and keeps their smallest alpha (bounds in
+//!       StitchOptions).
+//!    If the result has self-intersections (checked when check_self_intersections) that
+//!    involve a triangle the optimisation changed, the nodes of those triangles go back
+//!    to their assembled positions (up to 3 rounds); if some remain, the optimisation is
+//!    undone as a whole. Intersections already in the assembly stay (and are errors).
+//! 3. Verification (quality module): 2-manifold, consistently oriented, no degenerate or
+//!    self-intersecting triangles; with an input mesh also: closed iff the input is, and
+//!    per component (matched to the input's by nearest bounding box) the same Euler
+//!    characteristic and closedness, and the same number of components.
+//!
+//! \throw InvalidInput for invalid options, node ids out of range, array sizes that do not
+//!        match, or non-finite node coordinates.
+//! \throw Cancelled if the progress callback returns false.
+[[nodiscard]] StitchResult stitch(const SurfaceMesh& surface, const StitchOptions& options = {});
+
+//! As above, and compares the result's topology with the input's (closed iff the input is,
+//! same components with the same Euler characteristics).
+[[nodiscard]] StitchResult stitch(const SurfaceMesh& surface, const TriMesh& input,
+                                  const StitchOptions& options = {});
+
+}  // namespace nurbsfront

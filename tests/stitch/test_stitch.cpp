@@ -1,0 +1,402 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// stitch() on SurfaceMesh values built from procedural meshes split into patches by the
+// dominant axis of their face normals (a cube map): every patch is a graph over its
+// plane, fitted by multilevel B-spline approximation. Planted defects must be reported.
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <random>
+#include <set>
+#include <string>
+
+#include <Eigen/Geometry>
+
+#include "fixtures/shapes.h"
+#include "nurbsfront/core/error.h"
+#include "nurbsfront/core/soup.h"
+#include "nurbsfront/nurbs/frame.h"
+#include "nurbsfront/nurbs/mba.h"
+#include "nurbsfront/stitch/stitch.h"
+
+namespace nurbsfront {
+namespace {
+
+Eigen::Vector3d face_normal(const TriangleSoup& s, std::size_t t) {
+  const auto& tri = s.triangles[t];
+  return (s.points[tri[1]] - s.points[tri[0]]).cross(s.points[tri[2]] - s.points[tri[0]]).normalized();
+}
+
+// The patch of a face: the index (0..5) of the axis direction closest to its normal.
+int axis_patch(const Eigen::Vector3d& n) {
+  int axis = 0;
+  n.cwiseAbs().maxCoeff(&axis);
+  return 2 * axis + (n[axis] < 0 ? 1 : 0);
+}
+
+// A SurfaceMesh with the soup's points as nodes and triangles by the given patches.
+// Nodes with two patches are border nodes (one curve per patch pair), with three or more
+// (or two and the input's boundary) corners; boundary nodes of one patch lie on a feature
+// curve of the input's boundary. Each patch gets a height field fitted to its vertices.
+SurfaceMesh make_surface(const TriangleSoup& soup, const std::vector<int>& face_patch, int n_patches) {
+  SurfaceMesh s;
+  s.nodes = soup.points;
+  s.triangles.reserve(soup.triangles.size());
+  for (const auto& t : soup.triangles) s.triangles.push_back({int(t[0]), int(t[1]), int(t[2])});
+  s.triangle_patch = face_patch;
+  const std::size_t n = soup.points.size();
+  std::vector<std::set<int>> patches(n);
+  std::map<std::pair<std::uint32_t, std::uint32_t>, int> edge_count;
+  for (std::size_t t = 0; t < soup.triangles.size(); ++t) {
+    for (int k = 0; k < 3; ++k) {
+      const auto a = soup.triangles[t][k], b = soup.triangles[t][(k + 1) % 3];
+      patches[a].insert(face_patch[t]);
+      ++edge_count[{std::min(a, b), std::max(a, b)}];
+    }
+  }
+  std::vector<char> on_boundary(n, 0);
+  for (const auto& [edge, count] : edge_count) {
+    if (count == 1) on_boundary[edge.first] = on_boundary[edge.second] = 1;
+  }
+  std::map<std::pair<int, int>, int> curve_of;  // (patch, patch) or (patch, -1) -> curve id
+  auto curve = [&](int p, int q, bool feature) {
+    const auto [it, is_new] = curve_of.emplace(std::make_pair(p, q), int(curve_of.size()));
+    if (is_new) s.curve_is_feature.push_back(feature);
+    return it->second;
+  };
+  s.node_kind.resize(n);
+  s.node_owner.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::size_t sides = patches[i].size() + (on_boundary[i] ? 1 : 0);
+    if (sides >= 3) {
+      s.node_kind[i] = NodeKind::Corner;
+      s.node_owner[i] = -1;
+    } else if (sides == 2) {
+      s.node_kind[i] = NodeKind::Border;
+      const int p = *patches[i].begin();
+      s.node_owner[i] = on_boundary[i] ? curve(p, -1, true) : curve(p, *patches[i].rbegin(), false);
+    } else {
+      s.node_kind[i] = NodeKind::Inner;
+      s.node_owner[i] = patches[i].empty() ? 0 : *patches[i].begin();
+    }
+  }
+  for (int p = 0; p < n_patches; ++p) {
+    std::vector<Eigen::Vector3d> points, centroids, normals;
+    std::set<std::uint32_t> vertices;
+    for (std::size_t t = 0; t < soup.triangles.size(); ++t) {
+      if (face_patch[t] != p) continue;
+      const auto& tri = soup.triangles[t];
+      normals.push_back(face_normal(soup, t));
+      centroids.push_back((soup.points[tri[0]] + soup.points[tri[1]] + soup.points[tri[2]]) / 3.0);
+      for (auto v : tri) vertices.insert(v);
+    }
+    PatchSurface surface;
+    if (!vertices.empty()) {
+      for (auto v : vertices) points.push_back(soup.points[v]);
+      surface.frame = patch_frame(centroids, normals);
+      FitOptions fit;
+      fit.max_levels = 5;
+      surface.field = fit_height_field(surface.frame.to_local(points), fit).field;
+    }
+    s.surfaces.push_back(surface);
+  }
+  return s;
+}
+
+SurfaceMesh cube_map_surface(const TriangleSoup& soup) {
+  std::vector<int> face_patch(soup.triangles.size());
+  for (std::size_t t = 0; t < soup.triangles.size(); ++t) face_patch[t] = axis_patch(face_normal(soup, t));
+  return make_surface(soup, face_patch, 6);
+}
+
+std::string joined(const std::vector<std::string>& lines) {
+  std::string s;
+  for (const auto& l : lines) s += l + "\n";
+  return s;
+}
+
+bool mentions(const StitchReport& report, const std::string& word) {
+  return std::any_of(report.errors.begin(), report.errors.end(),
+                     [&](const std::string& e) { return e.find(word) != std::string::npos; });
+}
+
+// The icosphere with every vertex moved tangentially by up to `amount` times its mean edge
+// length and put back on the unit sphere: worse triangles, same surface.
+TriangleSoup jittered_sphere(int subdivisions, double amount) {
+  TriangleSoup s = test::icosphere(subdivisions);
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const double edge = (s.points[s.triangles[0][0]] - s.points[s.triangles[0][1]]).norm();
+  for (auto& p : s.points) {
+    p += amount * edge * Eigen::Vector3d(u(rng), u(rng), u(rng));
+    p.normalize();
+  }
+  return s;
+}
+
+TEST(Stitch, SphereOfSixPatchesIsClosedOrientedWithEulerTwo) {
+  const TriangleSoup soup = test::icosphere(3);
+  const SurfaceMesh surface = cube_map_surface(soup);
+  const StitchResult r = stitch(surface, to_trimesh(soup));
+  EXPECT_TRUE(r.report.ok()) << joined(r.report.errors);
+  const TopologyReport& t = r.report.output.topology;
+  EXPECT_TRUE(t.is_closed);
+  EXPECT_TRUE(t.is_manifold);
+  EXPECT_TRUE(t.is_consistently_oriented);
+  EXPECT_EQ(t.euler_characteristic, 2);
+  EXPECT_EQ(t.n_components, 1u);
+  ASSERT_TRUE(t.n_self_intersecting_pairs.has_value());
+  EXPECT_EQ(*t.n_self_intersecting_pairs, 0u);
+  EXPECT_EQ(r.mesh.n_faces(), soup.triangles.size());
+  EXPECT_EQ(r.mesh.n_vertices(), soup.points.size());
+  EXPECT_EQ(r.report.n_rejected_triangles, 0u);
+  EXPECT_EQ(r.face_patch.size(), r.mesh.n_faces());
+  EXPECT_EQ(r.vertex_node.size(), r.mesh.n_vertices());
+  // The optimisation never lowers the worst element's quality below its start (a move
+  // keeps the ring's smallest alpha above min(old, floor); flips raise the pair's minimum).
+  EXPECT_GE(r.report.output.quality.alpha_min, std::min(r.report.alpha_min_before, StitchOptions{}.alpha_floor) - 1e-12);
+  // The vertices stay on the (fitted) sphere.
+  for (auto v : r.mesh.vertices()) EXPECT_NEAR(to_eigen(r.mesh.point(v)).norm(), 1.0, 0.01);
+  // Oriented like the input: positive enclosed volume near the sphere's.
+  ASSERT_TRUE(t.volume.has_value());
+  EXPECT_NEAR(*t.volume, 4.0 / 3.0 * std::acos(-1.0), 0.1);
+}
+
+TEST(Stitch, TorusKeepsEulerZero) {
+  const TriangleSoup soup = test::torus(48, 16, 1.0, 0.35);
+  const StitchResult r = stitch(cube_map_surface(soup), to_trimesh(soup));
+  EXPECT_TRUE(r.report.ok()) << joined(r.report.errors);
+  EXPECT_TRUE(r.report.output.topology.is_closed);
+  EXPECT_EQ(r.report.output.topology.euler_characteristic, 0);
+  ASSERT_EQ(r.report.output_components.size(), 1u);
+  EXPECT_EQ(r.report.output_components[0].euler_characteristic, 0);
+}
+
+TEST(Stitch, OptimisationImprovesAJitteredSphereAcrossBorders) {
+  const TriangleSoup soup = jittered_sphere(3, 0.3);
+  const SurfaceMesh surface = cube_map_surface(soup);
+  const StitchResult r = stitch(surface, to_trimesh(soup));
+  EXPECT_TRUE(r.report.ok()) << joined(r.report.errors);
+  EXPECT_GT(r.report.n_flips, 0u);
+  EXPECT_GT(r.report.n_smoothing_moves, 0u);
+  EXPECT_GT(r.report.output.quality.alpha_mean, r.report.alpha_mean_before + 0.01);
+  EXPECT_GT(r.report.output.quality.alpha_min, r.report.alpha_min_before);
+  EXPECT_EQ(r.report.output.topology.euler_characteristic, 2);
+  // Corners never move; border nodes moved stay near the sphere (the mean of two fits).
+  for (auto v : r.mesh.vertices()) {
+    const auto node = static_cast<std::size_t>(r.vertex_node[static_cast<std::size_t>(v.idx())]);
+    const Eigen::Vector3d p = to_eigen(r.mesh.point(v));
+    if (surface.node_kind[node] == NodeKind::Corner) {
+      EXPECT_EQ(p, surface.nodes[node]);
+    }
+    EXPECT_NEAR(p.norm(), 1.0, 0.02);
+  }
+  // Without optimisation the quality stays that of the assembly.
+  StitchOptions none;
+  none.optimisation_passes = 0;
+  const StitchResult raw = stitch(surface, to_trimesh(soup), none);
+  EXPECT_EQ(raw.report.n_flips + raw.report.n_smoothing_moves, 0u);
+  EXPECT_DOUBLE_EQ(raw.report.output.quality.alpha_mean, raw.report.alpha_mean_before);
+}
+
+TEST(Stitch, FeatureCurvesAndCornersStayPut) {
+  const TriangleSoup soup = jittered_sphere(2, 0.3);
+  SurfaceMesh surface = cube_map_surface(soup);
+  std::fill(surface.curve_is_feature.begin(), surface.curve_is_feature.end(), std::uint8_t{1});
+  const StitchResult r = stitch(surface, to_trimesh(soup));
+  EXPECT_TRUE(r.report.ok()) << joined(r.report.errors);
+  std::set<std::pair<int, int>> border_edges_before, border_edges_after;
+  for (const auto& t : surface.triangles) {
+    for (int k = 0; k < 3; ++k) {
+      const int a = t[k], b = t[(k + 1) % 3];
+      if (surface.node_kind[a] != NodeKind::Inner && surface.node_kind[b] != NodeKind::Inner) {
+        border_edges_before.insert({std::min(a, b), std::max(a, b)});
+      }
+    }
+  }
+  for (auto v : r.mesh.vertices()) {
+    const auto node = static_cast<std::size_t>(r.vertex_node[static_cast<std::size_t>(v.idx())]);
+    if (surface.node_kind[node] != NodeKind::Inner) {
+      EXPECT_EQ(to_eigen(r.mesh.point(v)), surface.nodes[node]);
+    }
+  }
+  // Every crease edge between two patches is still there.
+  for (auto e : r.mesh.edges()) {
+    const auto h = r.mesh.halfedge_handle(e, 0);
+    const int fa = r.face_patch[static_cast<std::size_t>(r.mesh.face_handle(h).idx())];
+    const int fb = r.face_patch[static_cast<std::size_t>(r.mesh.opposite_face_handle(h).idx())];
+    if (fa == fb) continue;
+    const int a = r.vertex_node[static_cast<std::size_t>(r.mesh.from_vertex_handle(h).idx())];
+    const int b = r.vertex_node[static_cast<std::size_t>(r.mesh.to_vertex_handle(h).idx())];
+    border_edges_after.insert({std::min(a, b), std::max(a, b)});
+  }
+  for (const auto& e : border_edges_after) EXPECT_TRUE(border_edges_before.count(e));
+}
+
+TEST(Stitch, OpenInputKeepsItsBoundary) {
+  TriangleSoup soup = test::grid_patch(12, 12);
+  for (auto& p : soup.points) p.z() = 0.2 * std::sin(3.0 * p.x()) * std::cos(2.0 * p.y());
+  std::vector<int> face_patch(soup.triangles.size());
+  for (std::size_t t = 0; t < soup.triangles.size(); ++t) {
+    const auto& tri = soup.triangles[t];
+    const double x = (soup.points[tri[0]].x() + soup.points[tri[1]].x() + soup.points[tri[2]].x()) / 3.0;
+    face_patch[t] = x < 0.5 ? 0 : 1;
+  }
+  const SurfaceMesh surface = make_surface(soup, face_patch, 2);
+  const StitchResult r = stitch(surface, to_trimesh(soup));
+  EXPECT_TRUE(r.report.ok()) << joined(r.report.errors);
+  EXPECT_FALSE(r.report.output.topology.is_closed);
+  EXPECT_EQ(r.report.output.topology.euler_characteristic, 1);
+  EXPECT_EQ(r.report.output.topology.n_boundary_loops, 1u);
+  for (auto v : r.mesh.vertices()) {
+    if (!r.mesh.is_boundary(v)) continue;
+    const auto node = static_cast<std::size_t>(r.vertex_node[static_cast<std::size_t>(v.idx())]);
+    EXPECT_EQ(to_eigen(r.mesh.point(v)), surface.nodes[node]);
+  }
+}
+
+TEST(Stitch, UnusedNodesAreDroppedAndCounted) {
+  const TriangleSoup soup = test::icosphere(2);
+  SurfaceMesh surface = cube_map_surface(soup);
+  surface.nodes.push_back(Eigen::Vector3d(5, 5, 5));
+  surface.node_kind.push_back(NodeKind::Inner);
+  surface.node_owner.push_back(0);
+  const StitchResult r = stitch(surface, to_trimesh(soup));
+  EXPECT_TRUE(r.report.ok()) << joined(r.report.errors);
+  EXPECT_EQ(r.report.n_unused_nodes, 1u);
+  EXPECT_EQ(r.mesh.n_vertices(), soup.points.size());
+}
+
+TEST(Stitch, DuplicatedTriangleIsAnError) {
+  const TriangleSoup soup = test::icosphere(2);
+  SurfaceMesh surface = cube_map_surface(soup);
+  surface.triangles.push_back(surface.triangles[17]);
+  surface.triangle_patch.push_back(surface.triangle_patch[17]);
+  const StitchResult r = stitch(surface, to_trimesh(soup));
+  EXPECT_FALSE(r.report.ok());
+  EXPECT_EQ(r.report.n_rejected_triangles, 1u);
+  EXPECT_TRUE(mentions(r.report, "could not be added")) << joined(r.report.errors);
+}
+
+TEST(Stitch, MissingTriangleOpensAClosedInputAndIsAnError) {
+  const TriangleSoup soup = test::icosphere(2);
+  SurfaceMesh surface = cube_map_surface(soup);
+  surface.triangles.erase(surface.triangles.begin() + 40);
+  surface.triangle_patch.erase(surface.triangle_patch.begin() + 40);
+  const StitchResult r = stitch(surface, to_trimesh(soup));
+  EXPECT_FALSE(r.report.ok());
+  EXPECT_EQ(r.report.n_rejected_triangles, 0u);
+  EXPECT_FALSE(r.report.output.topology.is_closed);
+  EXPECT_TRUE(mentions(r.report, "open")) << joined(r.report.errors);
+  // Without the input only the intrinsic checks run, and an open mesh passes them.
+  EXPECT_TRUE(stitch(surface).report.ok());
+}
+
+TEST(Stitch, FlippedTriangleIsAnError) {
+  const TriangleSoup soup = test::icosphere(2);
+  SurfaceMesh surface = cube_map_surface(soup);
+  std::swap(surface.triangles[60][1], surface.triangles[60][2]);
+  const StitchResult r = stitch(surface, to_trimesh(soup));
+  EXPECT_FALSE(r.report.ok());
+  EXPECT_GE(r.report.n_rejected_triangles, 1u);
+  EXPECT_FALSE(stitch(surface).report.ok());
+}
+
+TEST(Stitch, MissingComponentIsAnError) {
+  TriangleSoup two = test::icosphere(2);
+  const TriangleSoup other = test::icosphere(2);
+  const auto offset = static_cast<std::uint32_t>(two.points.size());
+  for (const auto& p : other.points) two.points.push_back(p + Eigen::Vector3d(3, 0, 0));
+  for (const auto& t : other.triangles) two.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
+  const TriMesh input = to_trimesh(two);
+  SurfaceMesh surface = cube_map_surface(two);
+  EXPECT_TRUE(stitch(surface, input).report.ok());
+  surface.triangles.resize(surface.triangles.size() / 2);
+  surface.triangle_patch.resize(surface.triangles.size());
+  const StitchResult r = stitch(surface, input);
+  EXPECT_FALSE(r.report.ok());
+  EXPECT_TRUE(mentions(r.report, "no counterpart")) << joined(r.report.errors);
+  EXPECT_TRUE(mentions(r.report, "components")) << joined(r.report.errors);
+}
+
+TEST(Stitch, MovesThroughANearbySheetAreUndone) {
+  // Two parallel open sheets 0.002 apart; the upper one's surface is planted 0.002 below
+  // the lower one, so projecting its inner nodes pushes them through the lower sheet.
+  TriangleSoup sheets = test::grid_patch(8, 8);
+  const TriangleSoup upper = test::grid_patch(8, 8);
+  const auto offset = static_cast<std::uint32_t>(sheets.points.size());
+  for (const auto& p : upper.points) sheets.points.push_back(p + Eigen::Vector3d(0, 0, 0.002));
+  for (const auto& t : upper.triangles) sheets.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
+  std::vector<int> face_patch(sheets.triangles.size(), 0);
+  std::fill(face_patch.begin() + static_cast<long>(face_patch.size() / 2), face_patch.end(), 1);
+  SurfaceMesh surface = make_surface(sheets, face_patch, 2);
+  const double local_z = surface.surfaces[1].frame.to_local(Eigen::Vector3d(0.5, 0.5, -0.002)).z();
+  for (double& c : surface.surfaces[1].field.mutable_coefficients()) c = local_z;
+  const TriMesh input = to_trimesh(sheets);
+  StitchOptions unchecked;
+  unchecked.check_self_intersections = false;
+  const StitchResult pushed = stitch(surface, input, unchecked);
+  EXPECT_GT(count_self_intersections(to_soup(pushed.mesh)), 0u);  // the planted defect works
+  const StitchResult r = stitch(surface, input);
+  EXPECT_TRUE(r.report.ok()) << joined(r.report.errors);
+  EXPECT_TRUE(r.report.n_reverted_moves > 0 || r.report.optimisation_undone);
+  ASSERT_TRUE(r.report.output.topology.n_self_intersecting_pairs.has_value());
+  EXPECT_EQ(*r.report.output.topology.n_self_intersecting_pairs, 0u);
+}
+
+TEST(Stitch, IntersectionsOfTheInputStayReportedAndKeepTheOptimisation) {
+  // A horizontal and a vertical sheet crossing each other: intersecting before any move.
+  TriangleSoup sheets = test::grid_patch(8, 8);
+  const TriangleSoup wall = test::grid_patch(8, 8);
+  const auto offset = static_cast<std::uint32_t>(sheets.points.size());
+  for (const auto& p : wall.points) sheets.points.push_back(Eigen::Vector3d(p.x() + 0.03, 0.51, p.y() - 0.5));
+  for (const auto& t : wall.triangles) sheets.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
+  std::vector<int> face_patch(sheets.triangles.size(), 0);
+  std::fill(face_patch.begin() + static_cast<long>(face_patch.size() / 2), face_patch.end(), 1);
+  const StitchResult r = stitch(make_surface(sheets, face_patch, 2), to_trimesh(sheets));
+  EXPECT_FALSE(r.report.ok());
+  EXPECT_TRUE(mentions(r.report, "self-intersecting")) << joined(r.report.errors);
+  EXPECT_FALSE(r.report.optimisation_undone);
+}
+
+TEST(Stitch, InvalidInputThrows) {
+  const TriangleSoup soup = test::icosphere(1);
+  SurfaceMesh surface = cube_map_surface(soup);
+  SurfaceMesh bad = surface;
+  bad.triangles[0][1] = int(bad.nodes.size());
+  EXPECT_THROW((void)stitch(bad), InvalidInput);
+  bad = surface;
+  bad.triangle_patch.pop_back();
+  EXPECT_THROW((void)stitch(bad), InvalidInput);
+  bad = surface;
+  bad.nodes[3].x() = std::nan("");
+  EXPECT_THROW((void)stitch(bad), InvalidInput);
+  StitchOptions options;
+  options.max_flip_dihedral_deg = 180.0;
+  EXPECT_THROW((void)stitch(surface, options), InvalidInput);
+  options = {};
+  options.smoothing_relaxation = 0.0;
+  EXPECT_THROW((void)stitch(surface, options), InvalidInput);
+}
+
+TEST(Stitch, ProgressCanCancel) {
+  const TriangleSoup soup = test::icosphere(2);
+  const SurfaceMesh surface = cube_map_surface(soup);
+  StitchOptions options;
+  std::set<std::string> stages;
+  options.progress = [&](std::string_view stage, double) {
+    stages.insert(std::string(stage));
+    return true;
+  };
+  (void)stitch(surface, options);
+  EXPECT_TRUE(stages.count("stitch: assemble"));
+  EXPECT_TRUE(stages.count("stitch: optimise"));
+  EXPECT_TRUE(stages.count("stitch: verify"));
+  options.progress = [](std::string_view stage, double) { return stage != "stitch: optimise"; };
+  EXPECT_THROW((void)stitch(surface, options), Cancelled);
+}
+
+}  // namespace
+}  // namespace nurbsfront
