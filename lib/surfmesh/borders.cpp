@@ -2,14 +2,18 @@
 // Border curves: validation against the mesh, one discretisation per curve, feature flags.
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <numbers>
 #include <string>
 #include <utility>
 
+#include <Eigen/Geometry>
+
 #include "nurbsfront/core/error.h"
 #include "nurbsfront/core/soup.h"
 #include "nurbsfront/core/tolerances.h"
+#include "nurbsfront/front2d/predicates.h"
 #include "nurbsfront/surfmesh/surfmesh_internal.h"
 
 namespace nurbsfront::surfmesh_detail {
@@ -167,7 +171,8 @@ void validate_segmentation(const TriMesh& mesh, const Segmentation& seg) {
   }
 }
 
-BorderNodes discretise_borders(const TriMesh& mesh, const Segmentation& seg, const SizeAt& size_at) {
+BorderNodes discretise_borders(const TriMesh& mesh, const Segmentation& seg, const SizeAt& size_at,
+                               const std::vector<CurveSource>& source) {
   BorderNodes out;
   for (const int v : seg.corners) {
     out.positions.push_back(point(mesh, v));
@@ -196,9 +201,13 @@ BorderNodes discretise_borders(const TriMesh& mesh, const Segmentation& seg, con
     // Smoothing a short loop (closed, or from a corner to itself) can collapse it: such a
     // loop keeps its input positions.
     std::vector<Eigen::Vector3d> polyline = curve.smoothed;
-    if (min_pieces == 3 && curve.vertices.size() < kMinSmoothedLoopVertices)
+    if (source[c] != CurveSource::Smoothed || (min_pieces == 3 && curve.vertices.size() < kMinSmoothedLoopVertices))
       for (std::size_t i = 0; i < polyline.size(); ++i) polyline[i] = point(mesh, curve.vertices[i]);
-    const std::vector<Eigen::Vector3d> samples = resample(polyline, curve.is_closed, min_pieces, size_at);
+    std::vector<Eigen::Vector3d> samples;
+    if (source[c] == CurveSource::InputVertices)
+      samples.assign(polyline.begin() + (curve.is_closed ? 0 : 1), polyline.end() - (curve.is_closed ? 0 : 1));
+    else
+      samples = resample(polyline, curve.is_closed, min_pieces, size_at);
     if (!curve.is_closed) nodes.push_back(corner_index(seg.corners, curve.vertices.front()));
     for (const auto& q : samples) {
       nodes.push_back(static_cast<int>(out.positions.size()));
@@ -208,6 +217,84 @@ BorderNodes discretise_borders(const TriMesh& mesh, const Segmentation& seg, con
     }
     if (!curve.is_closed) nodes.push_back(corner_index(seg.corners, curve.vertices.back()));
   }
+  return out;
+}
+
+PatchBorder patch_border(const Segmentation& seg, int p, const BorderNodes& borders) {
+  PatchBorder out;
+  std::vector<std::array<int, 2>> global_edges;
+  for (const int c : seg.patches[static_cast<std::size_t>(p)].curves) {
+    const BorderCurve& curve = seg.curves[static_cast<std::size_t>(c)];
+    std::vector<int> chain = borders.curve_nodes[static_cast<std::size_t>(c)];
+    if (curve.is_closed) chain.push_back(chain.front());
+    // The curve walks with patch_left on its left: reversed for the right patch.
+    if (curve.patch_left != p) std::reverse(chain.begin(), chain.end());
+    for (std::size_t i = 0; i + 1 < chain.size(); ++i) {
+      global_edges.push_back({chain[i], chain[i + 1]});
+      out.edge_curve.push_back(c);
+    }
+  }
+  for (const auto& e : global_edges) out.nodes.insert(out.nodes.end(), e.begin(), e.end());
+  std::sort(out.nodes.begin(), out.nodes.end());
+  out.nodes.erase(std::unique(out.nodes.begin(), out.nodes.end()), out.nodes.end());
+  auto local = [&](int g) {
+    return static_cast<int>(std::lower_bound(out.nodes.begin(), out.nodes.end(), g) - out.nodes.begin());
+  };
+  for (const auto& e : global_edges) out.edges.push_back({local(e[0]), local(e[1])});
+  return out;
+}
+
+std::vector<int> crossing_curves(const Segmentation& seg, const BorderNodes& borders) {
+  std::vector<int> out;
+  for (std::size_t p = 0; p < seg.patches.size(); ++p) {
+    const PatchBorder border = patch_border(seg, static_cast<int>(p), borders);
+    const Eigen::Vector3d& axis = seg.patches[p].axis;
+    const Eigen::Vector3d e1 = axis.unitOrthogonal();
+    const Eigen::Vector3d e2 = axis.cross(e1);
+    std::vector<Eigen::Vector2d> xy;
+    xy.reserve(border.nodes.size());
+    for (const int g : border.nodes) {
+      const Eigen::Vector3d& x = borders.positions[static_cast<std::size_t>(g)];
+      xy.emplace_back(x.dot(e1), x.dot(e2));
+    }
+    // Sweep along x: segments sorted by their smallest x, each compared with those that
+    // start before it ends.
+    const std::size_t n = border.edges.size();
+    std::vector<std::size_t> order(n);
+    std::vector<double> lo(n), hi(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      order[i] = i;
+      lo[i] = std::min(xy[static_cast<std::size_t>(border.edges[i][0])].x(), xy[static_cast<std::size_t>(border.edges[i][1])].x());
+      hi[i] = std::max(xy[static_cast<std::size_t>(border.edges[i][0])].x(), xy[static_cast<std::size_t>(border.edges[i][1])].x());
+    }
+    std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return lo[a] < lo[b] || (lo[a] == lo[b] && a < b); });
+    for (std::size_t ii = 0; ii < n; ++ii) {
+      const std::size_t i = order[ii];
+      const auto [a, b] = border.edges[i];
+      for (std::size_t jj = ii + 1; jj < n && lo[order[jj]] <= hi[i]; ++jj) {
+        const std::size_t j = order[jj];
+        const auto [c, d] = border.edges[j];
+        const auto at = [&](int k) -> const Eigen::Vector2d& { return xy[static_cast<std::size_t>(k)]; };
+        bool bad = false;
+        if (a != c && a != d && b != c && b != d) {
+          bad = front2d::segments_intersect(at(a), at(b), at(c), at(d));
+        } else if (!((a == c && b == d) || (a == d && b == c))) {
+          // Sharing one node s: they overlap when the other ends are collinear with s and
+          // on the same side of it.
+          const int s = (a == c || a == d) ? a : b;
+          const int u = s == a ? b : a;
+          const int w = (c == s) ? d : c;
+          bad = front2d::orient2d(at(s), at(u), at(w)) == 0 && (at(u) - at(s)).dot(at(w) - at(s)) > 0.0;
+        }
+        if (bad) {
+          out.push_back(border.edge_curve[i]);
+          out.push_back(border.edge_curve[j]);
+        }
+      }
+    }
+  }
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
   return out;
 }
 

@@ -30,33 +30,6 @@ class HeightFieldMetric final : public Metric {
   const BicubicHeightField* field_;
 };
 
-// Border of one patch as directed edges (domain on the left) between its border nodes.
-struct PatchBorder {
-  std::vector<int> nodes;                   // global ids, ascending
-  std::vector<std::array<int, 2>> edges;    // local indices into nodes
-};
-
-PatchBorder patch_border(const Segmentation& seg, int p, const BorderNodes& borders) {
-  PatchBorder out;
-  std::vector<std::array<int, 2>> global_edges;
-  for (const int c : seg.patches[static_cast<std::size_t>(p)].curves) {
-    const BorderCurve& curve = seg.curves[static_cast<std::size_t>(c)];
-    std::vector<int> chain = borders.curve_nodes[static_cast<std::size_t>(c)];
-    if (curve.is_closed) chain.push_back(chain.front());
-    // The curve walks with patch_left on its left: reversed for the right patch.
-    if (curve.patch_left != p) std::reverse(chain.begin(), chain.end());
-    for (std::size_t i = 0; i + 1 < chain.size(); ++i) global_edges.push_back({chain[i], chain[i + 1]});
-  }
-  for (const auto& e : global_edges) out.nodes.insert(out.nodes.end(), e.begin(), e.end());
-  std::sort(out.nodes.begin(), out.nodes.end());
-  out.nodes.erase(std::unique(out.nodes.begin(), out.nodes.end()), out.nodes.end());
-  auto local = [&](int g) {
-    return static_cast<int>(std::lower_bound(out.nodes.begin(), out.nodes.end(), g) - out.nodes.begin());
-  };
-  for (const auto& e : global_edges) out.edges.push_back({local(e[0]), local(e[1])});
-  return out;
-}
-
 // Traces the directed edges into loops. Where loops touch (a node with several outgoing
 // edges), the next edge is the first outgoing one clockwise from the incoming edge's
 // reverse: it bounds the domain sector on the left of the incoming edge.
@@ -93,6 +66,11 @@ std::vector<std::vector<int>> trace_loops(const std::vector<Eigen::Vector2d>& xy
   }
   return loops;
 }
+
+// A traced loop that passes a corner twice (a neighbouring patch inside this one touching
+// its outer loop there, two lobes joined at a corner) is split into simple cycles
+// (split_at_repeated_vertices): a touching hole becomes its own clockwise cycle and gets
+// its hole point.
 
 double signed_area(const std::vector<Eigen::Vector2d>& polygon) {
   double twice = 0.0;
@@ -275,17 +253,23 @@ void mesh_patch(const Segmentation& seg, int p, const BorderNodes& borders, cons
     std::vector<std::vector<Eigen::Vector2d>> polygons;
     std::vector<double> orientation;
     double border_area = 0.0;  // area on the left of the directed border
+    std::size_t n_ccw = 0;  // traced loops (a loop through a touching corner counts once)
     for (const auto& loop : trace_loops(pslg.points, border.edges)) {
-      std::vector<Eigen::Vector2d>& polygon = polygons.emplace_back();
-      for (const int i : loop) polygon.push_back(pslg.points[static_cast<std::size_t>(i)]);
-      const double area = signed_area(polygon);
-      border_area += area;
-      orientation.push_back(area >= 0.0 ? 1.0 : -1.0);
+      double loop_area = 0.0;
+      for (const auto& cycle : split_at_repeated_vertices(loop)) {
+        std::vector<Eigen::Vector2d>& polygon = polygons.emplace_back();
+        for (const int i : cycle) polygon.push_back(pslg.points[static_cast<std::size_t>(i)]);
+        const double area = signed_area(polygon);
+        loop_area += area;
+        orientation.push_back(area >= 0.0 ? 1.0 : -1.0);
+      }
+      border_area += loop_area;
+      if (loop_area >= 0.0) ++n_ccw;
     }
     // The segmentation guarantees one counter-clockwise (outer) loop; a second one means
     // the discretised border folds in this plane.
-    if (std::count(orientation.begin(), orientation.end(), 1.0) != 1)
-      throw std::runtime_error("the border has " + std::to_string(std::count(orientation.begin(), orientation.end(), 1.0)) +
+    if (n_ccw != 1)
+      throw std::runtime_error("the border has " + std::to_string(n_ccw) +
                                " counter-clockwise loops in the patch plane (expected 1: it folds)");
     for (const auto& polygon : polygons) {
       Eigen::Vector2d inside;

@@ -35,11 +35,34 @@ struct BorderNodes {
   std::vector<std::vector<int>> curve_nodes;
 };
 
-//! Resamples every curve's smoothed polyline once, n segments of about size_at() each
-//! (closed curves and curves from a corner to itself at least 3; an open curve sharing
-//! both ends with another curve at least 2, so no patch gets a doubled segment).
+//! What a curve's nodes are taken from.
+enum class CurveSource : std::uint8_t {
+  Smoothed,       //!< the smoothed polyline, resampled (default)
+  Input,          //!< the input positions of its vertices, resampled
+  InputVertices,  //!< its input vertices themselves (the segmentation guarantees that
+                  //!< these never cross in a patch's plane)
+};
+
+//! Resamples every curve once, n segments of about size_at() each (closed curves and
+//! curves from a corner to itself at least 3; an open curve sharing both ends with another
+//! curve at least 2, so no patch gets a doubled segment), from the polyline `source` says
+//! (one entry per curve). Short loops are resampled from their input positions, never
+//! from the smoothed ones.
 [[nodiscard]] BorderNodes discretise_borders(const TriMesh& mesh, const Segmentation& segmentation,
-                                             const SizeAt& size_at);
+                                             const SizeAt& size_at, const std::vector<CurveSource>& source);
+
+//! Border of one patch as directed edges (domain on the left) between its border nodes.
+struct PatchBorder {
+  std::vector<int> nodes;                 //!< global ids, ascending
+  std::vector<std::array<int, 2>> edges;  //!< local indices into nodes
+  std::vector<int> edge_curve;            //!< the curve of each edge
+};
+[[nodiscard]] PatchBorder patch_border(const Segmentation& segmentation, int p, const BorderNodes& borders);
+
+//! Curves (ascending ids) with a segment that meets a segment it shares no node with, or
+//! overlaps a neighbouring one, in the plane of one of their patches (orthogonal to its
+//! axis; exact predicates).
+[[nodiscard]] std::vector<int> crossing_curves(const Segmentation& segmentation, const BorderNodes& borders);
 
 //! Per curve: on the input's boundary, or most of its edges have a dihedral above the angle.
 [[nodiscard]] std::vector<std::uint8_t> feature_curves(const TriMesh& mesh, const Segmentation& segmentation,

@@ -8,17 +8,21 @@
 #include <Eigen/Geometry>
 
 #include <cmath>
+#include <algorithm>
 #include <functional>
 #include <set>
 #include <string>
 #include <variant>
 
 #include "fixtures/shapes.h"
+#include "support/test_data.h"
 #include "nurbsfront/core/error.h"
 #include "nurbsfront/core/stopwatch.h"
+#include "nurbsfront/io/mesh_io.h"
 #include "nurbsfront/isosurface/marching_cubes.h"
 #include "nurbsfront/isosurface/scenes.h"
 #include "nurbsfront/quality/report.h"
+#include "nurbsfront/segment/segment_internal.h"
 #include "nurbsfront/surfmesh/surfmesh.h"
 #include "nurbsfront/surfmesh/surfmesh_internal.h"
 
@@ -266,6 +270,93 @@ TEST(Surfmesh, PatchWithHoleLoop) {
   }
 }
 
+// A segmentation from face labels (curves and corners as segment() extracts them, axes z).
+Segmentation labelled_segmentation(const TriMesh& mesh, const std::vector<int>& face_patch, int n_patches) {
+  Segmentation seg;
+  seg.face_patch = face_patch;
+  seg.patches.resize(static_cast<std::size_t>(n_patches));
+  for (std::size_t f = 0; f < face_patch.size(); ++f) seg.patches[static_cast<std::size_t>(face_patch[f])].faces.push_back(static_cast<int>(f));
+  BorderSmoothingOptions no_smoothing;
+  no_smoothing.iterations = 0;
+  segment_detail::Borders borders = segment_detail::extract_borders(mesh, face_patch, no_smoothing);
+  for (std::size_t c = 0; c < borders.curves.size(); ++c) {
+    seg.patches[static_cast<std::size_t>(borders.curves[c].patch_left)].curves.push_back(static_cast<int>(c));
+    if (borders.curves[c].patch_right >= 0)
+      seg.patches[static_cast<std::size_t>(borders.curves[c].patch_right)].curves.push_back(static_cast<int>(c));
+  }
+  seg.curves = std::move(borders.curves);
+  seg.corners = std::move(borders.corners);
+  return seg;
+}
+
+TEST(Surfmesh, NeighbourTouchingTheOuterLoopAtACorner) {
+  // A flat 12 x 12 grid; patch 1 is a small block inside patch 0 that touches the grid's
+  // boundary at one vertex only (the upper triangle of cell (5, 0) and cells (5, 1), (6, 1)).
+  // Patch 0's border passes that corner twice: its outer loop and the loop around patch 1
+  // touch there, and patch 1's side must become a hole of patch 0 (measured on the
+  // level-set DRAM cell at 128 cells before the fix: the hole was meshed over).
+  constexpr int kN = 12;
+  const TriMesh mesh = to_trimesh(test::grid_patch(kN, kN));
+  std::vector<int> face_patch(mesh.n_faces(), 0);
+  auto cell = [](int i, int j) { return 2 * (j * kN + i); };
+  for (const int f : {cell(5, 0) + 1, cell(5, 1), cell(5, 1) + 1, cell(6, 1), cell(6, 1) + 1}) face_patch[static_cast<std::size_t>(f)] = 1;
+  const Segmentation seg = labelled_segmentation(mesh, face_patch, 2);
+  ASSERT_EQ(seg.corners, std::vector<int>{5});  // the touching vertex (5, 0)
+  SurfMeshOptions options;
+  options.sizing.relative_size = 1.0;
+  const SurfaceMesh sm = mesh_surface(mesh, seg, options);
+  expect_consistent(seg, sm);
+  const SoupFigures f = figures(sm);
+  EXPECT_FALSE(f.closed);
+  EXPECT_EQ(f.euler, 1);
+  // The two patches together cover the unit square once.
+  double area[2] = {0.0, 0.0};
+  for (std::size_t t = 0; t < sm.triangles.size(); ++t) {
+    const auto& tri = sm.triangles[t];
+    const Eigen::Vector3d n = (sm.nodes[static_cast<std::size_t>(tri[1])] - sm.nodes[static_cast<std::size_t>(tri[0])])
+                                  .cross(sm.nodes[static_cast<std::size_t>(tri[2])] - sm.nodes[static_cast<std::size_t>(tri[0])]);
+    EXPECT_GT(n.z(), 0.0);
+    area[sm.triangle_patch[t]] += 0.5 * n.z();
+  }
+  EXPECT_NEAR(area[0] + area[1], 1.0, 1e-9);
+  EXPECT_NEAR(area[1], 5.0 / (2.0 * kN * kN), 0.2 * 5.0 / (2.0 * kN * kN));  // chords cut its corners
+}
+
+TEST(Surfmesh, CrossingCurvesFoundInThePatchPlane) {
+  // Two patches of a flat grid split along x = 0.5: one curve between them, plus the
+  // boundary curves. Moving one node of the middle curve across a boundary curve makes
+  // both cross; a node moved onto its neighbour's segment makes one overlap.
+  constexpr int kN = 8;
+  const TriMesh mesh = to_trimesh(test::grid_patch(kN, kN));
+  std::vector<int> face_patch(mesh.n_faces(), 0);
+  for (int j = 0; j < kN; ++j)
+    for (int i = kN / 2; i < kN; ++i) face_patch[static_cast<std::size_t>(2 * (j * kN + i))] = face_patch[static_cast<std::size_t>(2 * (j * kN + i) + 1)] = 1;
+  const Segmentation seg = labelled_segmentation(mesh, face_patch, 2);
+  const std::vector<surfmesh_detail::CurveSource> source(seg.curves.size(), surfmesh_detail::CurveSource::InputVertices);
+  surfmesh_detail::BorderNodes borders =
+      surfmesh_detail::discretise_borders(mesh, seg, [](const Eigen::Vector3d&) { return 1.0 / kN; }, source);
+  EXPECT_TRUE(surfmesh_detail::crossing_curves(seg, borders).empty());
+  int middle = -1;
+  for (std::size_t c = 0; c < seg.curves.size(); ++c)
+    if (seg.curves[c].patch_right >= 0) middle = static_cast<int>(c);
+  ASSERT_GE(middle, 0);
+  const std::vector<int>& nodes = borders.curve_nodes[static_cast<std::size_t>(middle)];
+  ASSERT_GE(nodes.size(), 4u);
+  // The second node of the middle curve (next to a corner at y = 0 or y = 1) pushed
+  // beyond that side of the square: its segments cross the boundary curve there.
+  surfmesh_detail::BorderNodes moved = borders;
+  Eigen::Vector3d& x = moved.positions[static_cast<std::size_t>(nodes[1])];
+  x.y() = x.y() < 0.5 ? -0.5 : 1.5;
+  const std::vector<int> crossing = surfmesh_detail::crossing_curves(seg, moved);
+  EXPECT_NE(std::find(crossing.begin(), crossing.end(), middle), crossing.end());
+  EXPECT_GE(crossing.size(), 2u);
+  // A node folded back onto the segment before it: an overlap of neighbouring segments.
+  surfmesh_detail::BorderNodes folded = borders;
+  folded.positions[static_cast<std::size_t>(nodes[2])] =
+      0.5 * (folded.positions[static_cast<std::size_t>(nodes[0])] + folded.positions[static_cast<std::size_t>(nodes[1])]);
+  EXPECT_EQ(surfmesh_detail::crossing_curves(seg, folded), std::vector<int>{middle});
+}
+
 TEST(Surfmesh, HolePointInsideClockwiseLoop) {
   // An L-shaped clockwise loop: the point must be strictly inside.
   const std::vector<Eigen::Vector2d> loop{{0, 0}, {0, 2}, {2, 2}, {2, 1}, {1, 1}, {1, 0}};
@@ -345,8 +436,71 @@ TEST(SurfmeshSlow, OccupancySphere96) {
   print_figures("occupancy sphere 96", mesh, seg, sm, seconds);
 }
 
-// Occupancy only: on the level-set DRAM cell at 128 cells some patches still fail (see
-// docs/surfmesh.md, "Known failures").
+long euler_characteristic(const TriMesh& mesh) {
+  return static_cast<long>(mesh.n_vertices()) - static_cast<long>(mesh.n_edges()) + static_cast<long>(mesh.n_faces());
+}
+
+// Every patch Ok, a manifold soup, closed iff the input is, with its Euler characteristic.
+void expect_whole(const TriMesh& mesh, const SurfMeshOptions& options, const char* name) {
+  SCOPED_TRACE(name);
+  const Segmentation seg = segment(mesh);
+  const Stopwatch clock;
+  const SurfaceMesh sm = mesh_surface(mesh, seg, options);
+  const double seconds = clock.seconds();
+  expect_consistent(seg, sm);
+  const SoupFigures f = figures(sm);
+  bool input_closed = true;
+  for (const auto h : mesh.halfedges())
+    if (mesh.is_boundary(h)) input_closed = false;
+  EXPECT_EQ(f.closed, input_closed);
+  EXPECT_EQ(f.euler, euler_characteristic(mesh));
+  EXPECT_GE(f.mean_alpha, 0.85);
+  print_figures(name, mesh, seg, sm, seconds);
+}
+
+TEST(Surfmesh, BrainSurface) {
+  // VTK's brain isosurface (9.5k faces, closed, genus 0 after welding).
+  const TriMesh mesh = read_mesh(test::test_data("io/brainImageSmooth.vtk"));
+  expect_whole(mesh, {}, "brain");
+}
+
+// Every built-in scene, level-set and occupancy, at 64 and 128 cells (256: below).
+TEST(SurfmeshSlow, ScenesAt64And128) {
+  for (const int res : {64, 128})
+    for (const char* scene : {"sphere", "torus", "trench", "dram"})
+      for (const SampleMode mode : {SampleMode::LevelSet, SampleMode::Occupancy}) {
+        const std::string name = std::string(scene) + " " + std::to_string(res) + (mode == SampleMode::LevelSet ? " level-set" : " occupancy");
+        SurfMeshOptions options;
+        options.threads = 2;
+        expect_whole(scene_mesh(scene, res, mode), options, name.c_str());
+      }
+}
+
+TEST(SurfmeshSlow, ScenesAt256) {
+  for (const char* scene : {"sphere", "torus", "trench", "dram"})
+    for (const SampleMode mode : {SampleMode::LevelSet, SampleMode::Occupancy}) {
+      const std::string name = std::string(scene) + " 256" + (mode == SampleMode::LevelSet ? " level-set" : " occupancy");
+      SurfMeshOptions options;
+      options.threads = 2;
+      expect_whole(scene_mesh(scene, 256, mode), options, name.c_str());
+    }
+}
+
+// The real meshes of ../shared/data (skipped on a fresh clone).
+TEST(SurfmeshSlow, SharedMeshes) {
+  bool any = false;
+  for (const char* file : {"meshes/cgal/bunny00.off", "meshes/cgal/fandisk.off", "meshes/cgal/armadillo.off",
+                           "mc_meshes/vtk_brainImageSmooth/brainImageSmooth.vtk"}) {
+    const auto path = test::shared_data(file);
+    if (!path) continue;
+    any = true;
+    SurfMeshOptions options;
+    options.threads = 2;
+    expect_whole(read_mesh(*path), options, file);
+  }
+  if (!any) GTEST_SKIP() << "../shared/data is absent";
+}
+
 TEST(SurfmeshSlow, OccupancyDramCell128) {
   const TriMesh mesh = scene_mesh("dram", 128, SampleMode::Occupancy);
   const Segmentation seg = segment(mesh);
