@@ -227,7 +227,26 @@ SurfaceMesh mesh_surface(const TriMesh& input, const Segmentation& segmentation,
 
   // With a cell grid the smoothed marching-cubes border is up to half a cell off the truth
   // while the band fits are not: border nodes go onto them too.
-  if (options.project_border_nodes || options.cell_grid.enabled) project_border_nodes(segmentation, results, out.curve_is_feature, mean_edge, borders);
+  if (options.project_border_nodes || options.cell_grid.enabled) {
+    // A projection that makes a curve cross another one in a patch plane is undone for that
+    // curve's nodes (its corners included), until nothing crosses that did not before.
+    const std::vector<int> crossing_before = crossing_curves(segmentation, borders);
+    const std::vector<Eigen::Vector3d> unprojected = borders.positions;
+    project_border_nodes(segmentation, results, out.curve_is_feature, mean_edge, borders);
+    std::vector<std::uint8_t> restored(segmentation.curves.size(), 0);
+    for (bool changed = true; changed;) {
+      changed = false;
+      for (const int c : crossing_curves(segmentation, borders)) {
+        if (restored[static_cast<std::size_t>(c)] != 0 ||
+            std::binary_search(crossing_before.begin(), crossing_before.end(), c))
+          continue;
+        restored[static_cast<std::size_t>(c)] = 1;
+        for (const int g : borders.curve_nodes[static_cast<std::size_t>(c)])
+          borders.positions[static_cast<std::size_t>(g)] = unprojected[static_cast<std::size_t>(g)];
+        changed = true;
+      }
+    }
+  }
 
   run_parallel(n_patches, threads, options.progress, 0.5, 1.0, [&](std::size_t p) {
     mesh_patch(segmentation, static_cast<int>(p), borders, options, h, results[p]);

@@ -136,5 +136,20 @@ TEST(SurfmeshFidelitySlow, OccupancyTorus96) {
   EXPECT_LT(r.bands.dense.mean, r.input.dense.mean / 2.0);
 }
 
+// The band fit's border projection must not make borders cross (it is undone curve by curve
+// where it would): every patch of the occupancy DRAM cell at 128 is meshed.
+TEST(SurfmeshFidelitySlow, OccupancyDramCell128AllPatchesOk) {
+  const ScalarGrid grid = sample_scene(scene_by_name("dram"), 128, SampleMode::Occupancy);
+  const TriMesh mesh = to_trimesh(marching_cubes(grid, scene_marching_cubes_options(SampleMode::Occupancy)));
+  const Segmentation seg = segment(mesh);
+  SurfMeshOptions options;
+  options.threads = 2;
+  options.cell_grid = {true, grid.origin, grid.spacing};
+  const SurfaceMesh sm = mesh_surface(mesh, seg, options);
+  ASSERT_EQ(sm.patches.size(), seg.patches.size());
+  for (std::size_t p = 0; p < sm.patches.size(); ++p)
+    EXPECT_EQ(sm.patches[p].status, PatchStatus::Ok) << "patch " << p << ": " << sm.patches[p].message;
+}
+
 }  // namespace
 }  // namespace nurbsfront
