@@ -64,7 +64,16 @@ struct PatchBorder {
 //! axis; exact predicates).
 [[nodiscard]] std::vector<int> crossing_curves(const Segmentation& segmentation, const BorderNodes& borders);
 
-//! Per curve: on the input's boundary, or most of its edges have a dihedral above the angle.
+//! Per curve (deg): the median over its vertices (the interior ones of an open curve) of
+//! the angle between the area-weighted mean normals of the faces within `rings`
+//! edge-adjacent rings around the vertex on each side (starting in one patch, never entering
+//! the other one, so a narrow bevel patch does not hide the faces beyond it); 180 for curves on
+//! the input's boundary. Unlike the dihedral of single edges, this sees a crease that
+//! marching cubes bevelled into steps below the crease angle.
+[[nodiscard]] std::vector<double> curve_crease_angles(const TriMesh& mesh, const Segmentation& segmentation, int rings);
+
+//! Per curve: on the input's boundary, or its crease angle (curve_crease_angles, 3 rings)
+//! is above 0.75 x the given angle, or most of its input edges have a dihedral above it.
 [[nodiscard]] std::vector<std::uint8_t> feature_curves(const TriMesh& mesh, const Segmentation& segmentation,
                                                        double crease_angle_deg);
 
