@@ -23,6 +23,7 @@ struct SceneInput {
   Scene scene;
   TriMesh mesh;
   double voxel = 0.0;
+  CellGrid cells;  // the sampled grid as a cell grid (enabled: false)
 };
 
 SceneInput scene_input(const std::string& name, int resolution, SampleMode mode) {
@@ -30,6 +31,8 @@ SceneInput scene_input(const std::string& name, int resolution, SampleMode mode)
   in.scene = scene_by_name(name);
   const ScalarGrid grid = sample_scene(in.scene, resolution, mode);
   in.voxel = grid.spacing.x();
+  in.cells.origin = grid.origin;
+  in.cells.spacing = grid.spacing;
   in.mesh = to_trimesh(marching_cubes(grid, scene_marching_cubes_options(mode)));
   return in;
 }
@@ -225,14 +228,11 @@ TEST(Pipeline, OccupancySphere) {
 // the analytic sphere and under a quarter voxel everywhere, after stitching and its
 // cross-border optimisation, with the whole contract met.
 TEST(Pipeline, OccupancySphereBandFit) {
-  const Scene scene = scene_by_name("sphere");
-  const ScalarGrid grid = sample_scene(scene, 48, SampleMode::Occupancy);
-  SceneInput in;
-  in.scene = scene;
-  in.voxel = grid.spacing.x();
-  in.mesh = to_trimesh(marching_cubes(grid, scene_marching_cubes_options(SampleMode::Occupancy)));
+  const SceneInput in = scene_input("sphere", 48, SampleMode::Occupancy);
+  const Scene& scene = in.scene;
   RemeshOptions options = fast_options();
-  options.surfmesh.cell_grid = {true, grid.origin, grid.spacing};
+  options.surfmesh.cell_grid = in.cells;
+  options.surfmesh.cell_grid.enabled = true;
   const RemeshResult r = remesh(in.mesh, options);
   expect_contract_and_quality(r, in, 2);
   EXPECT_LT(volume_change(r), 0.005);
