@@ -8,7 +8,6 @@
 #include <functional>
 #include <limits>
 #include <numbers>
-#include <queue>
 #include <unordered_map>
 #include <unordered_set>
 
@@ -72,7 +71,7 @@ double max_cos_in_metric(const Vec& a, const Vec& b, const Vec& c, const Mat& M)
   for (int i = 0; i < 3; ++i) {
     const Vec u = *p[static_cast<std::size_t>((i + 1) % 3)] - *p[static_cast<std::size_t>(i)];
     const Vec w = *p[static_cast<std::size_t>((i + 2) % 3)] - *p[static_cast<std::size_t>(i)];
-    const double n = std::sqrt(u.dot(M * u) * w.dot(M * w));
+    const double n = std::sqrt(u.dot(M * u)) * std::sqrt(w.dot(M * w));  // = |u| |w| exactly for M = I
     m = std::max(m, n > 0 ? u.dot(M * w) / n : 1.0);
   }
   return m;
@@ -273,6 +272,75 @@ class EdgeGrid {
   int free_ = -1;
 };
 
+// Binary min-heap of front edges by (squared length, creation order), indexed so that an edge is
+// removed when it dies: the heap holds only the live front (a few thousand entries that stay
+// in cache) instead of every dead edge until it surfaces.
+class EdgeHeap {
+ public:
+  [[nodiscard]] bool empty() const { return h_.empty(); }
+  //! Ties of key are broken by `birth` (a creation counter), so the order does not depend
+  //! on how edge ids are recycled.
+  void push(int e, double key, std::uint32_t birth) {
+    if (pos_.size() <= static_cast<std::size_t>(e)) pos_.resize(static_cast<std::size_t>(e) + 1024, -1);
+    h_.push_back({key, birth, e});
+    up(h_.size() - 1);
+  }
+  int pop() {
+    const int e = h_.front().e;
+    remove(e);
+    return e;
+  }
+  void remove(int e) {
+    if (static_cast<std::size_t>(e) >= pos_.size() || pos_[static_cast<std::size_t>(e)] < 0) return;
+    const auto i = static_cast<std::size_t>(pos_[static_cast<std::size_t>(e)]);
+    pos_[static_cast<std::size_t>(e)] = -1;
+    const Entry last = h_.back();
+    h_.pop_back();
+    if (i == h_.size()) return;
+    h_[i] = last;
+    pos_[static_cast<std::size_t>(last.e)] = static_cast<int>(i);
+    down(i);
+    up(static_cast<std::size_t>(pos_[static_cast<std::size_t>(last.e)]));
+  }
+
+ private:
+  struct Entry {  // 16 bytes
+    double key;
+    std::uint32_t birth;
+    int e;
+  };
+  static bool less(const Entry& x, const Entry& y) { return x.key < y.key || (x.key == y.key && x.birth < y.birth); }
+  void place(std::size_t i, const Entry& x) {
+    h_[i] = x;
+    pos_[static_cast<std::size_t>(x.e)] = static_cast<int>(i);
+  }
+  void up(std::size_t i) {
+    const Entry x = h_[i];
+    while (i > 0) {
+      const std::size_t parent = (i - 1) / 2;
+      if (!less(x, h_[parent])) break;
+      place(i, h_[parent]);
+      i = parent;
+    }
+    place(i, x);
+  }
+  void down(std::size_t i) {
+    const Entry x = h_[i];
+    const std::size_t n = h_.size();
+    while (true) {
+      std::size_t c = 2 * i + 1;
+      if (c >= n) break;
+      if (c + 1 < n && less(h_[c + 1], h_[c])) ++c;
+      if (!less(h_[c], x)) break;
+      place(i, h_[c]);
+      i = c;
+    }
+    place(i, x);
+  }
+  std::vector<Entry> h_;
+  std::vector<int> pos_;  // per edge: index in h_, -1 if absent
+};
+
 struct FrontEdge {
   int a = -1, b = -1;
   bool alive = false;
@@ -287,7 +355,7 @@ class AdvancingFront {
   //! Boundary edges never cancel: both sides of an interior segment are on the front.
   void add_boundary_edge(int a, int b) {
     const int e = new_edge(a, b);
-    heap_.emplace((pt(a) - pt(b)).squaredNorm(), e);
+    heap_.push(e, (pt(a) - pt(b)).squaredNorm(), births_);
   }
   void add_isolated_point(int p) {
     const int e = new_edge(p, p);
@@ -299,8 +367,7 @@ class AdvancingFront {
                   FrontReport& report) {
     std::size_t open = 0;
     while (!heap_.empty()) {
-      const int e = heap_.top().second;
-      heap_.pop();
+      const int e = heap_.pop();
       if (!E_[static_cast<std::size_t>(e)].alive) continue;
       const bool allow_new = report.n_new_points < max_new_points;
       if (!advance(e, allow_new, report)) ++open;
@@ -315,12 +382,21 @@ class AdvancingFront {
 
  private:
   int new_edge(int a, int b) {
-    const int e = static_cast<int>(E_.size());
-    E_.push_back({a, b, true, -1});
-    stamp_e_.push_back(0);
+    // Dead edges' ids are recycled: the edge arrays stay as small as the front.
+    ++births_;
+    int e = -1;
+    if (!free_edges_.empty()) {
+      e = free_edges_.back();
+      free_edges_.pop_back();
+      E_[static_cast<std::size_t>(e)] = {a, b, true, -1};
+    } else {
+      e = static_cast<int>(E_.size());
+      E_.push_back({a, b, true, -1});
+      stamp_e_.push_back(0);
+    }
     if (a != b) {
       if (out_head_.size() < P_.size()) out_head_.resize(P_.size() + P_.size() / 2 + 16, -1);
-      E_.back().next_out = out_head_[static_cast<std::size_t>(a)];
+      E_[static_cast<std::size_t>(e)].next_out = out_head_[static_cast<std::size_t>(a)];
       out_head_[static_cast<std::size_t>(a)] = e;
     }
     grid_.insert(e, P_[static_cast<std::size_t>(a)], P_[static_cast<std::size_t>(b)]);
@@ -329,6 +405,8 @@ class AdvancingFront {
   void kill(int e) {
     auto& f = E_[static_cast<std::size_t>(e)];
     f.alive = false;
+    heap_.remove(e);
+    free_edges_.push_back(e);
     grid_.erase(e, P_[static_cast<std::size_t>(f.a)], P_[static_cast<std::size_t>(f.b)]);
     if (f.a != f.b) {
       int* link = &out_head_[static_cast<std::size_t>(f.a)];
@@ -348,7 +426,7 @@ class AdvancingFront {
       return;
     }
     const int e = new_edge(a, b);
-    heap_.emplace((P_[static_cast<std::size_t>(a)] - P_[static_cast<std::size_t>(b)]).squaredNorm(), e);
+    heap_.push(e, (P_[static_cast<std::size_t>(a)] - P_[static_cast<std::size_t>(b)]).squaredNorm(), births_);
   }
   [[nodiscard]] const Vec& pt(int i) const { return P_[static_cast<std::size_t>(i)]; }
   void next_stamp() {
@@ -373,7 +451,6 @@ class AdvancingFront {
       lo.array() -= std::max(cn, ce);
       hi.array() += std::max(cn, ce);
     }
-    next_stamp();
     auto inside = [&](const Vec& v) { return orient2d(A, B, v) >= 0 && orient2d(B, q, v) >= 0 && orient2d(q, A, v) >= 0; };
     auto conflict = [&](int u, const Vec& U, int w, const Vec& W, int s, int t) {
       // New edge (u, w) against front edge (s, t); the pair {u, w} == {s, t} was skipped.
@@ -391,9 +468,7 @@ class AdvancingFront {
       return front2d::segments_intersect(U, W, pt(s), pt(t));
     };
     bool ok = true;
-    grid_.visit(lo, hi, [&](int e) {
-      if (!ok || stamp_e_[static_cast<std::size_t>(e)] == stamp_) return;
-      stamp_e_[static_cast<std::size_t>(e)] = stamp_;
+    auto check = [&](int e) {
       const FrontEdge& f = E_[static_cast<std::size_t>(e)];
       const int s = f.a, t = f.b;
       if (s == a && t == b) return;
@@ -439,11 +514,26 @@ class AdvancingFront {
         const double u = l2 > 0 ? std::clamp((q - S).dot(d) / l2, 0.0, 1.0) : 0.0;
         if ((S + u * d - q).squaredNorm() < ce * ce) ok = false;
       }
+    };
+    if (local_ok_ && lo.x() >= local_lo_.x() && lo.y() >= local_lo_.y() && hi.x() <= local_hi_.x() && hi.y() <= local_hi_.y()) {
+      // Every edge registered in a cell meeting the box is in the local list.
+      for (int e : local_edges_) {
+        check(e);
+        if (!ok) break;
+      }
+      return ok;
+    }
+    next_stamp();
+    grid_.visit(lo, hi, [&](int e) {
+      if (!ok || stamp_e_[static_cast<std::size_t>(e)] == stamp_) return;
+      stamp_e_[static_cast<std::size_t>(e)] = stamp_;
+      check(e);
     });
     return ok;
   }
 
   void accept(int e, int p) {
+    local_ok_ = false;  // the front changes
     const int a = E_[static_cast<std::size_t>(e)].a;
     const int b = E_[static_cast<std::size_t>(e)].b;
     tris_.push_back({a, b, p});
@@ -456,19 +546,37 @@ class AdvancingFront {
     add_edge(p, b);
   }
 
+  // Collects the front edges of the cells meeting the box (once each) into local_edges_, for
+  // the validity checks of this step, and their nodes other than a and b into cand_.
+  void gather_local(const Vec& lo, const Vec& hi, int a, int b) {
+    cand_.clear();
+    local_edges_.clear();
+    local_lo_ = lo;
+    local_hi_ = hi;
+    local_ok_ = true;
+    next_stamp();
+    grid_.visit(lo, hi, [&](int e) {
+      if (stamp_e_[static_cast<std::size_t>(e)] == stamp_) return;
+      stamp_e_[static_cast<std::size_t>(e)] = stamp_;
+      local_edges_.push_back(e);
+      add_nodes(E_[static_cast<std::size_t>(e)], a, b, cand_);
+    });
+  }
+
   void gather(const Vec& lo, const Vec& hi, int a, int b, std::vector<int>& out) {
     out.clear();
     next_stamp();
-    grid_.visit(lo, hi, [&](int e) {
-      const FrontEdge& f = E_[static_cast<std::size_t>(e)];
-      for (int v : {f.a, f.b}) {
-        if (v == a || v == b) continue;
-        if (static_cast<std::size_t>(v) >= stamp_v_.size()) stamp_v_.resize(P_.size() + 1024, 0);
-        if (stamp_v_[static_cast<std::size_t>(v)] == stamp_) continue;
-        stamp_v_[static_cast<std::size_t>(v)] = stamp_;
-        out.push_back(v);
-      }
-    });
+    grid_.visit(lo, hi, [&](int e) { add_nodes(E_[static_cast<std::size_t>(e)], a, b, out); });
+  }
+  // Appends the nodes of f other than a and b not yet seen in this walk.
+  void add_nodes(const FrontEdge& f, int a, int b, std::vector<int>& out) {
+    for (int v : {f.a, f.b}) {
+      if (v == a || v == b) continue;
+      if (static_cast<std::size_t>(v) >= stamp_v_.size()) stamp_v_.resize(P_.size() + 1024, 0);
+      if (stamp_v_[static_cast<std::size_t>(v)] == stamp_) continue;
+      stamp_v_[static_cast<std::size_t>(v)] = stamp_;
+      out.push_back(v);
+    }
   }
 
   bool advance(int e, bool allow_new, FrontReport& report) {
@@ -498,7 +606,9 @@ class AdvancingFront {
     const Vec ideal = mid + offset;
     const double side = 0.5 * ((ideal - A).norm() + (ideal - B).norm());
     const double wide = kWideRadius * side;
-    gather(ideal - Vec::Constant(wide), ideal + Vec::Constant(wide), a, b, cand_);
+    // One grid walk gives the candidates and serves the validity checks of the triangles
+    // that fit in its box (those over ab with a node near the ideal point).
+    gather_local(ideal - Vec::Constant(wide), ideal + Vec::Constant(wide), a, b);
     near_.clear();
     for (int v : cand_) {
       const double dist = (pt(v) - ideal).norm();
@@ -558,13 +668,18 @@ class AdvancingFront {
   EdgeGrid grid_;
   std::vector<FrontEdge> E_;
   std::vector<std::uint32_t> stamp_e_;
+  std::vector<int> free_edges_;
+  std::uint32_t births_ = 0;  // creation counter (wraps after 4e9 edges: only ties reorder)
   std::vector<std::uint32_t> stamp_v_;
   std::uint32_t stamp_ = 0;
   std::vector<int> out_head_;
   std::unordered_map<int, int> iso_edge_;
-  std::priority_queue<std::pair<double, int>, std::vector<std::pair<double, int>>, std::greater<>> heap_;
+  EdgeHeap heap_;
   std::vector<std::array<int, 3>> tris_;
   std::vector<int> cand_;
+  std::vector<int> local_edges_;
+  Vec local_lo_ = Vec::Zero(), local_hi_ = Vec::Zero();
+  bool local_ok_ = false;
   std::vector<std::pair<double, int>> near_;
 };
 
@@ -583,29 +698,36 @@ class Optimiser {
     }
     N_.assign(3 * T_.size(), -1);
     C_.assign(3 * T_.size(), false);
-    // Slots grouped by their first vertex (CSR); the twin of a->b is the slot b->a.
+    // Directed edges grouped by their first vertex (CSR of {second vertex, slot}); the twin
+    // of slot a->b is the entry a of b's group.
     std::vector<int> start(P_.size() + 1, 0);
     for (const auto& t : T_)
       for (int x : t) ++start[static_cast<std::size_t>(x) + 1];
     for (std::size_t i = 0; i < P_.size(); ++i) start[i + 1] += start[i];
-    std::vector<int> slots(static_cast<std::size_t>(start.back()));
-    std::vector<int> fill(start.begin(), start.end() - 1);
-    for (std::size_t s = 0; s < 3 * T_.size(); ++s) slots[static_cast<std::size_t>(fill[static_cast<std::size_t>(v(static_cast<int>(s)))]++)] = static_cast<int>(s);
-    for (std::size_t s = 0; s < 3 * T_.size(); ++s) {
-      const int si = static_cast<int>(s);
-      const int a = v(si), b = v(nxt(si));
-      for (int k = start[static_cast<std::size_t>(b)]; k < start[static_cast<std::size_t>(b) + 1]; ++k) {
-        const int o = slots[static_cast<std::size_t>(k)];
-        if (v(nxt(o)) == a) {
-          N_[s] = o;
-          break;
-        }
-      }
-      if (N_[s] < 0) C_[s] = true;  // boundary edges
-      else if (b < a) continue;
-      // Constraint edges join segment nodes, which all precede first_free.
-      else C_[s] = C_[static_cast<std::size_t>(N_[s])] = a < first_free && b < first_free && constraints.count(ukey(a, b)) > 0;
+    std::vector<std::array<int, 2>> out(static_cast<std::size_t>(start.back()));
+    {
+      std::vector<int> fill(start.begin(), start.end() - 1);
+      for (std::size_t t = 0; t < T_.size(); ++t)
+        for (int i = 0; i < 3; ++i)
+          out[static_cast<std::size_t>(fill[static_cast<std::size_t>(T_[t][static_cast<std::size_t>(i)])]++)] = {
+              T_[t][static_cast<std::size_t>((i + 1) % 3)], static_cast<int>(3 * t) + i};
     }
+    for (std::size_t t = 0; t < T_.size(); ++t)
+      for (int i = 0; i < 3; ++i) {
+        const std::size_t s = 3 * t + static_cast<std::size_t>(i);
+        if (N_[s] >= 0) continue;
+        const int a = T_[t][static_cast<std::size_t>(i)], b = T_[t][static_cast<std::size_t>((i + 1) % 3)];
+        for (int k = start[static_cast<std::size_t>(b)]; k < start[static_cast<std::size_t>(b) + 1]; ++k)
+          if (out[static_cast<std::size_t>(k)][0] == a) {
+            const int o = out[static_cast<std::size_t>(k)][1];
+            N_[s] = o;
+            N_[static_cast<std::size_t>(o)] = static_cast<int>(s);
+            // Constraint edges join segment nodes, which all precede first_free.
+            C_[s] = C_[static_cast<std::size_t>(o)] = a < first_free && b < first_free && constraints.count(ukey(a, b)) > 0;
+            break;
+          }
+        if (N_[s] < 0) C_[s] = true;  // boundary edges
+      }
   }
 
   [[nodiscard]] int v(int slot) const { return T_[static_cast<std::size_t>(slot / 3)][static_cast<std::size_t>(slot % 3)]; }
@@ -652,9 +774,9 @@ class Optimiser {
         bool ok = true;
         double worst_new = 2.0;
         for (int k = b0; k < b1 && ok; ++k) {
-          const auto& t = T_[static_cast<std::size_t>(inc.tri[static_cast<std::size_t>(k)])];
-          ok = orient2d(pt(t[0]), pt(t[1]), pt(t[2])) > 0;
-          worst_new = std::min(worst_new, quality(t));
+          const double q = checked_quality(T_[static_cast<std::size_t>(inc.tri[static_cast<std::size_t>(k)])]);
+          ok = q > kNotOriented;
+          worst_new = std::min(worst_new, q);
         }
         if (ok && worst_new < kSmoothAcceptAlpha) {
           const Vec moved = P_[vtx];
@@ -817,6 +939,21 @@ class Optimiser {
     if (metric_) return alpha_in_metric(pt(t[0]), pt(t[1]), pt(t[2]), tri_metric(t));
     return alpha(pt(t[0]), pt(t[1]), pt(t[2]));
   }
+  // quality(t) if t is exactly counter-clockwise, else kNotOriented (below every alpha). The
+  // orientation filter and alpha share their determinant.
+  static constexpr double kNotOriented = -2.0;
+  [[nodiscard]] double checked_quality(const std::array<int, 3>& t) const {
+    const Vec &a = pt(t[0]), &b = pt(t[1]), &c = pt(t[2]);
+    if (metric_) return orient2d(a, b, c) > 0 ? quality(t) : kNotOriented;
+    constexpr double kEps = std::numeric_limits<double>::epsilon() / 2.0;
+    constexpr double kErrBound = (3.0 + 16.0 * kEps) * kEps;  // as in front2d::orient2d
+    const double left = (a.x() - c.x()) * (b.y() - c.y());
+    const double right = (a.y() - c.y()) * (b.x() - c.x());
+    const double det = left - right;
+    if (!(det > kErrBound * (std::abs(left) + std::abs(right))) && orient2d(a, b, c) <= 0) return kNotOriented;
+    const double sq = (b - a).squaredNorm() + (c - b).squaredNorm() + (a - c).squaredNorm();
+    return sq > 0 ? 2.0 * kSqrt3 * det / sq : 0.0;
+  }
   [[nodiscard]] double max_cos(const std::array<int, 3>& t) const {
     if (metric_) return max_cos_in_metric(pt(t[0]), pt(t[1]), pt(t[2]), tri_metric(t));
     return max_cos_in_metric(pt(t[0]), pt(t[1]), pt(t[2]), Mat::Identity());
@@ -844,15 +981,20 @@ class Optimiser {
   // the circumcircle of abc; with a metric, in the image of the quad under the Cholesky
   // factor of the mean tensor of its four vertices.
   [[nodiscard]] bool should_swap(int a, int b, int c, int d) const {
-    if (!metric_) {
-      const Vec &A = pt(a), &B = pt(b), &Cc = pt(c), &D = pt(d);
-      const double scale = std::max({(A - B).squaredNorm(), (Cc - D).squaredNorm()});
-      return front2d::incircle(A, B, Cc, D) > kIncircleRelative * scale * scale;
-    }
+    if (!metric_) return clearly_in_circle(pt(a), pt(b), pt(c), pt(d));
     const Mat R = ((mv(a) + mv(b) + mv(c) + mv(d)) * 0.25).llt().matrixU();
-    const Vec A = R * pt(a), B = R * pt(b), Cc = R * pt(c), D = R * pt(d);
-    const double scale = std::max({(A - B).squaredNorm(), (Cc - D).squaredNorm()});
-    return front2d::incircle(A, B, Cc, D) > kIncircleRelative * scale * scale;
+    return clearly_in_circle(R * pt(a), R * pt(b), R * pt(c), R * pt(d));
+  }
+  // d inside the circle of the counter-clockwise abc by more than the relative margin
+  // kIncircleRelative (so that near-cocircular quads never ping-pong). Evaluated in double
+  // relative to d: its rounding error, about 1e-15 of the scale, is far below the margin.
+  [[nodiscard]] static bool clearly_in_circle(const Vec& a, const Vec& b, const Vec& c, const Vec& d) {
+    const Vec ad = a - d, bd = b - d, cd = c - d;
+    const double det = ad.squaredNorm() * (bd.x() * cd.y() - cd.x() * bd.y()) +
+                       bd.squaredNorm() * (cd.x() * ad.y() - ad.x() * cd.y()) +
+                       cd.squaredNorm() * (ad.x() * bd.y() - bd.x() * ad.y());
+    const double scale = std::max((a - b).squaredNorm(), (c - d).squaredNorm());
+    return det > kIncircleRelative * scale * scale;
   }
   // The smoothing target of vtx: the mean of its neighbours (each counted once per incident
   // triangle). With a metric that varies over the star, the point x minimising
@@ -1034,14 +1176,21 @@ Mesh2d mesh_pslg(const Pslg& pslg, const FrontOptions& options) {
   mean_edge /= static_cast<double>(std::max<std::size_t>(1, front0.size()));
   const double typical = std::max(mean_edge, std::sqrt(std::abs(mesh.report.domain_area) / std::max(1.0, expected)));
   const double margin = 1e-3 * (hi - lo).norm();
-  EdgeGrid grid(lo - Vec::Constant(margin), hi + Vec::Constant(margin), typical);
-  AdvancingFront front(P, size, metric, std::move(grid));
-  for (const auto& e : front0) front.add_boundary_edge(e[0], e[1]);
-  for (int p : dom.isolated_points) front.add_isolated_point(p);
   const auto budget = static_cast<std::size_t>(options.work_budget_factor * (expected + 10.0 * static_cast<double>(front0.size())) + 1000.0);
-  report_progress(options.progress, "front2d: front", 0.0);
-  mesh.report.n_open_edges = front.run(budget, static_cast<std::size_t>(2 * expected), options.progress, mesh.report);
-  mesh.triangles = std::move(front.triangles());
+  {  // the front's grid, heap and edges are released before the optimisation
+    EdgeGrid grid(lo - Vec::Constant(margin), hi + Vec::Constant(margin), typical);
+    AdvancingFront front(P, size, metric, std::move(grid));
+    // About `expected` triangles and half as many points: reserve so that the arrays are not
+    // copied while they grow (capped, in case the estimate is far off).
+    const auto hint = static_cast<std::size_t>(std::min(1.05 * expected + 16.0, 1e8));
+    front.triangles().reserve(hint);
+    P.reserve(P.size() + hint / 2 + 16);
+    for (const auto& e : front0) front.add_boundary_edge(e[0], e[1]);
+    for (int p : dom.isolated_points) front.add_isolated_point(p);
+    report_progress(options.progress, "front2d: front", 0.0);
+    mesh.report.n_open_edges = front.run(budget, static_cast<std::size_t>(2 * expected), options.progress, mesh.report);
+    mesh.triangles = std::move(front.triangles());
+  }
   mesh.report.seconds_front = clock.seconds();
   if (mesh.report.n_open_edges > 0) {
     mesh.report.status = FrontStatus::Incomplete;

@@ -23,6 +23,10 @@ namespace nurbsfront::front2d {
 //! and as orient2d's fallback.
 [[nodiscard]] int orient2d_exact(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& c);
 
+//! Second stage of orient2d(): exact when the coordinate differences are exact (a 4-term
+//! expansion of two FMA-split products), else orient2d_exact().
+[[nodiscard]] int orient2d_adapt(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& c);
+
 //! Sign of the signed area of (a, b, c): +1 if counter-clockwise, -1 if clockwise, 0 if
 //! collinear. Exact. Inline: the filter decides almost every call; a difference that is
 //! exactly zero (equal coordinates: a subtraction never rounds to zero) makes its product
@@ -42,7 +46,7 @@ namespace nurbsfront::front2d {
   auto sgn = [](double x) { return (x > 0.0) - (x < 0.0); };
   if (acx == 0.0 || bcy == 0.0) return -sgn(acy) * sgn(bcx);
   if (acy == 0.0 || bcx == 0.0) return sgn(acx) * sgn(bcy);
-  return orient2d_exact(a, b, c);
+  return orient2d_adapt(a, b, c);
 }
 
 //! Naive double evaluation of 2 * signed area of (a, b, c) (not exact; for tests and for
