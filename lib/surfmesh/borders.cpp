@@ -43,11 +43,13 @@ constexpr std::size_t kMinSmoothedLoopVertices = 8;
 constexpr double kMaxChordDeviation = 0.25;
 // More pieces than this multiple of the size-driven count are never added for the chord rule.
 constexpr int kMaxRefinement = 4;
-// Deviations up to this multiple of the polyline's mean segment length (the input's edge
-// length along the curve) are the curve's own zig-zag, not a bend: on marching-cubes inputs
-// the smoothed borders keep some of it, and refining for it put border nodes 4x closer than
-// the target size (occupancy sphere at 64 cells: min angle 18 deg, 2% obtuse triangles).
-constexpr double kZigZagSegments = 1.0;
+// Deviations up to this multiple of the polyline's roughness (the mean distance of a point
+// to the chord of its two neighbours) are the curve's own zig-zag, not a bend: on
+// marching-cubes inputs the smoothed borders keep some of it, and refining for it put border
+// nodes 4x closer than the target size (occupancy sphere at 64 cells: min angle 18 deg, 2%
+// obtuse triangles). A straight polyline with a few sharp corners has almost no roughness
+// and keeps the plain chord rule.
+constexpr double kZigZagRoughness = 3.0;
 // Rings of faces on each side of a curve vertex whose mean normals give its crease angle.
 constexpr int kCreaseRings = 3;
 // Share of the crease angle above which that ring-averaged angle marks a feature: the
@@ -65,7 +67,7 @@ double point_segment_distance(const Eigen::Vector3d& q, const Eigen::Vector3d& a
 
 // Resamples a polyline (closed: the last point joins the first) into n pieces of equal
 // integral of 1 / size, n = max(min_pieces, round(integral)), raised until no polyline
-// point is further than kMaxChordDeviation x chord (and kZigZagSegments x the mean segment)
+// point is further than kMaxChordDeviation x chord (and kZigZagRoughness x the roughness)
 // from its piece's chord. Returns the
 // interior points (open: n - 1 of them, the ends are the polyline's ends) or all n points
 // starting at the first polyline point (closed).
@@ -80,9 +82,9 @@ std::vector<Eigen::Vector3d> resample(const std::vector<Eigen::Vector3d>& pts, b
   for (std::size_t i = 1; i < m; ++i)
     cumulative[i] = cumulative[i - 1] + (poly[i] - poly[i - 1]).norm() * 0.5 * (inv_size[i] + inv_size[i - 1]);
   const double total = cumulative.back();
-  double polyline_length = 0.0;
-  for (std::size_t i = 1; i < m; ++i) polyline_length += (poly[i] - poly[i - 1]).norm();
-  const double zig_zag = kZigZagSegments * polyline_length / static_cast<double>(std::max<std::size_t>(m - 1, 1));
+  double roughness = 0.0;
+  for (std::size_t i = 1; i + 1 < m; ++i) roughness += point_segment_distance(poly[i], poly[i - 1], poly[i + 1]);
+  const double zig_zag = m > 2 ? kZigZagRoughness * roughness / static_cast<double>(m - 2) : 0.0;
   const long rounded = std::lround(total);
   const int n0 = std::max(min_pieces, static_cast<int>(std::min<long>(rounded, 1L << 30)));
   std::vector<Eigen::Vector3d> nodes;  // all n + 1 piece ends, first and last = the polyline's ends
