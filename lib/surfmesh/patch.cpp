@@ -213,12 +213,20 @@ void fit_patch(const TriMesh& mesh, const Segmentation& seg, int p, const Border
     fit.min_spacing = options.fit.min_spacing_edges * mean_edge;
     fit.max_levels = options.fit.max_levels;
     fit.domain = Rectangle{lo - Eigen::Vector2d::Constant(margin), hi + Eigen::Vector2d::Constant(margin)};
-    FitResult fitted = fit_height_field(local, fit);
     result.surface.frame = frame;
-    result.surface.field = std::move(fitted.field);
+    if (options.cell_grid.enabled) {
+      // Cell-based input: fit the bands of the vertices (docs/surfmesh.md, "Cell-based inputs").
+      BandFitResult fitted = fit_cell_bands(points, frame, options.cell_grid, *fit.domain);
+      result.surface.field = std::move(fitted.field);
+      result.report.fit_max_residual = fitted.max_miss;
+      result.report.fit_levels = 1;
+    } else {
+      FitResult fitted = fit_height_field(local, fit);
+      result.surface.field = std::move(fitted.field);
+      result.report.fit_max_residual = fitted.max_residual();
+      result.report.fit_levels = static_cast<int>(fitted.levels.size());
+    }
     result.has_surface = true;
-    result.report.fit_max_residual = fitted.max_residual();
-    result.report.fit_levels = static_cast<int>(fitted.levels.size());
   } catch (...) {
     result.report.status = PatchStatus::FitFailed;
     result.report.message = "fit failed: " + what_of(std::current_exception());

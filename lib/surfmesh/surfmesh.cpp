@@ -148,9 +148,19 @@ void PatchFitOptions::validate() const {
   if (max_levels < 1 || max_levels > 20) bad_option("fit.max_levels must be in [1, 20], got " + std::to_string(max_levels));
 }
 
+void CellGrid::validate() const {
+  if (!enabled) return;
+  if (!origin.allFinite()) bad_option("cell_grid.origin must be finite");
+  if (!(spacing.allFinite() && spacing.minCoeff() > 0.0)) bad_option("cell_grid.spacing must be finite and > 0");
+  if (!finite_positive(lattice_cells)) bad_option("cell_grid.lattice_cells must be finite and > 0, got " + std::to_string(lattice_cells));
+  if (!(std::isfinite(smoothing_cells) && smoothing_cells >= 0.0))
+    bad_option("cell_grid.smoothing_cells must be finite and >= 0, got " + std::to_string(smoothing_cells));
+}
+
 void SurfMeshOptions::validate() const {
   sizing.validate();
   fit.validate();
+  cell_grid.validate();
   if (smoothing_passes < 0) bad_option("smoothing_passes must be >= 0, got " + std::to_string(smoothing_passes));
   if (!(crease_angle_deg > 0.0 && crease_angle_deg <= 180.0))
     bad_option("crease_angle_deg must be in (0, 180], got " + std::to_string(crease_angle_deg));
@@ -215,7 +225,28 @@ SurfaceMesh mesh_surface(const TriMesh& input, const Segmentation& segmentation,
     fit_patch(input, segmentation, static_cast<int>(p), borders, options, mean_edge, results[p]);
   });
 
-  if (options.project_border_nodes) project_border_nodes(segmentation, results, out.curve_is_feature, mean_edge, borders);
+  // With a cell grid the smoothed marching-cubes border is up to half a cell off the truth
+  // while the band fits are not: border nodes go onto them too.
+  if (options.project_border_nodes || options.cell_grid.enabled) {
+    // A projection that makes a curve cross another one in a patch plane is undone for that
+    // curve's nodes (its corners included), until nothing crosses that did not before.
+    const std::vector<int> crossing_before = crossing_curves(segmentation, borders);
+    const std::vector<Eigen::Vector3d> unprojected = borders.positions;
+    project_border_nodes(segmentation, results, out.curve_is_feature, mean_edge, borders);
+    std::vector<std::uint8_t> restored(segmentation.curves.size(), 0);
+    for (bool changed = true; changed;) {
+      changed = false;
+      for (const int c : crossing_curves(segmentation, borders)) {
+        if (restored[static_cast<std::size_t>(c)] != 0 ||
+            std::binary_search(crossing_before.begin(), crossing_before.end(), c))
+          continue;
+        restored[static_cast<std::size_t>(c)] = 1;
+        for (const int g : borders.curve_nodes[static_cast<std::size_t>(c)])
+          borders.positions[static_cast<std::size_t>(g)] = unprojected[static_cast<std::size_t>(g)];
+        changed = true;
+      }
+    }
+  }
 
   run_parallel(n_patches, threads, options.progress, 0.5, 1.0, [&](std::size_t p) {
     mesh_patch(segmentation, static_cast<int>(p), borders, options, h, results[p]);

@@ -64,10 +64,32 @@ struct PatchFitOptions {
   void validate() const;
 };
 
+//! The lattice of a cell-based (0/1 occupancy) input: its cell centres are origin +
+//! (i, j, k) .* spacing, and its marching-cubes vertices (iso 0.5) are midpoints of lattice
+//! edges between an inside and an outside centre, so the true surface crosses each such edge
+//! within half a cell of the vertex. For a grid made by sample_scene(..., Occupancy) or read
+//! from a voxel file: {true, grid.origin, grid.spacing}.
+struct CellGrid {
+  //! Fit the patches to these bands (fit_height_field_to_bands) instead of fitting the
+  //! vertices (fit_height_field), and project the border nodes onto the fits as with
+  //! project_border_nodes. Default false: level-set and other inputs keep the plain fit.
+  bool enabled = false;
+  Eigen::Vector3d origin = Eigen::Vector3d::Zero();  //!< a cell centre (world)
+  Eigen::Vector3d spacing = Eigen::Vector3d::Ones(); //!< cell size along x, y, z (> 0)
+  //! Band-fit lattice spacing in cells (smallest spacing component). Default 1.5.
+  double lattice_cells = 1.5;
+  //! Band-fit smoothing length in cells (BandFitOptions::smoothing_length). Default 2.25.
+  double smoothing_cells = 2.25;
+  void validate() const;
+};
+
 //! Options of mesh_surface().
 struct SurfMeshOptions {
   SizingOptions sizing;
   PatchFitOptions fit;
+  //! Cell-based input: fit every patch to the band of each vertex (see CellGrid). Vertices
+  //! not at the midpoint of a lattice edge are plain point samples. Default off.
+  CellGrid cell_grid;
   //! Smoothing passes of the 2D front per patch (FrontOptions::smoothing_passes). Default 3.
   int smoothing_passes = 3;
   //! Crease angle (deg) for SurfaceMesh::curve_is_feature. Pass the segmentation's

@@ -10,6 +10,7 @@
 
 #include <Eigen/Core>
 
+#include "nurbsfront/nurbs/band_fit.h"
 #include "nurbsfront/surfmesh/surfmesh.h"
 
 namespace nurbsfront::surfmesh_detail {
@@ -75,6 +76,16 @@ struct PatchBorder {
 //! is above 0.75 x the given angle, or most of its input edges have a dihedral above it.
 [[nodiscard]] std::vector<std::uint8_t> feature_curves(const TriMesh& mesh, const Segmentation& segmentation,
                                                        double crease_angle_deg);
+
+//! The band samples of points (world) in a patch frame: a point at the midpoint of a cell
+//! lattice edge (one coordinate half-way between centres, the other two on centres) gets
+//! that edge as its band, any other point is a plain point sample.
+[[nodiscard]] std::vector<BandSample> cell_band_samples(const std::vector<Eigen::Vector3d>& world, const PatchFrame& frame,
+                                                        const CellGrid& grid);
+
+//! The band fit of a patch's points (world) in its frame over `domain` (frame coordinates).
+[[nodiscard]] BandFitResult fit_cell_bands(const std::vector<Eigen::Vector3d>& world, const PatchFrame& frame,
+                                           const CellGrid& grid, const Rectangle& domain);
 
 //! One patch's result before global numbering.
 struct PatchResult {

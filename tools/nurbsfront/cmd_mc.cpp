@@ -55,8 +55,8 @@ void run_mc(const McArgs& args) {
   if (args.inside_below) options.inside_above = false;
   options.pad = args.pad;
   options.progress = terminal_progress(args.quiet);
-  std::cout << "grid " << grid.dims[0] << " x " << grid.dims[1] << " x " << grid.dims[2] << ", spacing "
-            << grid.spacing.transpose() << ", iso " << options.iso << " (inside "
+  std::cout << "grid " << grid.dims[0] << " x " << grid.dims[1] << " x " << grid.dims[2] << ", origin "
+            << grid.origin.transpose() << ", spacing " << grid.spacing.transpose() << ", iso " << options.iso << " (inside "
             << (options.inside_above ? "above" : "below") << ")" << (args.iso ? "" : " [default]") << '\n';
   watch.restart();
   const TriangleSoup soup = marching_cubes(grid, options);

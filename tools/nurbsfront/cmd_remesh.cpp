@@ -31,6 +31,8 @@ struct RemeshArgs {
   std::string scene;
   int resolution = 128;
   bool occupancy = false;
+  std::vector<double> cell_grid;  // ORIGIN_X ORIGIN_Y ORIGIN_Z SPACING
+  bool no_cell_grid = false;
   std::optional<double> size;
   std::optional<double> relative_size;
   bool adaptive = false;
@@ -43,7 +45,10 @@ struct RemeshArgs {
   bool quiet = false;
 };
 
-TriMesh load_input(const RemeshArgs& args, const ProgressCallback& progress) {
+// Loads IN or samples the scene. An occupancy scene switches the band fit on with its
+// grid (CellGrid) unless --no-cell-grid is given.
+TriMesh load_input(const RemeshArgs& args, RemeshOptions& remesh_options) {
+  const ProgressCallback& progress = remesh_options.progress;
   if (args.input.empty() == args.scene.empty()) {
     throw InvalidInput("remesh: give either an input mesh IN or --scene NAME (exactly one)");
   }
@@ -52,7 +57,9 @@ TriMesh load_input(const RemeshArgs& args, const ProgressCallback& progress) {
     const SampleMode mode = args.occupancy ? SampleMode::Occupancy : SampleMode::LevelSet;
     MarchingCubesOptions options = scene_marching_cubes_options(mode);
     options.progress = progress;
-    soup = marching_cubes(sample_scene(scene_by_name(args.scene), args.resolution, mode), options);
+    const ScalarGrid grid = sample_scene(scene_by_name(args.scene), args.resolution, mode);
+    if (args.occupancy && !args.no_cell_grid) remesh_options.surfmesh.cell_grid = {true, grid.origin, grid.spacing};
+    soup = marching_cubes(grid, options);
   } else {
     if (args.occupancy) throw InvalidInput("remesh: --occupancy applies to --scene only");
     soup = read_soup(args.input);
@@ -77,6 +84,11 @@ void run_remesh(RemeshArgs& args) {
   if (args.max_slope) options.segment.max_slope_deg = *args.max_slope;
   if (args.crease) options.segment.crease_angle_deg = *args.crease;
   if (args.threads) options.set_threads(*args.threads);
+  if (!args.cell_grid.empty()) {
+    if (!args.scene.empty()) throw InvalidInput("remesh: --cell-grid applies to an input file (an occupancy scene sets it itself)");
+    const double spacing = args.cell_grid[3];
+    options.surfmesh.cell_grid = {true, {args.cell_grid[0], args.cell_grid[1], args.cell_grid[2]}, {spacing, spacing, spacing}};
+  }
   options.progress = terminal_progress(args.quiet);
   options.validate();
   // Fail on an unwritable or unsupported output before the work.
@@ -84,7 +96,8 @@ void run_remesh(RemeshArgs& args) {
   if (!args.vtk.empty()) (void)mesh_format_from_path(args.vtk);
 
   Stopwatch watch;
-  const TriMesh input = load_input(args, options.progress);
+  const TriMesh input = load_input(args, options);
+  options.validate();
   const double seconds_input = watch.seconds();
   const RemeshResult result = remesh(input, options);
   watch.restart();
@@ -124,6 +137,13 @@ void add_remesh_command(CLI::App& app) {
   cmd->add_option("--scene", args->scene, "Built-in scene's marching-cubes surface instead of IN: sphere, torus, trench, dram");
   cmd->add_option("--res", args->resolution, "Scene cells along the longest side (default 128)");
   cmd->add_flag("--occupancy", args->occupancy, "Sample the scene as 0/1 cell occupancy instead of a signed distance");
+  auto* cell_grid = cmd->add_option("--cell-grid", args->cell_grid,
+                                    "ORIGIN_X ORIGIN_Y ORIGIN_Z SPACING: IN is the marching-cubes surface of 0/1 cells "
+                                    "(centres at ORIGIN + SPACING * (i, j, k)); fit the patches to the cell bands")
+                        ->expected(4);
+  auto* no_cell_grid = cmd->add_flag("--no-cell-grid", args->no_cell_grid,
+                                     "With --scene --occupancy: plain fit of the vertices instead of the band fit");
+  cell_grid->excludes(no_cell_grid);
   auto* size = cmd->add_option("--size", args->size, "Target edge length (length units)");
   auto* relative = cmd->add_option("--relative-size", args->relative_size,
                                    "Target edge length as a multiple of the input's mean edge length (default 1.5)");

@@ -1,0 +1,346 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Band-constrained height-field fit: a P-spline (third-difference penalty) on the bicubic
+// lattice, solved by sparse Cholesky, with an active set of the bands the surface misses.
+// Not built on fit_height_field (MBA): MBA has no smoothness prior, so a flat terrace that
+// lies inside all its bands stays flat; the third-derivative prior is what carries the
+// curvature of the neighbouring terraces over it.
+
+#include "nurbsfront/nurbs/band_fit.h"
+
+#include <Eigen/Eigenvalues>
+#include <Eigen/Sparse>
+#include <Eigen/SparseCholesky>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <string>
+
+#include "nurbsfront/core/error.h"
+
+namespace nurbsfront {
+namespace {
+
+using Triplets = std::vector<Eigen::Triplet<double>>;
+
+// Relative tolerance on the unit length of a band's direction.
+constexpr double kUnitTolerance = 1e-6;
+// Diagonal regularisation (the data weights are about 1 per sample): only makes the system
+// definite should the samples not determine the penalty's null space (the quadrics); far
+// below any data term, and not scaled with the penalty, which would bias quadrics.
+constexpr double kRidge = 1e-12;
+// Bisection steps for a crossing (2^-40 of the band's length).
+constexpr int kBisectionSteps = 40;
+// Step halvings of the line search at most.
+constexpr int kLineSearchSteps = 12;
+
+// The 16 coefficient indices and tensor weights of the field at (x, y), matching
+// BicubicHeightField::value (border cells extrapolate outside the rectangle).
+struct Stencil {
+  std::array<int, 16> index{};
+  std::array<double, 16> weight{};
+};
+
+int locate(double x, double x0, double h, int n, double& s) {
+  const double f = (x - x0) / h;
+  int i = 0;
+  if (!(f >= 0.0)) {
+    i = 0;
+  } else if (f >= static_cast<double>(n)) {
+    i = n - 1;
+  } else {
+    i = static_cast<int>(f);
+  }
+  s = f - static_cast<double>(i);
+  return i;
+}
+
+Stencil stencil(const BicubicHeightField& field, double x, double y) {
+  double s = 0.0;
+  double t = 0.0;
+  const int i = locate(x, field.domain().min.x(), field.spacing_x(), field.n_cells_x(), s);
+  const int j = locate(y, field.domain().min.y(), field.spacing_y(), field.n_cells_y(), t);
+  double bx[4];
+  double by[4];
+  detail::cubic_weights(s, bx);
+  detail::cubic_weights(t, by);
+  const int stride = field.n_cells_x() + 3;
+  Stencil out;
+  for (int l = 0; l < 4; ++l)
+    for (int k = 0; k < 4; ++k) {
+      out.index[static_cast<std::size_t>(4 * l + k)] = (j + l) * stride + (i + k);
+      out.weight[static_cast<std::size_t>(4 * l + k)] = bx[k] * by[l];
+    }
+  return out;
+}
+
+void add_data(const Stencil& st, double z, double w, Triplets& a, Eigen::VectorXd& rhs) {
+  for (std::size_t u = 0; u < 16; ++u) {
+    rhs[st.index[u]] += w * z * st.weight[u];
+    for (std::size_t v = 0; v < 16; ++v) a.emplace_back(st.index[u], st.index[v], w * st.weight[u] * st.weight[v]);
+  }
+}
+
+// lambda sum over nodes of C(3, a) (Delta_x^a Delta_y^b c / (h_x^a h_y^b))^2 h_x h_y, a + b = 3:
+// the discrete third-derivative energy (rotation invariant in the continuum).
+void add_penalty(int n_x, int n_y, double h_x, double h_y, double lambda, Triplets& a) {
+  const int nx = n_x + 3;
+  const int ny = n_y + 3;
+  static constexpr std::array<std::array<double, 4>, 4> kBinomialSigned{{
+      {1.0, 0.0, 0.0, 0.0}, {-1.0, 1.0, 0.0, 0.0}, {1.0, -2.0, 1.0, 0.0}, {-1.0, 3.0, -3.0, 1.0}}};
+  static constexpr std::array<double, 4> kMultiplicity{1.0, 3.0, 3.0, 1.0};
+  for (int ax = 0; ax <= 3; ++ax) {
+    const int ay = 3 - ax;
+    const double scale = lambda * kMultiplicity[static_cast<std::size_t>(ax)] * h_x * h_y /
+                         (std::pow(h_x, 2 * ax) * std::pow(h_y, 2 * ay));
+    for (int j = 0; j + ay < ny; ++j)
+      for (int i = 0; i + ax < nx; ++i) {
+        std::array<int, 16> idx{};
+        std::array<double, 16> coef{};
+        int m = 0;
+        for (int q = 0; q <= ay; ++q)
+          for (int p = 0; p <= ax; ++p) {
+            idx[static_cast<std::size_t>(m)] = (j + q) * nx + (i + p);
+            coef[static_cast<std::size_t>(m)] = kBinomialSigned[static_cast<std::size_t>(ax)][static_cast<std::size_t>(p)] *
+                                                kBinomialSigned[static_cast<std::size_t>(ay)][static_cast<std::size_t>(q)];
+            ++m;
+          }
+        for (int u = 0; u < m; ++u)
+          for (int v = 0; v < m; ++v)
+            a.emplace_back(idx[static_cast<std::size_t>(u)], idx[static_cast<std::size_t>(v)],
+                           scale * coef[static_cast<std::size_t>(u)] * coef[static_cast<std::size_t>(v)]);
+      }
+  }
+}
+
+Eigen::Vector3d band_end(const BandSample& s, double t) { return s.point + t * s.half_length * s.direction; }
+
+double gap(const BicubicHeightField& field, const Eigen::Vector3d& q) { return q.z() - field.value(q.x(), q.y()); }
+
+void validate_samples(const std::vector<BandSample>& samples) {
+  if (samples.size() < 3) throw InvalidInput("fit_height_field_to_bands: at least 3 samples are needed, got " + std::to_string(samples.size()));
+  Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+  for (std::size_t i = 0; i < samples.size(); ++i) {
+    const BandSample& s = samples[i];
+    if (!s.point.allFinite() || !s.direction.allFinite() || !std::isfinite(s.half_length))
+      throw InvalidInput("fit_height_field_to_bands: sample " + std::to_string(i) + " is not finite");
+    if (s.half_length < 0.0) throw InvalidInput("fit_height_field_to_bands: sample " + std::to_string(i) + " has a negative half length");
+    if (s.half_length > 0.0 && !(std::abs(s.direction.norm() - 1.0) <= kUnitTolerance))
+      throw InvalidInput("fit_height_field_to_bands: sample " + std::to_string(i) + " has a band direction that is not a unit vector");
+    mean += s.point.head<2>();
+  }
+  mean /= static_cast<double>(samples.size());
+  Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();
+  for (const auto& s : samples) {
+    const Eigen::Vector2d d = s.point.head<2>() - mean;
+    cov += d * d.transpose();
+  }
+  const Eigen::Vector2d ev = Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(cov, Eigen::EigenvaluesOnly).eigenvalues();
+  if (!(ev[1] > 0.0) || !(ev[0] > 1e-12 * ev[1]))
+    throw InvalidInput("fit_height_field_to_bands: the samples are coincident or collinear in the xy-plane");
+}
+
+}  // namespace
+
+void BandFitOptions::validate() const {
+  if (!(std::isfinite(spacing) && spacing > 0.0)) throw InvalidInput("BandFitOptions: spacing must be finite and > 0, got " + std::to_string(spacing));
+  if (!(std::isfinite(smoothing_length) && smoothing_length >= 0.0))
+    throw InvalidInput("BandFitOptions: smoothing_length must be finite and >= 0, got " + std::to_string(smoothing_length));
+  if (!(centre_weight >= 0.0 && centre_weight <= 1.0))
+    throw InvalidInput("BandFitOptions: centre_weight must be in [0, 1], got " + std::to_string(centre_weight));
+  if (!(std::isfinite(band_weight) && band_weight >= 1.0))
+    throw InvalidInput("BandFitOptions: band_weight must be finite and >= 1, got " + std::to_string(band_weight));
+  if (max_iterations < 1 || max_iterations > 1000)
+    throw InvalidInput("BandFitOptions: max_iterations must be in [1, 1000], got " + std::to_string(max_iterations));
+  if (domain) domain->validate();
+}
+
+bool band_target(const BicubicHeightField& field, const BandSample& sample, Eigen::Vector3d& target) {
+  if (sample.half_length == 0.0) {
+    target = sample.point;
+    return true;
+  }
+  double lo = -1.0;
+  double hi = 1.0;
+  double g_lo = gap(field, band_end(sample, lo));
+  const double g_hi = gap(field, band_end(sample, hi));
+  if ((g_lo > 0.0 && g_hi > 0.0) || (g_lo < 0.0 && g_hi < 0.0)) {
+    target = band_end(sample, std::abs(g_lo) <= std::abs(g_hi) ? lo : hi);
+    return false;
+  }
+  for (int k = 0; k < kBisectionSteps; ++k) {
+    const double mid = 0.5 * (lo + hi);
+    const double g_mid = gap(field, band_end(sample, mid));
+    if ((g_mid > 0.0) == (g_lo > 0.0) && g_mid != 0.0) {
+      lo = mid;
+      g_lo = g_mid;
+    } else {
+      hi = mid;
+    }
+  }
+  target = band_end(sample, 0.5 * (lo + hi));
+  return true;
+}
+
+BandFitResult fit_height_field_to_bands(const std::vector<BandSample>& samples, const BandFitOptions& options) {
+  options.validate();
+  validate_samples(samples);
+  Rectangle domain;
+  if (options.domain) {
+    domain = *options.domain;
+  } else {
+    domain.min = domain.max = samples.front().point.head<2>();
+    for (const auto& s : samples) {
+      domain.min = domain.min.cwiseMin(s.point.head<2>());
+      domain.max = domain.max.cwiseMax(s.point.head<2>());
+    }
+  }
+  const int n_x = std::max(1, static_cast<int>(std::ceil(domain.width() / options.spacing)));
+  const int n_y = std::max(1, static_cast<int>(std::ceil(domain.height() / options.spacing)));
+  BandFitResult result;
+  result.field = BicubicHeightField(domain, n_x, n_y);
+  BicubicHeightField& field = result.field;
+  const int n_coef = (n_x + 3) * (n_y + 3);
+
+  // lambda: the energy integral of l^6 |D^3 f|^2 times the sample density (per area).
+  const double length = options.smoothing_length > 0.0 ? options.smoothing_length : 1.5 * options.spacing;
+  // Density over the cells that hold samples, not over the rectangle: a ring-shaped patch
+  // covers a small part of its rectangle, and must be smoothed like a compact one.
+  std::vector<std::uint8_t> occupied(static_cast<std::size_t>(n_x) * static_cast<std::size_t>(n_y), 0);
+  for (const auto& s : samples) {
+    double u = 0.0;
+    const int i = locate(s.point.x(), domain.min.x(), field.spacing_x(), n_x, u);
+    const int j = locate(s.point.y(), domain.min.y(), field.spacing_y(), n_y, u);
+    occupied[static_cast<std::size_t>(j) * static_cast<std::size_t>(n_x) + static_cast<std::size_t>(i)] = 1;
+  }
+  const double covered = static_cast<double>(std::count(occupied.begin(), occupied.end(), std::uint8_t{1})) *
+                         field.spacing_x() * field.spacing_y();
+  const double density = static_cast<double>(samples.size()) / covered;
+  const double lambda = density * std::pow(length, 6);
+
+  // Fixed part: penalty, point samples (weight 1), band centres (centre_weight).
+  Triplets fixed;
+  Eigen::VectorXd fixed_rhs = Eigen::VectorXd::Zero(n_coef);
+  add_penalty(n_x, n_y, field.spacing_x(), field.spacing_y(), lambda, fixed);
+  std::vector<Stencil> centre(samples.size());
+  for (std::size_t i = 0; i < samples.size(); ++i) {
+    const BandSample& s = samples[i];
+    centre[i] = stencil(field, s.point.x(), s.point.y());
+    if (s.half_length == 0.0) {
+      add_data(centre[i], s.point.z(), 1.0, fixed, fixed_rhs);
+      continue;
+    }
+    ++result.n_bands;
+    if (options.centre_weight > 0.0) add_data(centre[i], s.point.z(), options.centre_weight, fixed, fixed_rhs);
+  }
+
+  Eigen::SparseMatrix<double> fixed_matrix(n_coef, n_coef);
+  fixed_matrix.setFromTriplets(fixed.begin(), fixed.end());
+  for (int k = 0; k < n_coef; ++k) fixed_matrix.coeffRef(k, k) += kRidge;
+
+  // Which end (1 = minus, 2 = plus) a band misses the surface at, or -1 when crossed.
+  auto missed_end = [&](const BandSample& s) {
+    const double g_minus = gap(field, band_end(s, -1.0));
+    const double g_plus = gap(field, band_end(s, 1.0));
+    if ((g_minus > 0.0 && g_plus > 0.0) || (g_minus < 0.0 && g_plus < 0.0)) return std::abs(g_minus) <= std::abs(g_plus) ? 1 : 2;
+    return -1;
+  };
+  // The objective (up to a constant) at the field's current coefficients c.
+  auto objective = [&](const Eigen::VectorXd& c) {
+    double f = c.dot(fixed_matrix * c) - 2.0 * fixed_rhs.dot(c);
+    for (const auto& s : samples) {
+      if (s.half_length == 0.0) continue;
+      const int end = missed_end(s);
+      if (end > 0) f += options.band_weight * std::pow(gap(field, band_end(s, end == 1 ? -1.0 : 1.0)), 2);
+    }
+    return f;
+  };
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver;
+  // Solves the quadratic model: the fixed part plus every band in `active` pulled to its
+  // centre (0) or its nearer end (1, 2).
+  auto solve = [&](const std::vector<int>& active) {
+    Triplets a;
+    Eigen::VectorXd rhs = fixed_rhs;
+    for (std::size_t i = 0; i < samples.size(); ++i) {
+      if (active[i] < 0) continue;
+      const BandSample& s = samples[i];
+      if (active[i] == 0) {
+        add_data(centre[i], s.point.z(), 1.0, a, rhs);
+      } else {
+        const Eigen::Vector3d e = band_end(s, active[i] == 1 ? -1.0 : 1.0);
+        add_data(stencil(field, e.x(), e.y()), e.z(), options.band_weight, a, rhs);
+      }
+    }
+    Eigen::SparseMatrix<double> matrix(n_coef, n_coef);
+    matrix.setFromTriplets(a.begin(), a.end());
+    matrix += fixed_matrix;
+    solver.compute(matrix);
+    if (solver.info() != Eigen::Success) throw SolverError("fit_height_field_to_bands: the sparse Cholesky factorisation failed");
+    Eigen::VectorXd c = solver.solve(rhs);
+    if (solver.info() != Eigen::Success || !c.allFinite()) throw SolverError("fit_height_field_to_bands: the sparse solve failed");
+    return c;
+  };
+  auto set_coefficients = [&](const Eigen::VectorXd& c) { std::copy(c.data(), c.data() + n_coef, field.mutable_coefficients().begin()); };
+
+  // Start: every band pulled to its centre (a plain penalised fit of the centres).
+  std::vector<int> active(samples.size(), -1);
+  for (std::size_t i = 0; i < samples.size(); ++i)
+    if (samples[i].half_length > 0.0) active[i] = 0;
+  Eigen::VectorXd c = solve(active);
+  set_coefficients(c);
+  result.iterations = 1;
+  // Damped active-set Newton on the convex, piecewise quadratic objective: the model with
+  // the current missed bands pulled to their nearer ends is solved, and the step halved
+  // until the objective decreases (a plain active-set iteration can cycle).
+  for (std::size_t i = 0; i < samples.size(); ++i)
+    if (samples[i].half_length > 0.0) active[i] = missed_end(samples[i]);
+  double current = objective(c);
+  while (result.iterations < options.max_iterations) {
+    const Eigen::VectorXd step = solve(active) - c;
+    ++result.iterations;
+    double alpha = 1.0;
+    Eigen::VectorXd trial;
+    double value = 0.0;
+    for (int k = 0; k < kLineSearchSteps; ++k, alpha *= 0.5) {
+      trial = c + alpha * step;
+      set_coefficients(trial);
+      value = objective(trial);
+      if (value <= current) break;
+    }
+    if (!(value <= current)) {  // no decrease along the step: stationary to round-off
+      set_coefficients(c);
+      result.converged = true;
+      break;
+    }
+    c = trial;
+    current = value;
+    bool changed = false;
+    for (std::size_t i = 0; i < samples.size(); ++i) {
+      if (samples[i].half_length == 0.0) continue;
+      const int next = missed_end(samples[i]);
+      if (next != active[i]) changed = true;
+      active[i] = next;
+    }
+    if (!changed && alpha == 1.0) {  // the full step solved the model of its own active set
+      result.converged = true;
+      break;
+    }
+  }
+
+  for (std::size_t i = 0; i < samples.size(); ++i) {
+    const BandSample& s = samples[i];
+    if (s.half_length == 0.0) {
+      result.max_point_residual = std::max(result.max_point_residual, std::abs(gap(field, s.point)));
+      continue;
+    }
+    Eigen::Vector3d target;
+    if (!band_target(field, s, target)) {
+      ++result.n_missed;
+      result.max_miss = std::max(result.max_miss, std::abs(gap(field, target)));
+    }
+  }
+  return result;
+}
+
+}  // namespace nurbsfront

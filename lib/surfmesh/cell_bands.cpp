@@ -1,0 +1,59 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Bands of a cell-based (0/1 occupancy) input's marching-cubes vertices and the band fit of
+// a patch (docs/surfmesh.md, "Cell-based inputs").
+
+#include <cmath>
+
+#include "nurbsfront/surfmesh/surfmesh_internal.h"
+
+namespace nurbsfront::surfmesh_detail {
+
+namespace {
+
+// How far (in cells) a lattice coordinate may be from an integer or a half-integer and
+// still count as one: marching cubes puts an occupancy vertex at the exact midpoint, so only
+// round-off separates it.
+constexpr double kLatticeTolerance = 1e-6;
+
+}  // namespace
+
+std::vector<BandSample> cell_band_samples(const std::vector<Eigen::Vector3d>& world, const PatchFrame& frame,
+                                          const CellGrid& grid) {
+  std::vector<BandSample> out;
+  out.reserve(world.size());
+  for (const auto& x : world) {
+    BandSample s;
+    s.point = frame.to_local(x);
+    const Eigen::Vector3d t = (x - grid.origin).cwiseQuotient(grid.spacing);
+    int n_half = 0;
+    int n_whole = 0;
+    int axis = -1;
+    for (int d = 0; d < 3; ++d) {
+      const double frac = t[d] - std::floor(t[d]);
+      if (std::abs(frac - 0.5) <= kLatticeTolerance) {
+        ++n_half;
+        axis = d;
+      } else if (frac <= kLatticeTolerance || frac >= 1.0 - kLatticeTolerance) {
+        ++n_whole;
+      }
+    }
+    if (n_half == 1 && n_whole == 2) {
+      s.direction = frame.direction_to_local(Eigen::Vector3d::Unit(axis));
+      s.half_length = 0.5 * grid.spacing[axis];
+    }
+    out.push_back(s);
+  }
+  return out;
+}
+
+BandFitResult fit_cell_bands(const std::vector<Eigen::Vector3d>& world, const PatchFrame& frame, const CellGrid& grid,
+                             const Rectangle& domain) {
+  const double cell = grid.spacing.minCoeff();
+  BandFitOptions options;
+  options.spacing = grid.lattice_cells * cell;
+  options.smoothing_length = grid.smoothing_cells * cell;
+  options.domain = domain;
+  return fit_height_field_to_bands(cell_band_samples(world, frame, grid), options);
+}
+
+}  // namespace nurbsfront::surfmesh_detail

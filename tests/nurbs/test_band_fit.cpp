@@ -1,0 +1,206 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// fit_height_field_to_bands(): exact reproduction of planes and quadrics, band crossing,
+// and the point of it: a terraced (0/1 voxel) sphere cap is recovered much better than by
+// the plain fit of its vertices, the flat top terrace included.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <functional>
+#include <random>
+
+#include "nurbsfront/core/error.h"
+#include "nurbsfront/nurbs/band_fit.h"
+#include "nurbsfront/nurbs/mba.h"
+
+namespace nurbsfront {
+namespace {
+
+using Height = std::function<double(double, double)>;
+
+// Samples of z = g(x, y) on a jittered grid, each with a band in a random direction.
+std::vector<BandSample> exact_samples(const Height& g, int n, double half_length, std::uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  std::vector<BandSample> out;
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) {
+      const double x = (i + 0.3 * unit(rng)) / n;
+      const double y = (j + 0.3 * unit(rng)) / n;
+      BandSample s;
+      s.point = {x, y, g(x, y)};
+      // Slanted up to 63 deg from z, so every band crosses the surface well inside its ends.
+      s.direction = Eigen::Vector3d(unit(rng), unit(rng), 1.0).normalized();
+      s.half_length = (i + j) % 3 == 0 ? 0.0 : half_length;  // some plain points too
+      out.push_back(s);
+    }
+  return out;
+}
+
+TEST(BandFit, ReproducesPlanesAndQuadricsThroughTheCentres) {
+  const std::vector<Height> exact{
+      [](double x, double y) { return 0.3 * x - 0.2 * y + 1.0; },
+      [](double x, double y) { return 0.5 * x * x - 0.7 * x * y + 0.2 * y * y + 0.1 * x; },
+  };
+  for (const auto& g : exact) {
+    const auto samples = exact_samples(g, 20, 0.02, 7);
+    // Weak and strong smoothing: the third-difference penalty leaves quadrics alone (the
+    // strong one makes the system stiff: round-off grows to about 1e-9).
+    for (const double length : {0.05, 0.4}) {
+      BandFitOptions o;
+      o.spacing = 0.1;
+      o.smoothing_length = length;
+      const BandFitResult r = fit_height_field_to_bands(samples, o);
+      EXPECT_TRUE(r.converged);
+      EXPECT_EQ(r.n_missed, 0u);
+      EXPECT_LT(r.max_point_residual, 1e-7);
+      for (double x = 0.05; x < 0.95; x += 0.05)
+        for (double y = 0.05; y < 0.95; y += 0.05) EXPECT_NEAR(r.field.value(x, y), g(x, y), 1e-7);
+    }
+  }
+}
+
+TEST(BandFit, PlaneInsideItsBandsIsCrossedByEveryBand) {
+  // Centres scattered up to 0.9 half-lengths off the plane along their (vertical or
+  // slanted) bands: the plane crosses every band, so the fit must too.
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  const auto plane = [](double x, double y) { return 0.2 * x + 0.1 * y; };
+  std::vector<BandSample> samples;
+  for (int i = 0; i < 30; ++i)
+    for (int j = 0; j < 30; ++j) {
+      BandSample s;
+      const double x = (i + 0.5) / 30.0;
+      const double y = (j + 0.5) / 30.0;
+      s.direction = Eigen::Vector3d(0.3 * unit(rng), 0.3 * unit(rng), 1.0).normalized();
+      s.half_length = 0.02;
+      s.point = Eigen::Vector3d(x, y, plane(x, y)) + 0.9 * unit(rng) * s.half_length * s.direction;
+      samples.push_back(s);
+    }
+  // Without the pull towards the (scattered) centres, the objective is convex and the plane
+  // makes it 0 (every band crossed, no third derivative): a converged fit crosses every band.
+  BandFitOptions o;
+  o.spacing = 0.05;
+  o.centre_weight = 0.0;
+  const BandFitResult r = fit_height_field_to_bands(samples, o);
+  // Slanted bands make the objective only nearly exact (vertical residual at the nearer
+  // end): a few bands stay missed by a small fraction of their half-length.
+  EXPECT_LE(r.max_miss, 0.05 * 0.02);
+  for (const auto& s : samples) EXPECT_NEAR(r.field.value(s.point.x(), s.point.y()), plane(s.point.x(), s.point.y()), 0.02);
+  double worst = 0.0;
+  for (const auto& s : samples) {
+    Eigen::Vector3d target;
+    const bool crossed = band_target(r.field, s, target);
+    worst = std::max(worst, crossed ? 0.0 : std::abs(target.z() - r.field.value(target.x(), target.y())));
+    if (crossed) {
+      EXPECT_NEAR(target.z(), r.field.value(target.x(), target.y()), 1e-9);
+      EXPECT_LE((target - s.point).norm(), s.half_length * (1.0 + 1e-12));
+    }
+  }
+  EXPECT_LE(worst, 0.05 * 0.02);
+}
+
+// The marching-cubes vertices of a 0/1 occupancy grid (voxel centres at (i, j, k) h + offset,
+// iso 0.5) on the top cap of the ball |p| <= radius, with their bands: the grid edge
+// between the inside and the outside voxel centre (half-length h / 2 along its axis).
+std::vector<BandSample> occupancy_cap(double radius, double h, double z_offset, double cap_radius) {
+  const int n = static_cast<int>(std::ceil(cap_radius / h)) + 1;
+  const auto top = [&](int i, int j) {  // highest inside level of column (i, j)
+    const double r2 = radius * radius - (i * h) * (i * h) - (j * h) * (j * h);
+    return static_cast<int>(std::floor((std::sqrt(r2) - z_offset) / h));
+  };
+  const auto in_cap = [&](int i, int j) { return std::hypot(i * h, j * h) <= cap_radius; };
+  std::vector<BandSample> out;
+  for (int i = -n; i <= n; ++i)
+    for (int j = -n; j <= n; ++j) {
+      if (!in_cap(i, j)) continue;
+      const int k = top(i, j);
+      out.push_back({{i * h, j * h, (k + 0.5) * h + z_offset}, Eigen::Vector3d::UnitZ(), 0.5 * h});
+      for (const auto& [di, dj] : {std::pair{1, 0}, std::pair{0, 1}}) {
+        if (!in_cap(i + di, j + dj)) continue;
+        const int k2 = top(i + di, j + dj);
+        const Eigen::Vector3d axis(di, dj, 0.0);
+        for (int level = std::min(k, k2) + 1; level <= std::max(k, k2); ++level)
+          out.push_back({{(i + 0.5 * di) * h, (j + 0.5 * dj) * h, level * h + z_offset}, axis, 0.5 * h});
+      }
+    }
+  return out;
+}
+
+struct CapError {
+  double mean = 0.0;
+  double max = 0.0;
+};
+
+CapError cap_error(const Height& f, double radius, double r_max) {
+  CapError e;
+  int n = 0;
+  for (double x = -r_max; x <= r_max; x += 0.01 * radius)
+    for (double y = -r_max; y <= r_max; y += 0.01 * radius) {
+      if (std::hypot(x, y) > r_max) continue;
+      const double d = std::abs(f(x, y) - std::sqrt(radius * radius - x * x - y * y));
+      e.mean += d;
+      e.max = std::max(e.max, d);
+      ++n;
+    }
+  e.mean /= n;
+  return e;
+}
+
+TEST(BandFit, TerracedSphereCapBeatsThePlainFit) {
+  const double radius = 1.0;
+  const double h = radius / 48.0;  // a 96-voxel sphere
+  // Offsets putting the top terrace at different heights below the apex (0.5 h below: the
+  // worst case of the plain fit).
+  for (const double offset : {0.0, 0.25 * h, 0.5 * h}) {
+    const auto samples = occupancy_cap(radius, h, offset, 0.7 * radius);
+    std::vector<Eigen::Vector3d> points;
+    for (const auto& s : samples) points.push_back(s.point);
+    FitOptions plain;
+    plain.tolerance = 0.05 * 0.6 * h;
+    plain.min_spacing = 2.5 * 0.6 * h;  // the surfmesh defaults in a voxel's mean edge
+    const FitResult p = fit_height_field(points, plain);
+    BandFitOptions o;
+    o.spacing = 1.5 * h;
+    const BandFitResult b = fit_height_field_to_bands(samples, o);
+    const CapError ep = cap_error([&](double x, double y) { return p.field.value(x, y); }, radius, 0.6 * radius);
+    const CapError eb = cap_error([&](double x, double y) { return b.field.value(x, y); }, radius, 0.6 * radius);
+    std::printf("offset %.2f h: plain mean %.3f max %.3f h; band mean %.3f max %.3f h (%d iterations, %s, missed %zu of %zu, max miss %.3f h)\n",
+                offset / h, ep.mean / h, ep.max / h, eb.mean / h, eb.max / h, b.iterations, b.converged ? "converged" : "not converged",
+                b.n_missed, b.n_bands, b.max_miss / h);
+    EXPECT_LT(eb.max, 0.25 * h);
+    EXPECT_LT(eb.mean, 0.5 * ep.mean);
+  }
+}
+
+TEST(BandFit, BadInput) {
+  BandFitOptions o;
+  o.spacing = 0.1;
+  std::vector<BandSample> samples{{{0, 0, 0}, {0, 0, 1}, 0.1}, {{1, 0, 0}, {0, 0, 1}, 0.1}, {{0, 1, 0}, {0, 0, 1}, 0.1}};
+  EXPECT_NO_THROW((void)fit_height_field_to_bands(samples, o));
+  auto bad = samples;
+  bad[1].direction = {0, 0, 2};
+  EXPECT_THROW((void)fit_height_field_to_bands(bad, o), InvalidInput);
+  bad = samples;
+  bad[2].point.x() = std::nan("");
+  EXPECT_THROW((void)fit_height_field_to_bands(bad, o), InvalidInput);
+  bad = samples;
+  bad[2].point = {2, 0, 0};  // collinear
+  EXPECT_THROW((void)fit_height_field_to_bands(bad, o), InvalidInput);
+  bad = samples;
+  bad[0].half_length = -1.0;
+  EXPECT_THROW((void)fit_height_field_to_bands(bad, o), InvalidInput);
+  EXPECT_THROW((void)fit_height_field_to_bands({samples[0], samples[1]}, o), InvalidInput);
+  BandFitOptions spoiled = o;
+  spoiled.spacing = 0.0;
+  EXPECT_THROW((void)fit_height_field_to_bands(samples, spoiled), InvalidInput);
+  spoiled = o;
+  spoiled.centre_weight = 2.0;
+  EXPECT_THROW((void)fit_height_field_to_bands(samples, spoiled), InvalidInput);
+  spoiled = o;
+  spoiled.max_iterations = 0;
+  EXPECT_THROW((void)fit_height_field_to_bands(samples, spoiled), InvalidInput);
+}
+
+}  // namespace
+}  // namespace nurbsfront
