@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
+#include <unordered_map>
 
 #include "nurbsfront/core/error.h"
 #include "nurbsfront/segment/segment_internal.h"
@@ -82,6 +84,41 @@ std::pair<int, int> find_crossing(const std::vector<Segment>& segments, const st
   return {-1, -1};
 }
 
+bool polygon_contains(const std::vector<int>& cycle, const std::vector<Eigen::Vector2d>& xy, const Eigen::Vector2d& q) {
+  bool inside = false;
+  for (std::size_t i = 0, j = cycle.size() - 1; i < cycle.size(); j = i++) {
+    const Eigen::Vector2d& a = xy[cycle[i]];
+    const Eigen::Vector2d& b = xy[cycle[j]];
+    if ((a.y() > q.y()) != (b.y() > q.y()) && q.x() < a.x() + (q.y() - a.y()) * (b.x() - a.x()) / (b.y() - a.y()))
+      inside = !inside;
+  }
+  return inside;
+}
+
+// The vertices of a counter-clockwise cycle lying inside another counter-clockwise cycle,
+// or empty. Cycles of different loops never nest that way when the loops' segments do not
+// cross, and each cycle is tested by one vertex it does not share with the other.
+std::vector<int> nested_ccw_cycle(const std::vector<std::vector<int>>& cycles, const std::vector<Eigen::Vector2d>& xy) {
+  std::vector<std::size_t> ccw;
+  for (std::size_t k = 0; k < cycles.size(); ++k) {
+    const std::vector<int>& c = cycles[k];
+    if (c.size() < 3) continue;
+    double twice_area = 0.0;
+    for (std::size_t i = 1; i + 1 < c.size(); ++i) twice_area += orient(xy[c[0]], xy[c[i]], xy[c[i + 1]]);
+    if (twice_area > 0) ccw.push_back(k);
+  }
+  if (ccw.size() < 2) return {};
+  for (const std::size_t inner : ccw)
+    for (const std::size_t outer : ccw) {
+      if (inner == outer) continue;
+      const std::vector<int>& in = cycles[inner];
+      const std::vector<int>& out = cycles[outer];
+      const auto probe = std::find_if(in.begin(), in.end(), [&](int v) { return std::find(out.begin(), out.end(), v) == out.end(); });
+      if (probe != in.end() && polygon_contains(out, xy, xy[*probe])) return in;
+    }
+  return {};
+}
+
 // Breadth-first search inside the patch from `sources`; every reached face gets the index
 // of the source it was reached from in scratch.face_owner. Returns the last face reached.
 int breadth_first(const FaceGraph& graph, const std::vector<int>& sources, const std::vector<int>& face_patch,
@@ -151,20 +188,26 @@ ProjectionCheck check_projection(const FaceGraph& graph, const std::vector<int>&
   int n_outer = 0;
   OpenMesh::HalfedgeHandle smallest_outer;
   std::size_t smallest_size = 0;
+  std::vector<std::vector<int>> cycles;  // the loops' simple cycles (split where a loop passes a vertex twice)
+  std::vector<int> loop_vertices;
   for (const auto start : border) {
     if (scratch.halfedge_stamp[start.idx()] == epoch) continue;
     const Eigen::Vector2d origin = scratch.xy[mesh.from_vertex_handle(start).idx()];
     double twice_area = 0.0;
     auto h = start;
     std::size_t steps = 0;
+    loop_vertices.clear();
     do {
       scratch.halfedge_stamp[h.idx()] = epoch;
+      loop_vertices.push_back(mesh.from_vertex_handle(h).idx());
       twice_area += orient(origin, scratch.xy[mesh.from_vertex_handle(h).idx()], scratch.xy[mesh.to_vertex_handle(h).idx()]);
       auto next = mesh.next_halfedge_handle(h);
       while (in_patch(mesh.opposite_halfedge_handle(next))) next = mesh.next_halfedge_handle(mesh.opposite_halfedge_handle(next));
       h = next;
       NURBSFRONT_ASSERT(++steps <= segments.size());
     } while (h != start);
+    std::vector<std::vector<int>> split = split_at_repeated_vertices(loop_vertices);
+    cycles.insert(cycles.end(), std::make_move_iterator(split.begin()), std::make_move_iterator(split.end()));
     if (twice_area > 0) {
       ++n_outer;
       if (!smallest_outer.is_valid() || steps < smallest_size) {
@@ -185,6 +228,11 @@ ProjectionCheck check_projection(const FaceGraph& graph, const std::vector<int>&
     } while (h != smallest_outer);
     return check;
   }
+  // A loop that passes a vertex twice may hide a counter-clockwise cycle inside another
+  // one (a neighbour's face seen from below, touching the outer loop at a corner): the
+  // region inside both is covered twice although the loop's total area looks right.
+  const std::vector<int> nested = nested_ccw_cycle(cycles, scratch.xy);
+  if (!nested.empty()) return {false, nested.size() <= kMaxTroubleLoopEdges ? nested : std::vector<int>{}};
   const auto [i, j] = find_crossing(segments, scratch.xy);
   if (i < 0) return {true, {}};
   return {false, {segments[i].a, segments[i].b, segments[j].a, segments[j].b}};
@@ -206,3 +254,31 @@ std::pair<std::vector<int>, std::vector<int>> bisect_patch(const FaceGraph& grap
 }
 
 }  // namespace nurbsfront::segment_detail
+
+namespace nurbsfront {
+
+std::vector<std::vector<int>> split_at_repeated_vertices(const std::vector<int>& loop) {
+  std::vector<int> sorted = loop;
+  std::sort(sorted.begin(), sorted.end());
+  if (std::adjacent_find(sorted.begin(), sorted.end()) == sorted.end()) return {loop};  // the usual case
+  std::vector<std::vector<int>> out;
+  std::vector<int> stack;
+  std::unordered_map<int, std::size_t> position;  // vertex -> index in stack
+  for (const int v : loop) {
+    const auto it = position.find(v);
+    if (it == position.end()) {
+      position.emplace(v, stack.size());
+      stack.push_back(v);
+      continue;
+    }
+    // v closes the cycle stack[first ..]: emit it and keep v on the stack.
+    const std::size_t first = it->second;
+    out.emplace_back(stack.begin() + static_cast<std::ptrdiff_t>(first), stack.end());
+    for (std::size_t i = first + 1; i < stack.size(); ++i) position.erase(stack[i]);
+    stack.resize(first + 1);
+  }
+  if (!stack.empty()) out.push_back(std::move(stack));
+  return out;
+}
+
+}  // namespace nurbsfront

@@ -155,6 +155,12 @@ struct Segmentation {
 //! \throw Cancelled if the progress callback returns false.
 [[nodiscard]] Segmentation segment(const TriMesh& mesh, const SegmentOptions& options = {});
 
+//! Splits a closed vertex sequence (the last vertex joins the first) that passes some
+//! vertex more than once into simple cycles: where it returns to a vertex, the part since
+//! that vertex's previous visit is one cycle (e.g. a border loop through a corner where
+//! loops touch). A sequence without repeated vertices is returned as it is.
+[[nodiscard]] std::vector<std::vector<int>> split_at_repeated_vertices(const std::vector<int>& loop);
+
 //! Smooths a polyline by Taubin lambda|mu steps with uniform weights.
 //!
 //! The ends of an open polyline stay fixed; a closed one (last point joined to the first)

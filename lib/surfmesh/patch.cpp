@@ -94,6 +94,11 @@ std::vector<std::vector<int>> trace_loops(const std::vector<Eigen::Vector2d>& xy
   return loops;
 }
 
+// A traced loop that passes a corner twice (a neighbouring patch inside this one touching
+// its outer loop there, two lobes joined at a corner) is split into simple cycles
+// (split_at_repeated_vertices): a touching hole becomes its own clockwise cycle and gets
+// its hole point.
+
 double signed_area(const std::vector<Eigen::Vector2d>& polygon) {
   double twice = 0.0;
   for (std::size_t i = 0; i < polygon.size(); ++i) {
@@ -267,17 +272,23 @@ void mesh_patch(const Segmentation& seg, int p, const BorderNodes& borders, cons
     std::vector<std::vector<Eigen::Vector2d>> polygons;
     std::vector<double> orientation;
     double border_area = 0.0;  // area on the left of the directed border
+    std::size_t n_ccw = 0;  // traced loops (a loop through a touching corner counts once)
     for (const auto& loop : trace_loops(pslg.points, border.edges)) {
-      std::vector<Eigen::Vector2d>& polygon = polygons.emplace_back();
-      for (const int i : loop) polygon.push_back(pslg.points[static_cast<std::size_t>(i)]);
-      const double area = signed_area(polygon);
-      border_area += area;
-      orientation.push_back(area >= 0.0 ? 1.0 : -1.0);
+      double loop_area = 0.0;
+      for (const auto& cycle : split_at_repeated_vertices(loop)) {
+        std::vector<Eigen::Vector2d>& polygon = polygons.emplace_back();
+        for (const int i : cycle) polygon.push_back(pslg.points[static_cast<std::size_t>(i)]);
+        const double area = signed_area(polygon);
+        loop_area += area;
+        orientation.push_back(area >= 0.0 ? 1.0 : -1.0);
+      }
+      border_area += loop_area;
+      if (loop_area >= 0.0) ++n_ccw;
     }
     // The segmentation guarantees one counter-clockwise (outer) loop; a second one means
     // the discretised border folds in this plane.
-    if (std::count(orientation.begin(), orientation.end(), 1.0) != 1)
-      throw std::runtime_error("the border has " + std::to_string(std::count(orientation.begin(), orientation.end(), 1.0)) +
+    if (n_ccw != 1)
+      throw std::runtime_error("the border has " + std::to_string(n_ccw) +
                                " counter-clockwise loops in the patch plane (expected 1: it folds)");
     for (const auto& polygon : polygons) {
       Eigen::Vector2d inside;

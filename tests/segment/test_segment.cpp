@@ -236,6 +236,17 @@ TEST(Segment, ProgressIsReportedAndCancels) {
   EXPECT_THROW((void)segment(mesh, options), Cancelled);
 }
 
+TEST(SplitAtRepeatedVertices, SimpleLoopsStayWholeTouchingLoopsSplit) {
+  using Cycles = std::vector<std::vector<int>>;
+  EXPECT_EQ(split_at_repeated_vertices({4, 5, 6, 7}), (Cycles{{4, 5, 6, 7}}));
+  // An outer loop 0..3 through vertex 2 twice, with a loop 2, 8, 9 hanging there.
+  EXPECT_EQ(split_at_repeated_vertices({0, 1, 2, 8, 9, 2, 3}), (Cycles{{2, 8, 9}, {0, 1, 2, 3}}));
+  // Starting at the touching vertex, and two loops hanging at different vertices.
+  EXPECT_EQ(split_at_repeated_vertices({2, 8, 9, 2, 3, 0, 5, 6, 0, 1}), (Cycles{{2, 8, 9}, {0, 5, 6}, {2, 3, 0, 1}}));
+  // Nested: a loop hanging inside a loop that hangs at the same vertex.
+  EXPECT_EQ(split_at_repeated_vertices({0, 1, 7, 1, 2, 0, 3, 4}), (Cycles{{1, 7}, {0, 1, 2}, {0, 3, 4}}));
+}
+
 TEST(SmoothPolyline, ZigZagFlattensWithFixedEndsAndBoundedMoves) {
   std::vector<Eigen::Vector3d> points;
   for (int i = 0; i <= 20; ++i) points.emplace_back(i, (i % 2) * 0.5, 0.0);

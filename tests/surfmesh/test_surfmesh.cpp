@@ -19,6 +19,7 @@
 #include "nurbsfront/isosurface/marching_cubes.h"
 #include "nurbsfront/isosurface/scenes.h"
 #include "nurbsfront/quality/report.h"
+#include "nurbsfront/segment/segment_internal.h"
 #include "nurbsfront/surfmesh/surfmesh.h"
 #include "nurbsfront/surfmesh/surfmesh_internal.h"
 
@@ -264,6 +265,58 @@ TEST(Surfmesh, PatchWithHoleLoop) {
     const Eigen::Vector3d c = (sm.nodes[t[0]] + sm.nodes[t[1]] + sm.nodes[t[2]]) / 3.0;
     EXPECT_FALSE(std::abs(c.x() - 0.5) < 0.19 && std::abs(c.y() - 0.5) < 0.19);
   }
+}
+
+// A segmentation from face labels (curves and corners as segment() extracts them, axes z).
+Segmentation labelled_segmentation(const TriMesh& mesh, const std::vector<int>& face_patch, int n_patches) {
+  Segmentation seg;
+  seg.face_patch = face_patch;
+  seg.patches.resize(static_cast<std::size_t>(n_patches));
+  for (std::size_t f = 0; f < face_patch.size(); ++f) seg.patches[static_cast<std::size_t>(face_patch[f])].faces.push_back(static_cast<int>(f));
+  BorderSmoothingOptions no_smoothing;
+  no_smoothing.iterations = 0;
+  segment_detail::Borders borders = segment_detail::extract_borders(mesh, face_patch, no_smoothing);
+  for (std::size_t c = 0; c < borders.curves.size(); ++c) {
+    seg.patches[static_cast<std::size_t>(borders.curves[c].patch_left)].curves.push_back(static_cast<int>(c));
+    if (borders.curves[c].patch_right >= 0)
+      seg.patches[static_cast<std::size_t>(borders.curves[c].patch_right)].curves.push_back(static_cast<int>(c));
+  }
+  seg.curves = std::move(borders.curves);
+  seg.corners = std::move(borders.corners);
+  return seg;
+}
+
+TEST(Surfmesh, NeighbourTouchingTheOuterLoopAtACorner) {
+  // A flat 12 x 12 grid; patch 1 is a small block inside patch 0 that touches the grid's
+  // boundary at one vertex only (the upper triangle of cell (5, 0) and cells (5, 1), (6, 1)).
+  // Patch 0's border passes that corner twice: its outer loop and the loop around patch 1
+  // touch there, and patch 1's side must become a hole of patch 0 (measured on the
+  // level-set DRAM cell at 128 cells before the fix: the hole was meshed over).
+  constexpr int kN = 12;
+  const TriMesh mesh = to_trimesh(test::grid_patch(kN, kN));
+  std::vector<int> face_patch(mesh.n_faces(), 0);
+  auto cell = [](int i, int j) { return 2 * (j * kN + i); };
+  for (const int f : {cell(5, 0) + 1, cell(5, 1), cell(5, 1) + 1, cell(6, 1), cell(6, 1) + 1}) face_patch[static_cast<std::size_t>(f)] = 1;
+  const Segmentation seg = labelled_segmentation(mesh, face_patch, 2);
+  ASSERT_EQ(seg.corners, std::vector<int>{5});  // the touching vertex (5, 0)
+  SurfMeshOptions options;
+  options.sizing.relative_size = 1.0;
+  const SurfaceMesh sm = mesh_surface(mesh, seg, options);
+  expect_consistent(seg, sm);
+  const SoupFigures f = figures(sm);
+  EXPECT_FALSE(f.closed);
+  EXPECT_EQ(f.euler, 1);
+  // The two patches together cover the unit square once.
+  double area[2] = {0.0, 0.0};
+  for (std::size_t t = 0; t < sm.triangles.size(); ++t) {
+    const auto& tri = sm.triangles[t];
+    const Eigen::Vector3d n = (sm.nodes[static_cast<std::size_t>(tri[1])] - sm.nodes[static_cast<std::size_t>(tri[0])])
+                                  .cross(sm.nodes[static_cast<std::size_t>(tri[2])] - sm.nodes[static_cast<std::size_t>(tri[0])]);
+    EXPECT_GT(n.z(), 0.0);
+    area[sm.triangle_patch[t]] += 0.5 * n.z();
+  }
+  EXPECT_NEAR(area[0] + area[1], 1.0, 1e-9);
+  EXPECT_NEAR(area[1], 5.0 / (2.0 * kN * kN), 0.2 * 5.0 / (2.0 * kN * kN));  // chords cut its corners
 }
 
 TEST(Surfmesh, HolePointInsideClockwiseLoop) {
