@@ -3,7 +3,9 @@
 #include "nurbsfront/stitch/stitch.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <string>
 
@@ -136,6 +138,93 @@ void compare_with_input(StitchReport& report) {
   }
 }
 
+using FacePair = std::array<std::uint32_t, 2>;
+
+// Rounds of local repair before the optimisation is undone as a whole.
+constexpr int kRepairRounds = 6;
+
+// The optimisation may push a node through a nearby sheet (thin walls) or flip an edge
+// into one. `pairs` (all intersecting pairs of `mesh`, sorted) is updated in place while
+// the offending changes are undone: the nodes of an intersecting face the optimisation
+// changed go back to their assembled positions, and its edges that a flip made are
+// flipped back (flips keep vertex and face indices). Only the faces around the undone
+// changes are checked again (intersecting_pairs_of). Pairs of two faces the optimisation
+// did not change (same vertices at the same positions as assembled) were there before
+// and stay. Returns false when changed faces still intersect after kRepairRounds.
+bool repair_intersections(const TriMesh& assembled, TriMesh& mesh, std::vector<FacePair>& pairs, StitchReport& report) {
+  auto is_untouched = [&](std::uint32_t f) {
+    const TriMesh::FaceHandle now(static_cast<int>(f));
+    std::array<int, 3> a{}, b{};
+    int k = 0;
+    for (auto v : mesh.fv_range(now)) {
+      if (mesh.point(v) != assembled.point(v)) return false;
+      a[static_cast<std::size_t>(k++)] = v.idx();
+    }
+    k = 0;
+    for (auto v : assembled.fv_range(now)) b[static_cast<std::size_t>(k++)] = v.idx();
+    std::sort(a.begin(), a.end());
+    std::sort(b.begin(), b.end());
+    return a == b;
+  };
+  auto offending = [&] {
+    std::vector<std::uint32_t> faces;
+    for (const auto& pair : pairs) {
+      for (const std::uint32_t f : pair) {
+        if (!is_untouched(f)) faces.push_back(f);
+      }
+    }
+    std::sort(faces.begin(), faces.end());
+    faces.erase(std::unique(faces.begin(), faces.end()), faces.end());
+    return faces;
+  };
+  std::vector<char> changed(mesh.n_faces(), 0);
+  for (int round = 0; round < kRepairRounds; ++round) {
+    const std::vector<std::uint32_t> faces = offending();
+    if (faces.empty()) return true;
+    std::vector<std::uint32_t> touched;
+    auto touch = [&](TriMesh::FaceHandle f) {
+      if (!f.is_valid() || changed[static_cast<std::size_t>(f.idx())] != 0) return;
+      changed[static_cast<std::size_t>(f.idx())] = 1;
+      touched.push_back(static_cast<std::uint32_t>(f.idx()));
+    };
+    std::vector<TriMesh::EdgeHandle> flipped;
+    for (const std::uint32_t f : faces) {
+      const TriMesh::FaceHandle face(static_cast<int>(f));
+      touch(face);
+      for (auto h : mesh.fh_range(face)) {
+        const auto v = mesh.to_vertex_handle(h);
+        if (mesh.point(v) != assembled.point(v)) {
+          mesh.set_point(v, assembled.point(v));
+          ++report.n_reverted_moves;
+          for (auto g : mesh.vf_range(v)) touch(g);
+        }
+        if (!assembled.find_halfedge(mesh.from_vertex_handle(h), v).is_valid()) flipped.push_back(mesh.edge_handle(h));
+      }
+    }
+    std::sort(flipped.begin(), flipped.end());
+    flipped.erase(std::unique(flipped.begin(), flipped.end()), flipped.end());
+    for (const auto e : flipped) {
+      const auto h = mesh.halfedge_handle(e, 0);
+      // Still an edge the flips made, and flippable (the other diagonal is not an edge).
+      if (assembled.find_halfedge(mesh.from_vertex_handle(h), mesh.to_vertex_handle(h)).is_valid() ||
+          !mesh.is_flip_ok(e)) {
+        continue;
+      }
+      mesh.flip(e);
+      ++report.n_reverted_flips;
+      touch(mesh.face_handle(h));
+      touch(mesh.opposite_face_handle(h));
+    }
+    // Pairs with a changed face are replaced by that face's pairs now.
+    std::erase_if(pairs, [&](const FacePair& p) { return changed[p[0]] != 0 || changed[p[1]] != 0; });
+    const std::vector<FacePair> fresh = intersecting_pairs_of(to_soup(mesh), touched);
+    pairs.insert(pairs.end(), fresh.begin(), fresh.end());
+    std::sort(pairs.begin(), pairs.end());
+    for (const std::uint32_t f : touched) changed[f] = 0;
+  }
+  return offending().empty();
+}
+
 StitchResult stitch_impl(const SurfaceMesh& surface, const TriMesh* input, const StitchOptions& options) {
   options.validate();
   validate_surface(surface);
@@ -196,65 +285,34 @@ StitchResult stitch_impl(const SurfaceMesh& surface, const TriMesh* input, const
   }
   report.seconds_optimise = watch.seconds();
 
-  // 3. Verification.
+  // 3. Verification. The exact self-intersection check over the whole mesh runs once;
+  // intersections the optimisation made are then repaired locally (repair_intersections)
+  // and only the changed faces are checked again.
   watch.restart();
   report_progress(options.progress, "stitch: verify", 0.0);
-  ReportOptions check;
-  check.self_intersections = options.check_self_intersections;
-  check.n_threads = options.n_threads;
-  if (options.progress) {
-    check.progress = [&options](std::string_view, double fraction) { return options.progress("stitch: verify", fraction); };
-  }
-  report.output = mesh_report(to_soup(mesh), check);
-  auto n_intersections = [&report] {
-    return report.output.topology.n_self_intersecting_pairs.value_or(0);
-  };
-  if (optimise && n_intersections() > 0) {
-    // The optimisation may have pushed a node through a nearby sheet (thin walls): move
-    // the nodes of the intersecting triangles back (flips keep vertex indices), then undo
-    // everything if that is not enough. Pairs of two faces the optimisation did not touch
-    // (same vertices, same positions as assembled) were there before and stay reported.
-    auto is_untouched = [&](std::uint32_t f) {
-      const TriMesh::FaceHandle now(static_cast<int>(f));
-      std::array<int, 3> a{}, b{};
-      int k = 0;
-      for (auto v : mesh.fv_range(now)) {
-        if (mesh.point(v) != assembled.point(v)) return false;
-        a[static_cast<std::size_t>(k++)] = v.idx();
-      }
-      k = 0;
-      for (auto v : assembled.fv_range(now)) b[static_cast<std::size_t>(k++)] = v.idx();
-      std::sort(a.begin(), a.end());
-      std::sort(b.begin(), b.end());
-      return a == b;
-    };
-    auto new_pairs = [&] {
-      std::vector<std::array<std::uint32_t, 2>> pairs = self_intersecting_pairs(to_soup(mesh), options.n_threads);
-      std::erase_if(pairs, [&](const auto& p) { return is_untouched(p[0]) && is_untouched(p[1]); });
-      return pairs;
-    };
-    std::vector<std::array<std::uint32_t, 2>> pairs = new_pairs();
-    const bool changed = !pairs.empty();
-    for (int round = 0; round < 3 && !pairs.empty(); ++round) {
-      for (const auto& pair : pairs) {
-        for (const std::uint32_t f : pair) {
-          for (auto v : mesh.fv_range(TriMesh::FaceHandle(static_cast<int>(f)))) {
-            if (mesh.point(v) != assembled.point(v)) {
-              mesh.set_point(v, assembled.point(v));
-              ++report.n_reverted_moves;
-            }
-          }
-        }
-      }
-      pairs = new_pairs();
-    }
-    if (!pairs.empty()) {
+  std::vector<FacePair> pairs;
+  if (options.check_self_intersections) {
+    pairs = self_intersecting_pairs(to_soup(mesh), options.n_threads);
+    report_progress(options.progress, "stitch: verify", 0.5);
+    if (optimise && !repair_intersections(assembled, mesh, pairs, report)) {
+      // Local repair did not converge: the assembled mesh (whose own intersections are
+      // the surface mesh's) is returned.
       mesh = std::move(assembled);
       result.face_patch = std::move(assembled_patch);
       report.optimisation_undone = true;
+      pairs = self_intersecting_pairs(to_soup(mesh), options.n_threads);
     }
-    if (changed) report.output = mesh_report(to_soup(mesh), check);
   }
+  ReportOptions check;
+  check.self_intersections = false;  // counted above
+  check.n_threads = options.n_threads;
+  if (options.progress) {
+    check.progress = [&options](std::string_view, double fraction) {
+      return options.progress("stitch: verify", 0.5 + 0.5 * fraction);
+    };
+  }
+  report.output = mesh_report(to_soup(mesh), check);
+  if (options.check_self_intersections) report.output.topology.n_self_intersecting_pairs = pairs.size();
   const TopologyReport& topo = report.output.topology;
   if (!topo.is_manifold) {
     report.errors.push_back("output is not 2-manifold (" + std::to_string(topo.n_nonmanifold_edges) + " edges, " +

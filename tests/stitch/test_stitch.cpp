@@ -346,6 +346,45 @@ TEST(Stitch, MovesThroughANearbySheetAreUndone) {
   EXPECT_EQ(*r.report.output.topology.n_self_intersecting_pairs, 0u);
 }
 
+TEST(Stitch, OnlyTheOffendingMovesAreUndone) {
+  // The two sheets of the test above (the upper one pushed through the lower one) and a
+  // third, jittered sheet far away whose smoothing moves are harmless: they must stay.
+  TriangleSoup sheets = test::grid_patch(8, 8);
+  const TriangleSoup grid = test::grid_patch(8, 8);
+  auto append = [&](const Eigen::Vector3d& offset, double jitter) {
+    const auto first = static_cast<std::uint32_t>(sheets.points.size());
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<double> u(-jitter, jitter);
+    for (const auto& p : grid.points) {
+      const bool inner = p.x() > 1e-9 && p.x() < 1 - 1e-9 && p.y() > 1e-9 && p.y() < 1 - 1e-9;
+      sheets.points.push_back(p + offset + (inner ? Eigen::Vector3d(u(rng), u(rng), 0.0) : Eigen::Vector3d::Zero()));
+    }
+    for (const auto& t : grid.triangles) sheets.triangles.push_back({t[0] + first, t[1] + first, t[2] + first});
+  };
+  append(Eigen::Vector3d(0, 0, 0.002), 0.0);
+  append(Eigen::Vector3d(0, 0, 5.0), 0.03);
+  const std::size_t n_grid = grid.triangles.size();
+  std::vector<int> face_patch(sheets.triangles.size(), 0);
+  std::fill(face_patch.begin() + static_cast<long>(n_grid), face_patch.end(), 1);
+  std::fill(face_patch.begin() + static_cast<long>(2 * n_grid), face_patch.end(), 2);
+  SurfaceMesh surface = make_surface(sheets, face_patch, 3);
+  const double local_z = surface.surfaces[1].frame.to_local(Eigen::Vector3d(0.5, 0.5, -0.002)).z();
+  for (double& c : surface.surfaces[1].field.mutable_coefficients()) c = local_z;
+  const StitchResult r = stitch(surface, to_trimesh(sheets));
+  EXPECT_TRUE(r.report.ok()) << joined(r.report.errors);
+  EXPECT_FALSE(r.report.optimisation_undone);
+  EXPECT_GT(r.report.n_reverted_moves, 0u);
+  ASSERT_TRUE(r.report.output.topology.n_self_intersecting_pairs.has_value());
+  EXPECT_EQ(*r.report.output.topology.n_self_intersecting_pairs, 0u);
+  // The third sheet's nodes moved and stayed moved.
+  std::size_t n_moved = 0;
+  for (auto v : r.mesh.vertices()) {
+    const auto node = static_cast<std::size_t>(r.vertex_node[static_cast<std::size_t>(v.idx())]);
+    if (node >= 2 * grid.points.size() && (to_eigen(r.mesh.point(v)) - sheets.points[node]).norm() > 1e-9) ++n_moved;
+  }
+  EXPECT_GT(n_moved, 10u);
+}
+
 TEST(Stitch, IntersectionsOfTheInputStayReportedAndKeepTheOptimisation) {
   // A horizontal and a vertical sheet crossing each other: intersecting before any move.
   TriangleSoup sheets = test::grid_patch(8, 8);
