@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <numeric>
 #include <string>
 
 #include "nurbsfront/core/error.h"
@@ -346,51 +347,62 @@ StitchResult stitch_impl(const SurfaceMesh& surface, const TriMesh* input, const
 }  // namespace
 
 std::vector<ComponentSignature> component_signatures(const TriMesh& mesh) {
-  std::vector<ComponentSignature> components;
-  std::vector<int> face_component(mesh.n_faces(), -1);
-  std::vector<int> vertex_component(mesh.n_vertices(), -1);
-  std::vector<TriMesh::FaceHandle> stack;
-  for (auto seed : mesh.faces()) {
-    if (face_component[seed.idx()] >= 0) continue;
-    const int id = static_cast<int>(components.size());
-    ComponentSignature c;
-    face_component[seed.idx()] = id;
-    stack.assign(1, seed);
-    while (!stack.empty()) {
-      const TriMesh::FaceHandle f = stack.back();
-      stack.pop_back();
-      ++c.n_faces;
-      for (auto h : mesh.fh_range(f)) {
-        const auto opposite = mesh.opposite_halfedge_handle(h);
-        const auto g = mesh.face_handle(opposite);
-        if (!g.is_valid()) {
-          ++c.n_edges;  // boundary edge, counted from its only face
-        } else if (f.idx() < g.idx()) {
-          ++c.n_edges;
-        }
-        const auto v = mesh.to_vertex_handle(h);
-        if (vertex_component[v.idx()] != id) {
-          vertex_component[v.idx()] = id;
-          ++c.n_vertices;
-          c.box.extend(to_eigen(mesh.point(v)));
-          for (auto w : mesh.vf_range(v)) {
-            if (face_component[w.idx()] < 0) {
-              face_component[w.idx()] = id;
-              stack.push_back(w);
-            }
-          }
-        }
+  // Union-find over the vertices of every face (faces joined through shared vertices):
+  // linear, no vertex-face circulation.
+  std::vector<int> parent(mesh.n_vertices());
+  std::iota(parent.begin(), parent.end(), 0);
+  auto find = [&parent](int x) {
+    while (parent[static_cast<std::size_t>(x)] != x) {
+      parent[static_cast<std::size_t>(x)] = parent[static_cast<std::size_t>(parent[static_cast<std::size_t>(x)])];
+      x = parent[static_cast<std::size_t>(x)];
+    }
+    return x;
+  };
+  for (auto f : mesh.faces()) {
+    int root = -1;
+    for (auto v : mesh.fv_range(f)) {
+      const int r = find(v.idx());
+      if (root < 0) {
+        root = r;
+      } else if (r != root) {
+        parent[static_cast<std::size_t>(r)] = root;
       }
     }
-    c.euler_characteristic = static_cast<long>(c.n_vertices) - static_cast<long>(c.n_edges) + static_cast<long>(c.n_faces);
-    components.push_back(c);
+  }
+  std::vector<ComponentSignature> components;
+  std::vector<int> component_of_root(mesh.n_vertices(), -1);
+  std::vector<int> face_component(mesh.n_faces(), -1);
+  for (auto f : mesh.faces()) {
+    const int root = find(mesh.to_vertex_handle(mesh.halfedge_handle(f)).idx());
+    int& id = component_of_root[static_cast<std::size_t>(root)];
+    if (id < 0) {
+      id = static_cast<int>(components.size());
+      components.emplace_back();
+    }
+    face_component[static_cast<std::size_t>(f.idx())] = id;
+    ++components[static_cast<std::size_t>(id)].n_faces;
+  }
+  for (auto v : mesh.vertices()) {
+    const int id = component_of_root[static_cast<std::size_t>(find(v.idx()))];
+    if (id < 0) continue;  // on no face
+    ComponentSignature& c = components[static_cast<std::size_t>(id)];
+    ++c.n_vertices;
+    c.box.extend(to_eigen(mesh.point(v)));
+  }
+  for (auto e : mesh.edges()) {
+    auto f = mesh.face_handle(mesh.halfedge_handle(e, 0));
+    if (!f.is_valid()) f = mesh.face_handle(mesh.halfedge_handle(e, 1));
+    if (f.is_valid()) ++components[static_cast<std::size_t>(face_component[static_cast<std::size_t>(f.idx())])].n_edges;
   }
   // Closedness: a component is closed when none of its halfedges is a boundary halfedge.
-  for (auto& c : components) c.is_closed = true;
+  for (auto& c : components) {
+    c.euler_characteristic = static_cast<long>(c.n_vertices) - static_cast<long>(c.n_edges) + static_cast<long>(c.n_faces);
+    c.is_closed = true;
+  }
   for (auto h : mesh.halfedges()) {
     if (!mesh.is_boundary(h)) continue;
     const auto g = mesh.face_handle(mesh.opposite_halfedge_handle(h));
-    if (g.is_valid()) components[static_cast<std::size_t>(face_component[g.idx()])].is_closed = false;
+    if (g.is_valid()) components[static_cast<std::size_t>(face_component[static_cast<std::size_t>(g.idx())])].is_closed = false;
   }
   return components;
 }

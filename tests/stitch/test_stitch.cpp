@@ -321,6 +321,35 @@ TEST(Stitch, MissingComponentIsAnError) {
   EXPECT_TRUE(mentions(r.report, "components")) << joined(r.report.errors);
 }
 
+TEST(Stitch, ComponentSignaturesCountEachComponent) {
+  // A torus, an icosphere and an open grid, in that face order: chi 0, 2, 1.
+  TriangleSoup s = test::torus(24, 12);
+  auto append = [&](const TriangleSoup& other, const Eigen::Vector3d& offset) {
+    const auto first = static_cast<std::uint32_t>(s.points.size());
+    for (const auto& p : other.points) s.points.push_back(p + offset);
+    for (const auto& t : other.triangles) s.triangles.push_back({t[0] + first, t[1] + first, t[2] + first});
+  };
+  const TriangleSoup sphere = test::icosphere(2);
+  const TriangleSoup grid = test::grid_patch(5, 4);
+  append(sphere, Eigen::Vector3d(5, 0, 0));
+  append(grid, Eigen::Vector3d(0, 5, 0));
+  const std::vector<ComponentSignature> c = component_signatures(to_trimesh(s));
+  ASSERT_EQ(c.size(), 3u);
+  EXPECT_EQ(c[0].euler_characteristic, 0);
+  EXPECT_TRUE(c[0].is_closed);
+  EXPECT_EQ(c[1].euler_characteristic, 2);
+  EXPECT_TRUE(c[1].is_closed);
+  EXPECT_EQ(c[1].n_faces, sphere.triangles.size());
+  EXPECT_EQ(c[1].n_vertices, sphere.points.size());
+  EXPECT_EQ(c[2].euler_characteristic, 1);
+  EXPECT_FALSE(c[2].is_closed);
+  EXPECT_EQ(c[2].n_faces, 40u);
+  EXPECT_EQ(c[2].n_vertices, 30u);
+  EXPECT_EQ(c[2].n_edges, 69u);
+  EXPECT_NEAR(c[2].box.min.y(), 5.0, 1e-12);
+  EXPECT_NEAR(c[1].box.min.x(), 4.0, 1e-6);
+}
+
 TEST(Stitch, MovesThroughANearbySheetAreUndone) {
   // Two parallel open sheets 0.002 apart; the upper one's surface is planted 0.002 below
   // the lower one, so projecting its inner nodes pushes them through the lower sheet.

@@ -106,6 +106,12 @@ void run(benchmark::State& state, const std::string& name) {
   state.counters["s_remesh"] = report.seconds_total;
   state.counters["s_stitch_optimise"] = report.stitch.seconds_optimise;
   state.counters["s_stitch_verify"] = report.stitch.seconds_verify;
+  if (report.output.distance) {
+    state.counters["samples"] = static_cast<double>(report.output.distance->n_mesh_samples + report.output.distance->n_reference_samples);
+    state.counters["hausdorff"] = report.output.distance->hausdorff;
+  }
+  state.counters["reverted"] = static_cast<double>(report.stitch.n_reverted_moves + report.stitch.n_reverted_flips);
+  state.counters["opt_undone"] = report.stitch.optimisation_undone ? 1.0 : 0.0;
   state.counters["cpu_s"] = cpu_seconds;  // CPU time of all threads during the timed run
   state.counters["peak_rss_MB"] = peak_rss_mb();
 }
