@@ -30,33 +30,6 @@ class HeightFieldMetric final : public Metric {
   const BicubicHeightField* field_;
 };
 
-// Border of one patch as directed edges (domain on the left) between its border nodes.
-struct PatchBorder {
-  std::vector<int> nodes;                   // global ids, ascending
-  std::vector<std::array<int, 2>> edges;    // local indices into nodes
-};
-
-PatchBorder patch_border(const Segmentation& seg, int p, const BorderNodes& borders) {
-  PatchBorder out;
-  std::vector<std::array<int, 2>> global_edges;
-  for (const int c : seg.patches[static_cast<std::size_t>(p)].curves) {
-    const BorderCurve& curve = seg.curves[static_cast<std::size_t>(c)];
-    std::vector<int> chain = borders.curve_nodes[static_cast<std::size_t>(c)];
-    if (curve.is_closed) chain.push_back(chain.front());
-    // The curve walks with patch_left on its left: reversed for the right patch.
-    if (curve.patch_left != p) std::reverse(chain.begin(), chain.end());
-    for (std::size_t i = 0; i + 1 < chain.size(); ++i) global_edges.push_back({chain[i], chain[i + 1]});
-  }
-  for (const auto& e : global_edges) out.nodes.insert(out.nodes.end(), e.begin(), e.end());
-  std::sort(out.nodes.begin(), out.nodes.end());
-  out.nodes.erase(std::unique(out.nodes.begin(), out.nodes.end()), out.nodes.end());
-  auto local = [&](int g) {
-    return static_cast<int>(std::lower_bound(out.nodes.begin(), out.nodes.end(), g) - out.nodes.begin());
-  };
-  for (const auto& e : global_edges) out.edges.push_back({local(e[0]), local(e[1])});
-  return out;
-}
-
 // Traces the directed edges into loops. Where loops touch (a node with several outgoing
 // edges), the next edge is the first outgoing one clockwise from the incoming edge's
 // reverse: it bounds the domain sector on the left of the incoming edge.

@@ -189,7 +189,21 @@ SurfaceMesh mesh_surface(const TriMesh& input, const Segmentation& segmentation,
       return s;
     };
   }
-  BorderNodes borders = discretise_borders(input, segmentation, size_at);
+  // Chords of the smoothed curves may cross in a small patch's plane: such curves are
+  // resampled from their input positions, and if that still crosses, take their input
+  // vertices (which the segmentation guarantees not to cross).
+  std::vector<CurveSource> source(segmentation.curves.size(), CurveSource::Smoothed);
+  BorderNodes borders = discretise_borders(input, segmentation, size_at, source);
+  for (bool changed = true; changed;) {
+    changed = false;
+    for (const int c : crossing_curves(segmentation, borders)) {
+      CurveSource& s = source[static_cast<std::size_t>(c)];
+      if (s == CurveSource::InputVertices) continue;  // crossing anyway: the patch will fail
+      s = s == CurveSource::Smoothed ? CurveSource::Input : CurveSource::InputVertices;
+      changed = true;
+    }
+    if (changed) borders = discretise_borders(input, segmentation, size_at, source);
+  }
   out.curve_is_feature = feature_curves(input, segmentation, options.crease_angle_deg);
   report_progress(options.progress, "surfmesh: borders", 1.0);
 

@@ -70,9 +70,12 @@ struct SurfMeshOptions {
   PatchFitOptions fit;
   //! Smoothing passes of the 2D front per patch (FrontOptions::smoothing_passes). Default 3.
   int smoothing_passes = 3;
-  //! Dihedral angle (deg, between the raw normals of an input edge's two faces) above which
-  //! an edge counts as a crease for SurfaceMesh::curve_is_feature. Pass the segmentation's
-  //! SegmentOptions::crease_angle_deg. In (0, 180]. Default 80 (the segment default).
+  //! Crease angle (deg) for SurfaceMesh::curve_is_feature. Pass the segmentation's
+  //! SegmentOptions::crease_angle_deg. A curve is a crease when the angle between the mean
+  //! normals of the faces within 3 rings on each side (median over its vertices) exceeds
+  //! 0.75 x this angle (marching cubes bevels a 90 deg edge into steps below the crease
+  //! angle, and the averaging lowers it), or when most of its input edges have a dihedral
+  //! above this angle. In (0, 180]. Default 80 (the segment default).
   double crease_angle_deg = 80.0;
   //! Move every border node to the mean of its vertical projections onto the fitted
   //! surfaces of its curve's patches before meshing (by at most one mean input edge), so the
@@ -138,8 +141,8 @@ struct SurfaceMesh {
   std::vector<std::array<int, 3>> triangles;
   std::vector<int> triangle_patch;      //!< patch of each triangle
   std::vector<PatchSurface> surfaces;   //!< one per patch
-  //! Per curve: true when the curve is a crease (its input edges are above the crease
-  //! angle) or on the input's boundary; stitch never flips across or smooths such curves.
+  //! Per curve: true when the curve is a crease (see SurfMeshOptions::crease_angle_deg) or
+  //! on the input's boundary; stitch never flips across or smooths such curves.
   std::vector<std::uint8_t> curve_is_feature;
   std::vector<PatchMeshReport> patches; //!< one per patch
   double target_size = 0.0;             //!< the resolved uniform target edge length

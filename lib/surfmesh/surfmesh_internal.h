@@ -34,13 +34,45 @@ struct BorderNodes {
   std::vector<std::vector<int>> curve_nodes;
 };
 
-//! Resamples every curve's smoothed polyline once, n segments of about size_at() each
-//! (closed curves and curves from a corner to itself at least 3; an open curve sharing
-//! both ends with another curve at least 2, so no patch gets a doubled segment).
-[[nodiscard]] BorderNodes discretise_borders(const TriMesh& mesh, const Segmentation& segmentation,
-                                             const SizeAt& size_at);
+//! What a curve's nodes are taken from.
+enum class CurveSource : std::uint8_t {
+  Smoothed,       //!< the smoothed polyline, resampled (default)
+  Input,          //!< the input positions of its vertices, resampled
+  InputVertices,  //!< its input vertices themselves (the segmentation guarantees that
+                  //!< these never cross in a patch's plane)
+};
 
-//! Per curve: on the input's boundary, or most of its edges have a dihedral above the angle.
+//! Resamples every curve once, n segments of about size_at() each (closed curves and
+//! curves from a corner to itself at least 3; an open curve sharing both ends with another
+//! curve at least 2, so no patch gets a doubled segment), from the polyline `source` says
+//! (one entry per curve). Short loops are resampled from their input positions, never
+//! from the smoothed ones.
+[[nodiscard]] BorderNodes discretise_borders(const TriMesh& mesh, const Segmentation& segmentation,
+                                             const SizeAt& size_at, const std::vector<CurveSource>& source);
+
+//! Border of one patch as directed edges (domain on the left) between its border nodes.
+struct PatchBorder {
+  std::vector<int> nodes;                 //!< global ids, ascending
+  std::vector<std::array<int, 2>> edges;  //!< local indices into nodes
+  std::vector<int> edge_curve;            //!< the curve of each edge
+};
+[[nodiscard]] PatchBorder patch_border(const Segmentation& segmentation, int p, const BorderNodes& borders);
+
+//! Curves (ascending ids) with a segment that meets a segment it shares no node with, or
+//! overlaps a neighbouring one, in the plane of one of their patches (orthogonal to its
+//! axis; exact predicates).
+[[nodiscard]] std::vector<int> crossing_curves(const Segmentation& segmentation, const BorderNodes& borders);
+
+//! Per curve (deg): the median over its vertices (the interior ones of an open curve) of
+//! the angle between the area-weighted mean normals of the faces within `rings`
+//! edge-adjacent rings around the vertex on each side (starting in one patch, never entering
+//! the other one, so a narrow bevel patch does not hide the faces beyond it); 180 for curves on
+//! the input's boundary. Unlike the dihedral of single edges, this sees a crease that
+//! marching cubes bevelled into steps below the crease angle.
+[[nodiscard]] std::vector<double> curve_crease_angles(const TriMesh& mesh, const Segmentation& segmentation, int rings);
+
+//! Per curve: on the input's boundary, or its crease angle (curve_crease_angles, 3 rings)
+//! is above 0.75 x the given angle, or most of its input edges have a dihedral above it.
 [[nodiscard]] std::vector<std::uint8_t> feature_curves(const TriMesh& mesh, const Segmentation& segmentation,
                                                        double crease_angle_deg);
 

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <cstdlib>
 #include <string>
 
 namespace nurbsfront::test {
@@ -15,7 +16,11 @@ std::filesystem::path test_data(const std::filesystem::path& relative) {
 }
 
 std::optional<std::filesystem::path> shared_data(const std::filesystem::path& relative) {
-  auto path = std::filesystem::path(NURBSFRONT_SOURCE_DIR).parent_path() / "shared" / "data" / relative;
+  // NURBSFRONT_SHARED_DATA overrides the location (a worktree is not next to ../shared).
+  const char* root = std::getenv("NURBSFRONT_SHARED_DATA");
+  auto path = (root != nullptr && *root != '\0' ? std::filesystem::path(root)
+                                                 : std::filesystem::path(NURBSFRONT_SOURCE_DIR).parent_path() / "shared" / "data") /
+              relative;
   if (std::filesystem::exists(path)) return path;
   return std::nullopt;
 }

@@ -10,7 +10,7 @@ namespace nurbsfront::test {
 
 //! <repo>/tests/data/<relative>; fails the test if missing.
 std::filesystem::path test_data(const std::filesystem::path& relative);
-//! <repo>/../shared/data/<relative> if it exists.
+//! <repo>/../shared/data/<relative> (or $NURBSFRONT_SHARED_DATA/<relative>) if it exists.
 std::optional<std::filesystem::path> shared_data(const std::filesystem::path& relative);
 //! A fresh, empty temporary directory for a test's output files, unique to this process.
 std::filesystem::path temp_dir(const std::string& name);
