@@ -153,19 +153,18 @@ constexpr int kRepairRounds = 6;
 // did not change (same vertices at the same positions as assembled) were there before
 // and stay. Returns false when changed faces still intersect after kRepairRounds.
 bool repair_intersections(const TriMesh& assembled, TriMesh& mesh, std::vector<FacePair>& pairs, StitchReport& report) {
+  // A face is untouched when the assembled mesh has the same triangle (same vertices, same
+  // orientation, same positions), under any face index: undoing flips in another order
+  // than they were made can restore a triangle under its neighbour's index.
   auto is_untouched = [&](std::uint32_t f) {
-    const TriMesh::FaceHandle now(static_cast<int>(f));
-    std::array<int, 3> a{}, b{};
+    std::array<TriMesh::VertexHandle, 3> v;
     int k = 0;
-    for (auto v : mesh.fv_range(now)) {
-      if (mesh.point(v) != assembled.point(v)) return false;
-      a[static_cast<std::size_t>(k++)] = v.idx();
+    for (auto u : mesh.fv_range(TriMesh::FaceHandle(static_cast<int>(f)))) {
+      if (mesh.point(u) != assembled.point(u)) return false;
+      v[static_cast<std::size_t>(k++)] = u;
     }
-    k = 0;
-    for (auto v : assembled.fv_range(now)) b[static_cast<std::size_t>(k++)] = v.idx();
-    std::sort(a.begin(), a.end());
-    std::sort(b.begin(), b.end());
-    return a == b;
+    const auto h = assembled.find_halfedge(v[0], v[1]);
+    return h.is_valid() && !assembled.is_boundary(h) && assembled.to_vertex_handle(assembled.next_halfedge_handle(h)) == v[2];
   };
   auto offending = [&] {
     std::vector<std::uint32_t> faces;
