@@ -62,6 +62,7 @@ std::string to_json(const RemeshReport& r) {
   stitch.count("input_triangles", s.n_input_triangles).count("rejected_triangles", s.n_rejected_triangles);
   stitch.count("flips", s.n_flips).count("smoothing_moves", s.n_smoothing_moves);
   stitch.count("smoothing_rejected", s.n_smoothing_rejected).count("reverted_moves", s.n_reverted_moves);
+  stitch.count("reverted_flips", s.n_reverted_flips);
   stitch.flag("optimisation_undone", s.optimisation_undone);
   stitch.num("alpha_mean_before", s.alpha_mean_before).num("alpha_min_before", s.alpha_min_before);
   stitch.add("input_components", components_json(s.input_components));

@@ -30,6 +30,13 @@ std::uint64_t spread_bits(std::uint64_t x) {
 
 constexpr double kMortonCells = 2097151.0;  // 2^21 - 1 cells per axis
 
+// Morton code of p in the box [lo, lo + extent] (extent > 0 on every axis), 21 bits per axis.
+std::uint64_t morton_code(const Eigen::Vector3d& p, const Eigen::Vector3d& lo, const Eigen::Vector3d& extent) {
+  const Eigen::Vector3d q = ((p - lo).cwiseQuotient(extent) * kMortonCells).cwiseMax(0.0).cwiseMin(kMortonCells);
+  return spread_bits(static_cast<std::uint64_t>(q.x())) << 2 | spread_bits(static_cast<std::uint64_t>(q.y())) << 1 |
+         spread_bits(static_cast<std::uint64_t>(q.z()));
+}
+
 // Largest float <= x and smallest float >= x (the largest finite float or infinity
 // beyond the float range). One step of the bit pattern moves to the neighbouring float.
 float float_below(double x) {
@@ -69,9 +76,7 @@ AabbTree::AabbTree(const TriangleSoup& soup, std::vector<std::uint32_t> faces) :
   std::vector<std::uint64_t> codes(n);
   std::vector<std::uint32_t> order(n);
   for (std::size_t i = 0; i < n; ++i) {
-    const Eigen::Vector3d q = (centroids[i] - centroid_box.min).cwiseQuotient(extent) * kMortonCells;
-    codes[i] = spread_bits(static_cast<std::uint64_t>(q.x())) << 2 | spread_bits(static_cast<std::uint64_t>(q.y())) << 1 |
-               spread_bits(static_cast<std::uint64_t>(q.z()));
+    codes[i] = morton_code(centroids[i], centroid_box.min, extent);
     order[i] = static_cast<std::uint32_t>(i);
   }
   centroids = {};
@@ -131,6 +136,20 @@ void AabbTree::build(std::uint32_t node, std::uint32_t begin, std::uint32_t end,
   build(left, begin, mid, codes);
   build(left + 1, mid, end, codes);
   nodes_[node].box = merge(nodes_[left].box, nodes_[left + 1].box);
+}
+
+std::vector<std::uint32_t> morton_order(const std::vector<Eigen::Vector3d>& points) {
+  BoundingBox box;
+  for (const auto& p : points) box.extend(p);
+  const Eigen::Vector3d extent = (box.max - box.min).cwiseMax(std::numeric_limits<double>::min());
+  std::vector<std::uint64_t> codes(points.size());
+  std::vector<std::uint32_t> order(points.size());
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    codes[i] = morton_code(points[i], box.min, extent);
+    order[i] = static_cast<std::uint32_t>(i);
+  }
+  radix_sort(codes, order);
+  return order;
 }
 
 Eigen::Vector3d closest_point_on_triangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a,

@@ -89,6 +89,10 @@ class AabbTree {
   std::vector<Box3f> boxes_;
 };
 
+//! The indices of `points` in Morton (Z-curve) order of the points' bounding box: queries
+//! made in this order visit the tree's nodes coherently (cache-friendly).
+std::vector<std::uint32_t> morton_order(const std::vector<Eigen::Vector3d>& points);
+
 //! Closest point of triangle (a, b, c) to p (Ericson, Real-Time Collision Detection 5.1.5).
 Eigen::Vector3d closest_point_on_triangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a,
                                           const Eigen::Vector3d& b, const Eigen::Vector3d& c);

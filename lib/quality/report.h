@@ -189,6 +189,15 @@ struct MeshReport {
 [[nodiscard]] std::vector<std::array<std::uint32_t, 2>> self_intersecting_pairs(const TriangleSoup& soup,
                                                                                 unsigned n_threads = 2);
 
+//! The intersecting face pairs of self_intersecting_pairs() that involve at least one of
+//! `faces` (any order, repeats allowed), in the same form: (smaller, larger) face indices,
+//! ascending, each pair once. For re-checking a few changed faces of a large soup: a tree
+//! is built over `faces` only and every face of the soup is tested against it, so the cost
+//! is linear in the soup plus the candidates near `faces`.
+//! \throw InvalidInput for out-of-range indices (in the soup or in `faces`) or non-finite points.
+[[nodiscard]] std::vector<std::array<std::uint32_t, 2>> intersecting_pairs_of(const TriangleSoup& soup,
+                                                                              const std::vector<std::uint32_t>& faces);
+
 //! Two-sided distance by dense sampling: every vertex plus area-proportional samples
 //! (spacing sample_spacing_relative * reference diagonal) on both surfaces, exact
 //! closest points on the other surface through an AABB tree. Deterministic.

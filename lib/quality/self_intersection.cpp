@@ -382,4 +382,86 @@ std::vector<std::array<std::uint32_t, 2>> self_intersecting_pairs(const Triangle
   return pairs;
 }
 
+std::vector<std::array<std::uint32_t, 2>> intersecting_pairs_of(const TriangleSoup& soup,
+                                                                 const std::vector<std::uint32_t>& faces) {
+  quality_detail::validate_soup(soup, "intersecting_pairs_of");
+  const std::size_t n = soup.triangles.size();
+  std::vector<std::uint32_t> subset = faces;
+  std::sort(subset.begin(), subset.end());
+  subset.erase(std::unique(subset.begin(), subset.end()), subset.end());
+  if (!subset.empty() && subset.back() >= n) {
+    throw InvalidInput("nurbsfront: intersecting_pairs_of: face " + std::to_string(subset.back()) + " of " +
+                       std::to_string(n));
+  }
+  std::vector<FacePair> pairs;
+  if (subset.empty()) return pairs;
+  const std::vector<std::uint32_t> ids = canonical_ids(soup);
+  const double diagonal = bounding_box(soup).diagonal();
+  const double area_floor = tolerance::kDegenerateAreaRelative * diagonal * diagonal;
+  // The same faces as count_self_intersections_with() skips (repeated corner, degenerate area).
+  auto usable = [&](std::uint32_t f) {
+    const auto& t = soup.triangles[f];
+    if (ids[t[0]] == ids[t[1]] || ids[t[1]] == ids[t[2]] || ids[t[2]] == ids[t[0]]) return false;
+    return 0.5 * (soup.points[t[1]] - soup.points[t[0]]).cross(soup.points[t[2]] - soup.points[t[0]]).norm() > area_floor;
+  };
+  std::vector<char> in_subset(n, 0);
+  for (std::uint32_t f : subset) in_subset[f] = usable(f) ? 1 : 0;
+  subset.erase(std::remove_if(subset.begin(), subset.end(), [&](std::uint32_t f) { return in_subset[f] == 0; }),
+               subset.end());
+  if (subset.empty()) return pairs;
+  const quality_detail::AabbTree tree(soup, subset);
+  const auto& nodes = tree.nodes();
+  std::vector<std::uint32_t> stack;
+  for (std::uint32_t g = 0; g < n; ++g) {
+    const auto& tg = soup.triangles[g];
+    const Eigen::Vector3d& a = soup.points[tg[0]];
+    const Eigen::Vector3d& b = soup.points[tg[1]];
+    const Eigen::Vector3d& c = soup.points[tg[2]];
+    const Eigen::Vector3d lo = a.cwiseMin(b).cwiseMin(c), hi = a.cwiseMax(b).cwiseMax(c);
+    // Double box tests against the float boxes, which contain the exact boxes: never prunes
+    // an overlapping pair.
+    auto overlaps = [&](const quality_detail::Box3f& box) {
+      for (int k = 0; k < 3; ++k) {
+        if (static_cast<double>(box.hi[k]) < lo[k] || hi[k] < static_cast<double>(box.lo[k])) return false;
+      }
+      return true;
+    };
+    if (!overlaps(nodes[0].box)) continue;
+    bool g_usable = true, g_checked = false;
+    const std::array<std::uint32_t, 3> ids_g{ids[tg[0]], ids[tg[1]], ids[tg[2]]};
+    const std::array<Eigen::Vector3d, 3> points_g{a, b, c};
+    stack.assign(1, 0);
+    while (!stack.empty()) {
+      const auto& node = nodes[stack.back()];
+      stack.pop_back();
+      if (!overlaps(node.box)) continue;
+      if (!node.is_leaf()) {
+        stack.push_back(node.left());
+        stack.push_back(node.right());
+        continue;
+      }
+      for (std::uint32_t i = node.begin(); i < node.end(); ++i) {
+        const std::uint32_t f = tree.faces()[i];
+        // A pair of two subset faces is tested once, from its larger face.
+        if (f == g || (in_subset[g] != 0 && f > g) || !overlaps(tree.face_box(i))) continue;
+        if (!g_checked) {
+          g_usable = usable(g);
+          g_checked = true;
+        }
+        if (!g_usable) break;
+        const auto& tf = soup.triangles[f];
+        const std::array<std::uint32_t, 3> ids_f{ids[tf[0]], ids[tf[1]], ids[tf[2]]};
+        const std::array<Eigen::Vector3d, 3> points_f{soup.points[tf[0]], soup.points[tf[1]], soup.points[tf[2]]};
+        if (quality_detail::triangles_intersect(ids_f, points_f, ids_g, points_g)) {
+          pairs.push_back({std::min(f, g), std::max(f, g)});
+        }
+      }
+      if (!g_usable) break;
+    }
+  }
+  std::sort(pairs.begin(), pairs.end());
+  pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
+  return pairs;
+}
+
 }  // namespace nurbsfront

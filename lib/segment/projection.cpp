@@ -38,10 +38,14 @@ struct Segment {
 
 // Extra outer loops up to this many edges are reported as local trouble.
 constexpr std::size_t kMaxTroubleLoopEdges = 24;
+// Crossing border segment pairs reported as local trouble by one check: all of a patch's
+// local folds are cut out at once instead of one per check of the whole patch.
+constexpr std::size_t kMaxTroubleCrossings = 256;
 
-// Two segments that share no vertex but meet (as indices), or (-1, -1); a uniform grid
-// keeps the search near linear.
-std::pair<int, int> find_crossing(const std::vector<Segment>& segments, const std::vector<Eigen::Vector2d>& xy) {
+// Pairs of segments that share no vertex but meet (as indices), at most max_pairs of them
+// (each pair once); a uniform grid keeps the search near linear.
+std::vector<std::pair<int, int>> find_crossings(const std::vector<Segment>& segments, const std::vector<Eigen::Vector2d>& xy,
+                                                std::size_t max_pairs) {
   const auto n = static_cast<int>(segments.size());
   Eigen::Vector2d lo = xy[segments[0].a], hi = lo;
   for (const Segment& s : segments) {
@@ -68,6 +72,7 @@ std::pair<int, int> find_crossing(const std::vector<Segment>& segments, const st
       for (int x = x0; x <= x1; ++x) entries.emplace_back(y * cells + x, i);
   }
   std::sort(entries.begin(), entries.end());
+  std::vector<std::pair<int, int>> found;
   for (std::size_t begin = 0; begin < entries.size();) {
     std::size_t end = begin;
     while (end < entries.size() && entries[end].first == entries[begin].first) ++end;
@@ -76,12 +81,19 @@ std::pair<int, int> find_crossing(const std::vector<Segment>& segments, const st
       for (std::size_t j = i + 1; j < end; ++j) {
         const Segment& t = segments[entries[j].second];
         if (s.a == t.a || s.a == t.b || s.b == t.a || s.b == t.b) continue;
-        if (segments_meet(xy[s.a], xy[s.b], xy[t.a], xy[t.b])) return {entries[i].second, entries[j].second};
+        if (segments_meet(xy[s.a], xy[s.b], xy[t.a], xy[t.b])) {
+          found.emplace_back(std::min(entries[i].second, entries[j].second), std::max(entries[i].second, entries[j].second));
+        }
       }
     }
+    if (found.size() >= max_pairs) break;
     begin = end;
   }
-  return {-1, -1};
+  // A pair in several common cells is found once per cell.
+  std::sort(found.begin(), found.end());
+  found.erase(std::unique(found.begin(), found.end()), found.end());
+  if (found.size() > max_pairs) found.resize(max_pairs);
+  return found;
 }
 
 bool polygon_contains(const std::vector<int>& cycle, const std::vector<Eigen::Vector2d>& xy, const Eigen::Vector2d& q) {
@@ -154,11 +166,32 @@ std::pair<Eigen::Vector3d, Eigen::Vector3d> plane_frame(const Eigen::Vector3d& a
   return {e1, axis.cross(e1)};
 }
 
+std::vector<OpenMesh::HalfedgeHandle> patch_border(const FaceGraph& graph, const std::vector<int>& faces,
+                                                   const std::vector<int>& face_patch) {
+  std::vector<OpenMesh::HalfedgeHandle> border;
+  if (faces.empty()) return border;
+  const TriMesh& mesh = *graph.mesh;
+  const int patch = face_patch[faces[0]];
+  for (int f : faces) {
+    for (const auto h : mesh.fh_range(mesh.face_handle(f))) {
+      const auto g = mesh.opposite_face_handle(h);
+      if (!g.is_valid() || face_patch[g.idx()] != patch) border.push_back(h);
+    }
+  }
+  return border;
+}
+
 ProjectionCheck check_projection(const FaceGraph& graph, const std::vector<int>& faces,
                                  const std::vector<int>& face_patch, const Eigen::Vector3d& axis, Scratch& scratch) {
   if (faces.size() <= 1) return {true, {}};
+  return check_projection(graph, patch_border(graph, faces, face_patch), face_patch, axis, scratch);
+}
+
+ProjectionCheck check_projection(const FaceGraph& graph, const std::vector<OpenMesh::HalfedgeHandle>& border,
+                                 const std::vector<int>& face_patch, const Eigen::Vector3d& axis, Scratch& scratch) {
+  if (border.empty()) return {false, {}};  // a closed surface is never a height field
   const TriMesh& mesh = *graph.mesh;
-  const int patch = face_patch[faces[0]];
+  const int patch = face_patch[mesh.face_handle(border[0]).idx()];
   const int epoch = ++scratch.vertex_epoch;
   const auto [e1, e2] = plane_frame(axis);
   auto in_patch = [&](OpenMesh::HalfedgeHandle h) {
@@ -166,28 +199,21 @@ ProjectionCheck check_projection(const FaceGraph& graph, const std::vector<int>&
     return f.is_valid() && face_patch[f.idx()] == patch;
   };
   std::vector<Segment> segments;
-  std::vector<OpenMesh::HalfedgeHandle> border;
-  for (int f : faces) {
-    for (const auto h : mesh.fh_range(mesh.face_handle(f))) {
-      if (in_patch(mesh.opposite_halfedge_handle(h))) continue;
-      const int a = mesh.from_vertex_handle(h).idx(), b = mesh.to_vertex_handle(h).idx();
-      for (int v : {a, b}) {
-        if (scratch.vertex_stamp[v] == epoch) continue;
-        scratch.vertex_stamp[v] = epoch;
-        const Eigen::Vector3d& p = graph.points[v];
-        scratch.xy[v] = Eigen::Vector2d(p.dot(e1), p.dot(e2));
-      }
-      segments.push_back({a, b});
-      border.push_back(h);
+  segments.reserve(border.size());
+  for (const auto h : border) {
+    const int a = mesh.from_vertex_handle(h).idx(), b = mesh.to_vertex_handle(h).idx();
+    for (int v : {a, b}) {
+      if (scratch.vertex_stamp[v] == epoch) continue;
+      scratch.vertex_stamp[v] = epoch;
+      const Eigen::Vector3d& p = graph.points[v];
+      scratch.xy[v] = Eigen::Vector2d(p.dot(e1), p.dot(e2));
     }
+    segments.push_back({a, b});
   }
-  if (segments.empty()) return {false, {}};  // a closed surface is never a height field
   // Loops, traced through the patch's own faces around each vertex, so a loop passing a
   // vertex twice (where the patch touches itself) stays apart from the other. At most one
   // loop may be counter-clockwise (the outer loop); two would mean a region covered twice.
-  int n_outer = 0;
-  OpenMesh::HalfedgeHandle smallest_outer;
-  std::size_t smallest_size = 0;
+  std::vector<std::pair<std::size_t, OpenMesh::HalfedgeHandle>> outer;  // (edges, start) per outer loop
   std::vector<std::vector<int>> cycles;  // the loops' simple cycles (split where a loop passes a vertex twice)
   std::vector<int> loop_vertices;
   for (const auto start : border) {
@@ -208,24 +234,23 @@ ProjectionCheck check_projection(const FaceGraph& graph, const std::vector<int>&
     } while (h != start);
     std::vector<std::vector<int>> split = split_at_repeated_vertices(loop_vertices);
     cycles.insert(cycles.end(), std::make_move_iterator(split.begin()), std::make_move_iterator(split.end()));
-    if (twice_area > 0) {
-      ++n_outer;
-      if (!smallest_outer.is_valid() || steps < smallest_size) {
-        smallest_outer = start;
-        smallest_size = steps;
-      }
-    }
+    if (twice_area > 0) outer.emplace_back(steps, start);
   }
-  if (n_outer > 1) {
+  if (outer.size() > 1) {
+    // Every outer loop but the largest one is extra; the short ones are local trouble
+    // (all reported, so they are cut out together). Ties keep the first loop found.
+    std::stable_sort(outer.begin(), outer.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
     ProjectionCheck check{false, {}};
-    if (smallest_size > kMaxTroubleLoopEdges) return check;
-    auto h = smallest_outer;
-    do {
-      check.trouble.push_back(mesh.from_vertex_handle(h).idx());
-      auto next = mesh.next_halfedge_handle(h);
-      while (in_patch(mesh.opposite_halfedge_handle(next))) next = mesh.next_halfedge_handle(mesh.opposite_halfedge_handle(next));
-      h = next;
-    } while (h != smallest_outer);
+    if (outer[0].first > kMaxTroubleLoopEdges) return check;
+    for (std::size_t k = 0; k + 1 < outer.size() && outer[k].first <= kMaxTroubleLoopEdges; ++k) {
+      auto h = outer[k].second;
+      do {
+        check.trouble.push_back(mesh.from_vertex_handle(h).idx());
+        auto next = mesh.next_halfedge_handle(h);
+        while (in_patch(mesh.opposite_halfedge_handle(next))) next = mesh.next_halfedge_handle(mesh.opposite_halfedge_handle(next));
+        h = next;
+      } while (h != outer[k].second);
+    }
     return check;
   }
   // A loop that passes a vertex twice may hide a counter-clockwise cycle inside another
@@ -233,9 +258,11 @@ ProjectionCheck check_projection(const FaceGraph& graph, const std::vector<int>&
   // region inside both is covered twice although the loop's total area looks right.
   const std::vector<int> nested = nested_ccw_cycle(cycles, scratch.xy);
   if (!nested.empty()) return {false, nested.size() <= kMaxTroubleLoopEdges ? nested : std::vector<int>{}};
-  const auto [i, j] = find_crossing(segments, scratch.xy);
-  if (i < 0) return {true, {}};
-  return {false, {segments[i].a, segments[i].b, segments[j].a, segments[j].b}};
+  const std::vector<std::pair<int, int>> crossings = find_crossings(segments, scratch.xy, kMaxTroubleCrossings);
+  if (crossings.empty()) return {true, {}};
+  ProjectionCheck check{false, {}};
+  for (const auto& [i, j] : crossings) check.trouble.insert(check.trouble.end(), {segments[i].a, segments[i].b, segments[j].a, segments[j].b});
+  return check;
 }
 
 std::pair<std::vector<int>, std::vector<int>> bisect_patch(const FaceGraph& graph, const std::vector<int>& faces,

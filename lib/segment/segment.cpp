@@ -296,6 +296,24 @@ void merge_patches(const Grouping& grouping, std::size_t min_faces, Patches& pat
     int patch = -1, shared = 0;
     bool blocked = false;
   };
+  // Merges refused by the projection check, as (neighbour, own size, neighbour's size): a
+  // patch's faces change only by merges, which change its size, so an attempt with both
+  // sizes unchanged would be refused again and is skipped (the check costs the size of
+  // the merged patch).
+  std::vector<std::vector<std::array<std::size_t, 3>>> refused(scratch != nullptr ? n_patches : 0);
+  // Border halfedges per patch (scratch mode), valid while the patch keeps the size they
+  // were taken at: the merged patch's border comes from its two parts' borders, so a merge
+  // check costs the borders, not the faces.
+  std::vector<std::vector<OpenMesh::HalfedgeHandle>> border(scratch != nullptr ? n_patches : 0);
+  std::vector<std::size_t> border_size(border.size(), 0);
+  auto border_of = [&](int p) -> const std::vector<OpenMesh::HalfedgeHandle>& {
+    if (border_size[p] != patches.faces[p].size() || patches.faces[p].empty()) {
+      border[p] = segment_detail::patch_border(graph, patches.faces[p], patches.face_patch);
+      border_size[p] = patches.faces[p].size();
+    }
+    return border[p];
+  };
+  std::vector<OpenMesh::HalfedgeHandle> merged_border;
   std::vector<PatchCones> cones(n_patches);
   for (int p = 0; p < n_patches; ++p) cones[p] = patch_cones(grouping, patches.faces[p], patches.axes[p]);
   const double max_smooth = grouping.max_slope - kAngleMarginRad;
@@ -326,6 +344,8 @@ void merge_patches(const Grouping& grouping, std::size_t min_faces, Patches& pat
       bool merged = false;
       for (const Neighbour& q : neighbours) {
         if (q.blocked) continue;
+        const std::array<std::size_t, 3> attempt{static_cast<std::size_t>(q.patch), size, patches.faces[q.patch].size()};
+        if (scratch != nullptr && std::find(refused[p].begin(), refused[p].end(), attempt) != refused[p].end()) continue;
         const PatchCones old_cones = cones[q.patch];
         const Eigen::Vector3d old_axis = patches.axes[q.patch];
         // First the union of the bounding cones: its axis may bound both patches.
@@ -345,17 +365,36 @@ void merge_patches(const Grouping& grouping, std::size_t min_faces, Patches& pat
           cones[q.patch].smooth = cone_union(cones[q.patch].smooth, cones[p].smooth);
           cones[q.patch].raw = cone_union(cones[q.patch].raw, cones[p].raw);
         }
+        if (scratch != nullptr) {
+          // Both borders before the faces change hands (face_patch decides what is border).
+          (void)border_of(q.patch);
+          (void)border_of(p);
+        }
         for (int f : patches.faces[p]) patches.face_patch[f] = q.patch;
         auto& target = patches.faces[q.patch];
         target.insert(target.end(), patches.faces[p].begin(), patches.faces[p].end());
+        if (scratch != nullptr) {
+          merged_border.clear();
+          for (const auto* part : {&border[q.patch], &border[p]}) {
+            for (const auto h : *part) {
+              const auto g = graph.mesh->opposite_face_handle(h);
+              if (!g.is_valid() || patches.face_patch[g.idx()] != q.patch) merged_border.push_back(h);
+            }
+          }
+        }
         if (scratch != nullptr &&
-            !segment_detail::check_projection(graph, target, patches.face_patch, patches.axes[q.patch], *scratch)
+            !segment_detail::check_projection(graph, merged_border, patches.face_patch, patches.axes[q.patch], *scratch)
                  .is_simple) {
           target.resize(target.size() - patches.faces[p].size());
           for (int f : patches.faces[p]) patches.face_patch[f] = p;
           cones[q.patch] = old_cones;
           patches.axes[q.patch] = old_axis;
+          refused[p].push_back(attempt);
           continue;
+        }
+        if (scratch != nullptr) {
+          border[q.patch].swap(merged_border);
+          border_size[q.patch] = target.size();
         }
         patches.faces[p].clear();
         merged = true;

@@ -42,8 +42,9 @@ struct Scratch {
 //! The result of check_projection().
 struct ProjectionCheck {
   bool is_simple = true;
-  //! Where it fails, when that is local: the vertices of a short extra outer loop, or of
-  //! two crossing border segments. Empty when the failure is not local.
+  //! Where it fails, when that is local: the vertices of every short extra outer loop, or
+  //! of the crossing border segments (up to 256 pairs), so all local folds of a patch can be
+  //! cut out at once. Empty when the failure is not local.
   std::vector<int> trouble;
 };
 
@@ -51,6 +52,18 @@ struct ProjectionCheck {
 //! the plane orthogonal to `axis` as border loops whose segments never cross or touch
 //! except at shared vertices, with at most one counter-clockwise (outer) loop.
 [[nodiscard]] ProjectionCheck check_projection(const FaceGraph& graph, const std::vector<int>& faces,
+                                               const std::vector<int>& face_patch, const Eigen::Vector3d& axis,
+                                               Scratch& scratch);
+
+//! The border halfedges of a patch (inside the patch, the face across is another patch's
+//! or none), face by face in the order of `faces`.
+[[nodiscard]] std::vector<OpenMesh::HalfedgeHandle> patch_border(const FaceGraph& graph, const std::vector<int>& faces,
+                                                                 const std::vector<int>& face_patch);
+
+//! check_projection() of the patch with these border halfedges (patch_border()): the cost
+//! is that of the border, not of the faces. An empty border (a closed surface) fails.
+[[nodiscard]] ProjectionCheck check_projection(const FaceGraph& graph,
+                                               const std::vector<OpenMesh::HalfedgeHandle>& border,
                                                const std::vector<int>& face_patch, const Eigen::Vector3d& axis,
                                                Scratch& scratch);
 

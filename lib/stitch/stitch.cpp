@@ -3,8 +3,11 @@
 #include "nurbsfront/stitch/stitch.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstdint>
 #include <limits>
+#include <numeric>
 #include <string>
 
 #include "nurbsfront/core/error.h"
@@ -136,6 +139,92 @@ void compare_with_input(StitchReport& report) {
   }
 }
 
+using FacePair = std::array<std::uint32_t, 2>;
+
+// Rounds of local repair before the optimisation is undone as a whole.
+constexpr int kRepairRounds = 6;
+
+// The optimisation may push a node through a nearby sheet (thin walls) or flip an edge
+// into one. `pairs` (all intersecting pairs of `mesh`, sorted) is updated in place while
+// the offending changes are undone: the nodes of an intersecting face the optimisation
+// changed go back to their assembled positions, and its edges that a flip made are
+// flipped back (flips keep vertex and face indices). Only the faces around the undone
+// changes are checked again (intersecting_pairs_of). Pairs of two faces the optimisation
+// did not change (same vertices at the same positions as assembled) were there before
+// and stay. Returns false when changed faces still intersect after kRepairRounds.
+bool repair_intersections(const TriMesh& assembled, TriMesh& mesh, std::vector<FacePair>& pairs, StitchReport& report) {
+  // A face is untouched when the assembled mesh has the same triangle (same vertices, same
+  // orientation, same positions), under any face index: undoing flips in another order
+  // than they were made can restore a triangle under its neighbour's index.
+  auto is_untouched = [&](std::uint32_t f) {
+    std::array<TriMesh::VertexHandle, 3> v;
+    int k = 0;
+    for (auto u : mesh.fv_range(TriMesh::FaceHandle(static_cast<int>(f)))) {
+      if (mesh.point(u) != assembled.point(u)) return false;
+      v[static_cast<std::size_t>(k++)] = u;
+    }
+    const auto h = assembled.find_halfedge(v[0], v[1]);
+    return h.is_valid() && !assembled.is_boundary(h) && assembled.to_vertex_handle(assembled.next_halfedge_handle(h)) == v[2];
+  };
+  auto offending = [&] {
+    std::vector<std::uint32_t> faces;
+    for (const auto& pair : pairs) {
+      for (const std::uint32_t f : pair) {
+        if (!is_untouched(f)) faces.push_back(f);
+      }
+    }
+    std::sort(faces.begin(), faces.end());
+    faces.erase(std::unique(faces.begin(), faces.end()), faces.end());
+    return faces;
+  };
+  std::vector<char> changed(mesh.n_faces(), 0);
+  for (int round = 0; round < kRepairRounds; ++round) {
+    const std::vector<std::uint32_t> faces = offending();
+    if (faces.empty()) return true;
+    std::vector<std::uint32_t> touched;
+    auto touch = [&](TriMesh::FaceHandle f) {
+      if (!f.is_valid() || changed[static_cast<std::size_t>(f.idx())] != 0) return;
+      changed[static_cast<std::size_t>(f.idx())] = 1;
+      touched.push_back(static_cast<std::uint32_t>(f.idx()));
+    };
+    std::vector<TriMesh::EdgeHandle> flipped;
+    for (const std::uint32_t f : faces) {
+      const TriMesh::FaceHandle face(static_cast<int>(f));
+      touch(face);
+      for (auto h : mesh.fh_range(face)) {
+        const auto v = mesh.to_vertex_handle(h);
+        if (mesh.point(v) != assembled.point(v)) {
+          mesh.set_point(v, assembled.point(v));
+          ++report.n_reverted_moves;
+          for (auto g : mesh.vf_range(v)) touch(g);
+        }
+        if (!assembled.find_halfedge(mesh.from_vertex_handle(h), v).is_valid()) flipped.push_back(mesh.edge_handle(h));
+      }
+    }
+    std::sort(flipped.begin(), flipped.end());
+    flipped.erase(std::unique(flipped.begin(), flipped.end()), flipped.end());
+    for (const auto e : flipped) {
+      const auto h = mesh.halfedge_handle(e, 0);
+      // Still an edge the flips made, and flippable (the other diagonal is not an edge).
+      if (assembled.find_halfedge(mesh.from_vertex_handle(h), mesh.to_vertex_handle(h)).is_valid() ||
+          !mesh.is_flip_ok(e)) {
+        continue;
+      }
+      mesh.flip(e);
+      ++report.n_reverted_flips;
+      touch(mesh.face_handle(h));
+      touch(mesh.opposite_face_handle(h));
+    }
+    // Pairs with a changed face are replaced by that face's pairs now.
+    std::erase_if(pairs, [&](const FacePair& p) { return changed[p[0]] != 0 || changed[p[1]] != 0; });
+    const std::vector<FacePair> fresh = intersecting_pairs_of(to_soup(mesh), touched);
+    pairs.insert(pairs.end(), fresh.begin(), fresh.end());
+    std::sort(pairs.begin(), pairs.end());
+    for (const std::uint32_t f : touched) changed[f] = 0;
+  }
+  return offending().empty();
+}
+
 StitchResult stitch_impl(const SurfaceMesh& surface, const TriMesh* input, const StitchOptions& options) {
   options.validate();
   validate_surface(surface);
@@ -196,65 +285,34 @@ StitchResult stitch_impl(const SurfaceMesh& surface, const TriMesh* input, const
   }
   report.seconds_optimise = watch.seconds();
 
-  // 3. Verification.
+  // 3. Verification. The exact self-intersection check over the whole mesh runs once;
+  // intersections the optimisation made are then repaired locally (repair_intersections)
+  // and only the changed faces are checked again.
   watch.restart();
   report_progress(options.progress, "stitch: verify", 0.0);
-  ReportOptions check;
-  check.self_intersections = options.check_self_intersections;
-  check.n_threads = options.n_threads;
-  if (options.progress) {
-    check.progress = [&options](std::string_view, double fraction) { return options.progress("stitch: verify", fraction); };
-  }
-  report.output = mesh_report(to_soup(mesh), check);
-  auto n_intersections = [&report] {
-    return report.output.topology.n_self_intersecting_pairs.value_or(0);
-  };
-  if (optimise && n_intersections() > 0) {
-    // The optimisation may have pushed a node through a nearby sheet (thin walls): move
-    // the nodes of the intersecting triangles back (flips keep vertex indices), then undo
-    // everything if that is not enough. Pairs of two faces the optimisation did not touch
-    // (same vertices, same positions as assembled) were there before and stay reported.
-    auto is_untouched = [&](std::uint32_t f) {
-      const TriMesh::FaceHandle now(static_cast<int>(f));
-      std::array<int, 3> a{}, b{};
-      int k = 0;
-      for (auto v : mesh.fv_range(now)) {
-        if (mesh.point(v) != assembled.point(v)) return false;
-        a[static_cast<std::size_t>(k++)] = v.idx();
-      }
-      k = 0;
-      for (auto v : assembled.fv_range(now)) b[static_cast<std::size_t>(k++)] = v.idx();
-      std::sort(a.begin(), a.end());
-      std::sort(b.begin(), b.end());
-      return a == b;
-    };
-    auto new_pairs = [&] {
-      std::vector<std::array<std::uint32_t, 2>> pairs = self_intersecting_pairs(to_soup(mesh), options.n_threads);
-      std::erase_if(pairs, [&](const auto& p) { return is_untouched(p[0]) && is_untouched(p[1]); });
-      return pairs;
-    };
-    std::vector<std::array<std::uint32_t, 2>> pairs = new_pairs();
-    const bool changed = !pairs.empty();
-    for (int round = 0; round < 3 && !pairs.empty(); ++round) {
-      for (const auto& pair : pairs) {
-        for (const std::uint32_t f : pair) {
-          for (auto v : mesh.fv_range(TriMesh::FaceHandle(static_cast<int>(f)))) {
-            if (mesh.point(v) != assembled.point(v)) {
-              mesh.set_point(v, assembled.point(v));
-              ++report.n_reverted_moves;
-            }
-          }
-        }
-      }
-      pairs = new_pairs();
-    }
-    if (!pairs.empty()) {
+  std::vector<FacePair> pairs;
+  if (options.check_self_intersections) {
+    pairs = self_intersecting_pairs(to_soup(mesh), options.n_threads);
+    report_progress(options.progress, "stitch: verify", 0.5);
+    if (optimise && !repair_intersections(assembled, mesh, pairs, report)) {
+      // Local repair did not converge: the assembled mesh (whose own intersections are
+      // the surface mesh's) is returned.
       mesh = std::move(assembled);
       result.face_patch = std::move(assembled_patch);
       report.optimisation_undone = true;
+      pairs = self_intersecting_pairs(to_soup(mesh), options.n_threads);
     }
-    if (changed) report.output = mesh_report(to_soup(mesh), check);
   }
+  ReportOptions check;
+  check.self_intersections = false;  // counted above
+  check.n_threads = options.n_threads;
+  if (options.progress) {
+    check.progress = [&options](std::string_view, double fraction) {
+      return options.progress("stitch: verify", 0.5 + 0.5 * fraction);
+    };
+  }
+  report.output = mesh_report(to_soup(mesh), check);
+  if (options.check_self_intersections) report.output.topology.n_self_intersecting_pairs = pairs.size();
   const TopologyReport& topo = report.output.topology;
   if (!topo.is_manifold) {
     report.errors.push_back("output is not 2-manifold (" + std::to_string(topo.n_nonmanifold_edges) + " edges, " +
@@ -288,51 +346,62 @@ StitchResult stitch_impl(const SurfaceMesh& surface, const TriMesh* input, const
 }  // namespace
 
 std::vector<ComponentSignature> component_signatures(const TriMesh& mesh) {
-  std::vector<ComponentSignature> components;
-  std::vector<int> face_component(mesh.n_faces(), -1);
-  std::vector<int> vertex_component(mesh.n_vertices(), -1);
-  std::vector<TriMesh::FaceHandle> stack;
-  for (auto seed : mesh.faces()) {
-    if (face_component[seed.idx()] >= 0) continue;
-    const int id = static_cast<int>(components.size());
-    ComponentSignature c;
-    face_component[seed.idx()] = id;
-    stack.assign(1, seed);
-    while (!stack.empty()) {
-      const TriMesh::FaceHandle f = stack.back();
-      stack.pop_back();
-      ++c.n_faces;
-      for (auto h : mesh.fh_range(f)) {
-        const auto opposite = mesh.opposite_halfedge_handle(h);
-        const auto g = mesh.face_handle(opposite);
-        if (!g.is_valid()) {
-          ++c.n_edges;  // boundary edge, counted from its only face
-        } else if (f.idx() < g.idx()) {
-          ++c.n_edges;
-        }
-        const auto v = mesh.to_vertex_handle(h);
-        if (vertex_component[v.idx()] != id) {
-          vertex_component[v.idx()] = id;
-          ++c.n_vertices;
-          c.box.extend(to_eigen(mesh.point(v)));
-          for (auto w : mesh.vf_range(v)) {
-            if (face_component[w.idx()] < 0) {
-              face_component[w.idx()] = id;
-              stack.push_back(w);
-            }
-          }
-        }
+  // Union-find over the vertices of every face (faces joined through shared vertices):
+  // linear, no vertex-face circulation.
+  std::vector<int> parent(mesh.n_vertices());
+  std::iota(parent.begin(), parent.end(), 0);
+  auto find = [&parent](int x) {
+    while (parent[static_cast<std::size_t>(x)] != x) {
+      parent[static_cast<std::size_t>(x)] = parent[static_cast<std::size_t>(parent[static_cast<std::size_t>(x)])];
+      x = parent[static_cast<std::size_t>(x)];
+    }
+    return x;
+  };
+  for (auto f : mesh.faces()) {
+    int root = -1;
+    for (auto v : mesh.fv_range(f)) {
+      const int r = find(v.idx());
+      if (root < 0) {
+        root = r;
+      } else if (r != root) {
+        parent[static_cast<std::size_t>(r)] = root;
       }
     }
-    c.euler_characteristic = static_cast<long>(c.n_vertices) - static_cast<long>(c.n_edges) + static_cast<long>(c.n_faces);
-    components.push_back(c);
+  }
+  std::vector<ComponentSignature> components;
+  std::vector<int> component_of_root(mesh.n_vertices(), -1);
+  std::vector<int> face_component(mesh.n_faces(), -1);
+  for (auto f : mesh.faces()) {
+    const int root = find(mesh.to_vertex_handle(mesh.halfedge_handle(f)).idx());
+    int& id = component_of_root[static_cast<std::size_t>(root)];
+    if (id < 0) {
+      id = static_cast<int>(components.size());
+      components.emplace_back();
+    }
+    face_component[static_cast<std::size_t>(f.idx())] = id;
+    ++components[static_cast<std::size_t>(id)].n_faces;
+  }
+  for (auto v : mesh.vertices()) {
+    const int id = component_of_root[static_cast<std::size_t>(find(v.idx()))];
+    if (id < 0) continue;  // on no face
+    ComponentSignature& c = components[static_cast<std::size_t>(id)];
+    ++c.n_vertices;
+    c.box.extend(to_eigen(mesh.point(v)));
+  }
+  for (auto e : mesh.edges()) {
+    auto f = mesh.face_handle(mesh.halfedge_handle(e, 0));
+    if (!f.is_valid()) f = mesh.face_handle(mesh.halfedge_handle(e, 1));
+    if (f.is_valid()) ++components[static_cast<std::size_t>(face_component[static_cast<std::size_t>(f.idx())])].n_edges;
   }
   // Closedness: a component is closed when none of its halfedges is a boundary halfedge.
-  for (auto& c : components) c.is_closed = true;
+  for (auto& c : components) {
+    c.euler_characteristic = static_cast<long>(c.n_vertices) - static_cast<long>(c.n_edges) + static_cast<long>(c.n_faces);
+    c.is_closed = true;
+  }
   for (auto h : mesh.halfedges()) {
     if (!mesh.is_boundary(h)) continue;
     const auto g = mesh.face_handle(mesh.opposite_halfedge_handle(h));
-    if (g.is_valid()) components[static_cast<std::size_t>(face_component[g.idx()])].is_closed = false;
+    if (g.is_valid()) components[static_cast<std::size_t>(face_component[static_cast<std::size_t>(g.idx())])].is_closed = false;
   }
   return components;
 }

@@ -77,8 +77,12 @@ struct StitchReport {
   //! Nodes moved back to their assembled position because a triangle of theirs intersected
   //! another after the optimisation.
   std::size_t n_reverted_moves = 0;
-  //! True when reverting moves did not remove the intersections the optimisation made, so
-  //! the whole optimisation was undone (the assembled mesh is returned).
+  //! Edges a flip made that were flipped back because a triangle of theirs intersected
+  //! another after the optimisation.
+  std::size_t n_reverted_flips = 0;
+  //! True when undoing the offending moves and flips did not remove the intersections the
+  //! optimisation made, so the whole optimisation was undone (the assembled mesh is
+  //! returned).
   bool optimisation_undone = false;
   double alpha_mean_before = 0.0;      //!< mean alpha after assembly, before optimisation
   double alpha_min_before = 0.0;       //!< min alpha after assembly, before optimisation
@@ -123,9 +127,11 @@ struct StitchResult {
 //!       Corners, feature and boundary nodes never move. A move is kept only if it turns
 //!       no incident triangle's normal too far and keeps their smallest alpha (bounds in
 //!       StitchOptions).
-//!    If the result has self-intersections (checked when check_self_intersections) that
-//!    involve a triangle the optimisation changed, the nodes of those triangles go back
-//!    to their assembled positions (up to 3 rounds); if some remain, the optimisation is
+//!    If the result has self-intersections (one exact check over the whole mesh, when
+//!    check_self_intersections) that involve a triangle the optimisation changed, the
+//!    nodes of those triangles go back to their assembled positions and the edges flips
+//!    made in them are flipped back; only the faces around these changes are checked
+//!    again (up to 6 rounds). If changed triangles still intersect, the optimisation is
 //!    undone as a whole. Intersections already in the assembly stay (and are errors).
 //! 3. Verification (quality module): 2-manifold, consistently oriented, no degenerate or
 //!    self-intersecting triangles; with an input mesh also: closed iff the input is, and

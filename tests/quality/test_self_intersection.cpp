@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "fixtures/shapes.h"
+#include "nurbsfront/core/error.h"
 #include "nurbsfront/quality/predicates.h"
 #include "nurbsfront/quality/report.h"
 #include "nurbsfront/quality/self_intersection.h"
@@ -140,6 +141,42 @@ TEST(QualitySelfIntersection, PlantedIntersectionInClosedMesh) {
   const std::size_t n = count_self_intersections(s);
   EXPECT_GT(n, 0u);
   EXPECT_TRUE(mesh_report(s).topology.is_closed);  // topology alone does not see it
+}
+
+TEST(QualitySelfIntersection, PairsOfSubsetMatchTheGlobalPairs) {
+  // Two interpenetrating spheres: the pairs involving a chosen set of faces are exactly
+  // the global pairs with a face in the set (subset faces on both sides, one side, none).
+  TriangleSoup s = test::icosphere(3);
+  const TriangleSoup other = test::icosphere(3);
+  const auto offset = static_cast<std::uint32_t>(s.points.size());
+  const auto n_first = static_cast<std::uint32_t>(s.triangles.size());
+  for (const auto& p : other.points) s.points.push_back(p + V(0.93, 0.11, 0.07));
+  for (const auto& t : other.triangles) s.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
+  const auto all = self_intersecting_pairs(s, 2);
+  ASSERT_GT(all.size(), 20u);
+  // Every third face of the first sphere, and every fifth of the second, some repeated.
+  std::vector<std::uint32_t> subset;
+  std::vector<char> chosen(s.triangles.size(), 0);
+  for (std::uint32_t f = 0; f < s.triangles.size(); ++f) {
+    if ((f < n_first && f % 3 == 0) || (f >= n_first && f % 5 == 0)) {
+      subset.push_back(f);
+      subset.push_back(f);
+      chosen[f] = 1;
+    }
+  }
+  std::vector<std::array<std::uint32_t, 2>> expected;
+  for (const auto& p : all) {
+    if (chosen[p[0]] != 0 || chosen[p[1]] != 0) expected.push_back(p);
+  }
+  ASSERT_FALSE(expected.empty());
+  ASSERT_LT(expected.size(), all.size());
+  EXPECT_EQ(intersecting_pairs_of(s, subset), expected);
+  std::vector<std::uint32_t> everything(s.triangles.size());
+  for (std::uint32_t f = 0; f < everything.size(); ++f) everything[f] = f;
+  EXPECT_EQ(intersecting_pairs_of(s, everything), all);
+  EXPECT_TRUE(intersecting_pairs_of(s, {}).empty());
+  EXPECT_TRUE(intersecting_pairs_of(test::icosphere(3), {0, 1, 2}).empty());
+  EXPECT_THROW((void)intersecting_pairs_of(s, {static_cast<std::uint32_t>(s.triangles.size())}), InvalidInput);
 }
 
 }  // namespace

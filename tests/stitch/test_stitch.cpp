@@ -321,6 +321,35 @@ TEST(Stitch, MissingComponentIsAnError) {
   EXPECT_TRUE(mentions(r.report, "components")) << joined(r.report.errors);
 }
 
+TEST(Stitch, ComponentSignaturesCountEachComponent) {
+  // A torus, an icosphere and an open grid, in that face order: chi 0, 2, 1.
+  TriangleSoup s = test::torus(24, 12);
+  auto append = [&](const TriangleSoup& other, const Eigen::Vector3d& offset) {
+    const auto first = static_cast<std::uint32_t>(s.points.size());
+    for (const auto& p : other.points) s.points.push_back(p + offset);
+    for (const auto& t : other.triangles) s.triangles.push_back({t[0] + first, t[1] + first, t[2] + first});
+  };
+  const TriangleSoup sphere = test::icosphere(2);
+  const TriangleSoup grid = test::grid_patch(5, 4);
+  append(sphere, Eigen::Vector3d(5, 0, 0));
+  append(grid, Eigen::Vector3d(0, 5, 0));
+  const std::vector<ComponentSignature> c = component_signatures(to_trimesh(s));
+  ASSERT_EQ(c.size(), 3u);
+  EXPECT_EQ(c[0].euler_characteristic, 0);
+  EXPECT_TRUE(c[0].is_closed);
+  EXPECT_EQ(c[1].euler_characteristic, 2);
+  EXPECT_TRUE(c[1].is_closed);
+  EXPECT_EQ(c[1].n_faces, sphere.triangles.size());
+  EXPECT_EQ(c[1].n_vertices, sphere.points.size());
+  EXPECT_EQ(c[2].euler_characteristic, 1);
+  EXPECT_FALSE(c[2].is_closed);
+  EXPECT_EQ(c[2].n_faces, 40u);
+  EXPECT_EQ(c[2].n_vertices, 30u);
+  EXPECT_EQ(c[2].n_edges, 69u);
+  EXPECT_NEAR(c[2].box.min.y(), 5.0, 1e-12);
+  EXPECT_NEAR(c[1].box.min.x(), 4.0, 1e-6);
+}
+
 TEST(Stitch, MovesThroughANearbySheetAreUndone) {
   // Two parallel open sheets 0.002 apart; the upper one's surface is planted 0.002 below
   // the lower one, so projecting its inner nodes pushes them through the lower sheet.
@@ -344,6 +373,45 @@ TEST(Stitch, MovesThroughANearbySheetAreUndone) {
   EXPECT_TRUE(r.report.n_reverted_moves > 0 || r.report.optimisation_undone);
   ASSERT_TRUE(r.report.output.topology.n_self_intersecting_pairs.has_value());
   EXPECT_EQ(*r.report.output.topology.n_self_intersecting_pairs, 0u);
+}
+
+TEST(Stitch, OnlyTheOffendingMovesAreUndone) {
+  // The two sheets of the test above (the upper one pushed through the lower one) and a
+  // third, jittered sheet far away whose smoothing moves are harmless: they must stay.
+  TriangleSoup sheets = test::grid_patch(8, 8);
+  const TriangleSoup grid = test::grid_patch(8, 8);
+  auto append = [&](const Eigen::Vector3d& offset, double jitter) {
+    const auto first = static_cast<std::uint32_t>(sheets.points.size());
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<double> u(-jitter, jitter);
+    for (const auto& p : grid.points) {
+      const bool inner = p.x() > 1e-9 && p.x() < 1 - 1e-9 && p.y() > 1e-9 && p.y() < 1 - 1e-9;
+      sheets.points.push_back(p + offset + (inner ? Eigen::Vector3d(u(rng), u(rng), 0.0) : Eigen::Vector3d::Zero()));
+    }
+    for (const auto& t : grid.triangles) sheets.triangles.push_back({t[0] + first, t[1] + first, t[2] + first});
+  };
+  append(Eigen::Vector3d(0, 0, 0.002), 0.0);
+  append(Eigen::Vector3d(0, 0, 5.0), 0.03);
+  const std::size_t n_grid = grid.triangles.size();
+  std::vector<int> face_patch(sheets.triangles.size(), 0);
+  std::fill(face_patch.begin() + static_cast<long>(n_grid), face_patch.end(), 1);
+  std::fill(face_patch.begin() + static_cast<long>(2 * n_grid), face_patch.end(), 2);
+  SurfaceMesh surface = make_surface(sheets, face_patch, 3);
+  const double local_z = surface.surfaces[1].frame.to_local(Eigen::Vector3d(0.5, 0.5, -0.002)).z();
+  for (double& c : surface.surfaces[1].field.mutable_coefficients()) c = local_z;
+  const StitchResult r = stitch(surface, to_trimesh(sheets));
+  EXPECT_TRUE(r.report.ok()) << joined(r.report.errors);
+  EXPECT_FALSE(r.report.optimisation_undone);
+  EXPECT_GT(r.report.n_reverted_moves, 0u);
+  ASSERT_TRUE(r.report.output.topology.n_self_intersecting_pairs.has_value());
+  EXPECT_EQ(*r.report.output.topology.n_self_intersecting_pairs, 0u);
+  // The third sheet's nodes moved and stayed moved.
+  std::size_t n_moved = 0;
+  for (auto v : r.mesh.vertices()) {
+    const auto node = static_cast<std::size_t>(r.vertex_node[static_cast<std::size_t>(v.idx())]);
+    if (node >= 2 * grid.points.size() && (to_eigen(r.mesh.point(v)) - sheets.points[node]).norm() > 1e-9) ++n_moved;
+  }
+  EXPECT_GT(n_moved, 10u);
 }
 
 TEST(Stitch, IntersectionsOfTheInputStayReportedAndKeepTheOptimisation) {
