@@ -14,21 +14,12 @@
 #include "nurbsfront/core/stopwatch.h"
 #include "nurbsfront/front2d/front.h"
 #include "nurbsfront/nurbs/mba.h"
+#include "nurbsfront/surfmesh/height_field_metric.h"
 #include "nurbsfront/surfmesh/surfmesh_internal.h"
 
 namespace nurbsfront::surfmesh_detail {
 
 namespace {
-
-// The first fundamental form of the patch's height field: 3D lengths of plane steps.
-class HeightFieldMetric final : public Metric {
- public:
-  explicit HeightFieldMetric(const BicubicHeightField& field) : field_(&field) {}
-  [[nodiscard]] Eigen::Matrix2d tensor(const Eigen::Vector2d& x) const override { return field_->metric(x.x(), x.y()); }
-
- private:
-  const BicubicHeightField* field_;
-};
 
 // Traces the directed edges into loops. Where loops touch (a node with several outgoing
 // edges), the next edge is the first outgoing one clockwise from the incoming edge's

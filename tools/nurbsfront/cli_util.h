@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Small helpers shared by the subcommands: progress display on stderr.
+#include <filesystem>
 #include <string>
 #include <string_view>
 
@@ -11,6 +12,9 @@ namespace nurbsfront::cli {
 //! A ProgressCallback that draws "stage: 42%" on stderr when it is a terminal,
 //! or prints one line per stage otherwise. Never cancels.
 ProgressCallback terminal_progress(bool quiet = false);
+
+//! The path's extension in lower case, with its dot (".ply"), or "".
+std::string lower_extension(const std::filesystem::path& path);
 
 //! Prints "nurbsfront: error: <message>" on stderr.
 void print_error(std::string_view message);

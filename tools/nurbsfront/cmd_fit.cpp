@@ -30,11 +30,6 @@ struct FitArgs {
   bool quiet = false;
 };
 
-std::string lower_extension(const std::filesystem::path& path) {
-  std::string ext = path.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return ext;
-}
 }  // namespace
 
 void add_fit_command(CLI::App& app) {

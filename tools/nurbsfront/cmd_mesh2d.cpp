@@ -79,8 +79,7 @@ void add_mesh2d_command(CLI::App& app) {
     const TriangleSoup soup = lift(mesh);
     if (!args->output.empty()) {
       std::filesystem::path out(args->output);
-      std::string ext = out.extension().string();
-      std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+      const std::string ext = lower_extension(out);
       if (ext == ".node" || ext == ".ele") {
         write_triangle_files(mesh, out.replace_extension());
       } else {

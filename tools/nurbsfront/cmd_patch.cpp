@@ -69,8 +69,7 @@ void add_patch_command(CLI::App& app) {
       write_soup(soup, args->output, write_options);
     }
     if (!args->surface.empty()) {
-      std::string ext = std::filesystem::path(args->surface).extension().string();
-      std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+      const std::string ext = lower_extension(args->surface);
       const NurbsSurface surface = mesh.surface.field.to_nurbs().transformed(mesh.surface.frame.axes, mesh.surface.frame.origin);
       if (ext == ".nurbs") {
         write_surface(args->surface, surface);
