@@ -42,18 +42,11 @@ struct Stencil {
   std::array<double, 16> weight{};
 };
 
+// The cell holding x on the field's lattice, as the field's own evaluation finds it.
 int locate(double x, double x0, double h, int n, double& s) {
-  const double f = (x - x0) / h;
-  int i = 0;
-  if (!(f >= 0.0)) {
-    i = 0;
-  } else if (f >= static_cast<double>(n)) {
-    i = n - 1;
-  } else {
-    i = static_cast<int>(f);
-  }
-  s = f - static_cast<double>(i);
-  return i;
+  const detail::Cell c = detail::locate_cell(x, x0, 1.0 / h, n);
+  s = c.s;
+  return c.index;
 }
 
 Stencil stencil(const BicubicHeightField& field, double x, double y) {

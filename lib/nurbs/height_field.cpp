@@ -10,25 +10,8 @@
 namespace nurbsfront {
 namespace {
 
-struct Cell {
-  int index;
-  double s;
-};
-
-// The cell holding coordinate x (clamped to the border cells) and the local parameter;
-// s leaves [0, 1] outside the rectangle, which extrapolates the border polynomial.
-inline Cell locate(double x, double x0, double inv_h, int n) {
-  const double f = (x - x0) * inv_h;
-  int i = 0;
-  if (!(f >= 0.0)) {
-    i = 0;  // also NaN: the result is NaN, never an out-of-range index
-  } else if (f >= static_cast<double>(n)) {
-    i = n - 1;
-  } else {
-    i = static_cast<int>(f);
-  }
-  return {i, f - static_cast<double>(i)};
-}
+using detail::Cell;
+using detail::locate_cell;
 
 inline void cubic_derivative_weights(double s, double* d1, double* d2) {
   const double s2 = s * s;
@@ -76,8 +59,8 @@ BicubicHeightField::BicubicHeightField(const Rectangle& domain, int n_x, int n_y
 }
 
 double BicubicHeightField::value(double x, double y) const {
-  const Cell cx = locate(x, domain_.min.x(), inv_h_x_, n_x_);
-  const Cell cy = locate(y, domain_.min.y(), inv_h_y_, n_y_);
+  const Cell cx = locate_cell(x, domain_.min.x(), inv_h_x_, n_x_);
+  const Cell cy = locate_cell(y, domain_.min.y(), inv_h_y_, n_y_);
   double bx[4];
   double by[4];
   detail::cubic_weights(cx.s, bx);
@@ -92,8 +75,8 @@ double BicubicHeightField::value(double x, double y) const {
 }
 
 HeightJet BicubicHeightField::jet(double x, double y) const {
-  const Cell cx = locate(x, domain_.min.x(), inv_h_x_, n_x_);
-  const Cell cy = locate(y, domain_.min.y(), inv_h_y_, n_y_);
+  const Cell cx = locate_cell(x, domain_.min.x(), inv_h_x_, n_x_);
+  const Cell cy = locate_cell(y, domain_.min.y(), inv_h_y_, n_y_);
   double bx[4];
   double by[4];
   double dx1[4];

@@ -116,6 +116,28 @@ inline void cubic_weights(double s, double* b) {
   b[2] = (-3.0 * s3 + 3.0 * s2 + 3.0 * s + 1.0) * kSixth;
   b[3] = s3 * kSixth;
 }
+
+//! A lattice cell along one axis and the local parameter in it.
+struct Cell {
+  int index;  //!< in [0, n - 1]
+  double s;   //!< (x - x0) / h - index; leaves [0, 1] outside the rectangle
+};
+
+//! The cell holding coordinate x on a lattice of n cells of width 1 / inv_h from x0,
+//! clamped to the border cells (so s extrapolates the border polynomial); NaN gives cell 0
+//! and a NaN parameter, never an out-of-range index.
+inline Cell locate_cell(double x, double x0, double inv_h, int n) {
+  const double f = (x - x0) * inv_h;
+  int i = 0;
+  if (!(f >= 0.0)) {
+    i = 0;
+  } else if (f >= static_cast<double>(n)) {
+    i = n - 1;
+  } else {
+    i = static_cast<int>(f);
+  }
+  return {i, f - static_cast<double>(i)};
+}
 }  // namespace detail
 
 }  // namespace nurbsfront
