@@ -3,8 +3,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <sstream>
-#include <unordered_map>
 
 #include "nurbsfront/core/error.h"
 
@@ -39,78 +39,108 @@ std::string ManifoldCheck::message() const {
 }
 
 ManifoldCheck check_manifold(const TriangleSoup& soup) {
+  // Linear time: every pass is over the triangles or over compressed per-vertex lists
+  // (no sort, no hash map), with per-vertex stamps instead of clearing arrays.
   ManifoldCheck check;
   const auto n_points = static_cast<std::uint64_t>(soup.points.size());
-  // Directed edges (from, to) of the valid triangles.
-  std::vector<std::pair<std::uint32_t, std::uint32_t>> directed;
-  directed.reserve(soup.triangles.size() * 3);
+  constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
+  // Edges of the valid triangles, listed at their smaller vertex: (larger vertex, 1 if the
+  // triangle runs small -> large, 2 if large -> small).
+  std::vector<std::uint32_t> first(n_points + 1, 0);
+  auto is_bad_index = [&](const std::array<std::uint32_t, 3>& t) {
+    return t[0] >= n_points || t[1] >= n_points || t[2] >= n_points;
+  };
+  auto is_repeated = [](const std::array<std::uint32_t, 3>& t) { return t[0] == t[1] || t[1] == t[2] || t[2] == t[0]; };
   for (const auto& t : soup.triangles) {
-    if (t[0] >= n_points || t[1] >= n_points || t[2] >= n_points) {
+    if (is_bad_index(t)) {
       ++check.n_bad_indices;
-      continue;
-    }
-    if (t[0] == t[1] || t[1] == t[2] || t[2] == t[0]) {
+    } else if (is_repeated(t)) {
       ++check.n_repeated_index;
-      continue;
-    }
-    for (int k = 0; k < 3; ++k) directed.emplace_back(t[k], t[(k + 1) % 3]);
-  }
-  // Undirected multiplicity and orientation of each edge.
-  std::vector<std::pair<std::uint32_t, std::uint32_t>> undirected(directed.size());
-  std::transform(directed.begin(), directed.end(), undirected.begin(), [](auto e) {
-    return std::make_pair(std::min(e.first, e.second), std::max(e.first, e.second));
-  });
-  std::sort(undirected.begin(), undirected.end());
-  for (std::size_t i = 0; i < undirected.size();) {
-    std::size_t j = i;
-    while (j < undirected.size() && undirected[j] == undirected[i]) ++j;
-    if (j - i > 2) ++check.n_nonmanifold_edges;
-    i = j;
-  }
-  std::sort(directed.begin(), directed.end());
-  for (std::size_t i = 1; i < directed.size(); ++i) {
-    if (directed[i] == directed[i - 1] && (i < 2 || directed[i - 2] != directed[i])) {
-      ++check.n_misoriented_edges;
+    } else {
+      for (int k = 0; k < 3; ++k) ++first[std::min(t[k], t[(k + 1) % 3]) + 1];
     }
   }
-  if (check.n_nonmanifold_edges + check.n_misoriented_edges + check.n_bad_indices +
-          check.n_repeated_index > 0) {
+  const std::size_t n_bad_triangles = check.n_bad_indices + check.n_repeated_index;
+  for (std::size_t i = 1; i < first.size(); ++i) first[i] += first[i - 1];
+  std::vector<std::pair<std::uint32_t, std::uint8_t>> edges(first.back());
+  std::vector<std::uint32_t> fill(first.begin(), first.end() - 1);
+  for (const auto& t : soup.triangles) {
+    if (is_bad_index(t) || is_repeated(t)) continue;
+    for (int k = 0; k < 3; ++k) {
+      const std::uint32_t a = t[k], b = t[(k + 1) % 3];
+      if (a < b) {
+        edges[fill[a]++] = {b, 1};
+      } else {
+        edges[fill[b]++] = {a, 2};
+      }
+    }
+  }
+  // Per undirected edge: how often each direction occurs (a direction twice is a
+  // misoriented edge, counted once; more than two triangles a non-manifold edge).
+  std::vector<std::uint32_t> stamp(n_points, kNone);
+  std::vector<std::uint32_t> n_forward(n_points, 0), n_backward(n_points, 0);
+  for (std::uint64_t a = 0; a < n_points; ++a) {
+    const auto tag = static_cast<std::uint32_t>(a);
+    for (std::uint32_t i = first[a]; i < first[a + 1]; ++i) {
+      const std::uint32_t b = edges[i].first;
+      if (stamp[b] != tag) {
+        stamp[b] = tag;
+        n_forward[b] = n_backward[b] = 0;
+      }
+      ++(edges[i].second == 1 ? n_forward[b] : n_backward[b]);
+    }
+    for (std::uint32_t i = first[a]; i < first[a + 1]; ++i) {
+      const std::uint32_t b = edges[i].first;
+      if (stamp[b] != tag) continue;  // counted already
+      stamp[b] = kNone;
+      if (n_forward[b] + n_backward[b] > 2) ++check.n_nonmanifold_edges;
+      if (n_forward[b] >= 2) ++check.n_misoriented_edges;
+      if (n_backward[b] >= 2) ++check.n_misoriented_edges;
+    }
+  }
+  if (check.n_nonmanifold_edges + check.n_misoriented_edges + n_bad_triangles > 0) {
     return check;  // the fan test below assumes a manifold, oriented edge structure
   }
+  edges = {};
   // Vertex fans: at vertex a, triangle (a, b, c) links b -> c. With manifold oriented
-  // edges every b has at most one successor; one fan means one chain or one cycle.
-  std::vector<std::uint32_t> first(n_points + 1, 0);
+  // edges every b has at most one successor and one predecessor; one fan means one chain
+  // or one cycle.
+  std::fill(first.begin(), first.end(), 0);
   for (const auto& t : soup.triangles) {
     for (int k = 0; k < 3; ++k) ++first[t[k] + 1];
   }
   for (std::size_t i = 1; i < first.size(); ++i) first[i] += first[i - 1];
   std::vector<std::pair<std::uint32_t, std::uint32_t>> links(first.back());
-  std::vector<std::uint32_t> fill(first.begin(), first.end() - 1);
+  std::copy(first.begin(), first.end() - 1, fill.begin());
   for (const auto& t : soup.triangles) {
     for (int k = 0; k < 3; ++k) links[fill[t[k]]++] = {t[(k + 1) % 3], t[(k + 2) % 3]};
   }
-  std::unordered_map<std::uint32_t, std::uint32_t> next;
-  std::unordered_map<std::uint32_t, bool> is_target;
+  // next[b] (valid when has_next[b] is a's tag) and is_target[b] (== a's tag).
+  std::vector<std::uint32_t>& next = n_forward;
+  std::vector<std::uint32_t>& has_next = stamp;
+  std::vector<std::uint32_t>& is_target = n_backward;
+  std::fill(has_next.begin(), has_next.end(), kNone);
+  std::fill(is_target.begin(), is_target.end(), kNone);
   for (std::uint64_t v = 0; v < n_points; ++v) {
     const std::uint32_t begin = first[v], end = first[v + 1];
     if (end - begin <= 1) continue;
-    next.clear();
-    is_target.clear();
+    const auto tag = static_cast<std::uint32_t>(v);
     for (std::uint32_t i = begin; i < end; ++i) {
       next[links[i].first] = links[i].second;
-      is_target[links[i].second] = true;
+      has_next[links[i].first] = tag;
+      is_target[links[i].second] = tag;
     }
     std::size_t n_chains = 0;
     std::size_t visited = 0;
     for (std::uint32_t i = begin; i < end; ++i) {
       std::uint32_t b = links[i].first;
-      if (is_target.count(b)) continue;  // not the start of an open chain
+      if (is_target[b] == tag) continue;  // not the start of an open chain
       ++n_chains;
-      for (auto it = next.find(b); it != next.end(); it = next.find(it->second)) ++visited;
+      for (; has_next[b] == tag; b = next[b]) ++visited;
     }
     const std::size_t n_links = end - begin;
     // Links not on an open chain form cycles; one fan = one open chain covering all,
-    // or no open chain and one cycle covering all.
+    // or no open chain and one cycle covering all (then every successor has a successor).
     bool single_fan = false;
     if (n_chains == 1 && visited == n_links) single_fan = true;
     if (n_chains == 0) {

@@ -1,7 +1,11 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <limits>
+#include <map>
+#include <random>
+#include <set>
 
 #include "fixtures/shapes.h"
 #include "nurbsfront/core/error.h"
@@ -68,6 +72,95 @@ TEST(Soup, BadIndicesAndNanAreErrors) {
   TriangleSoup n = test::tetrahedron();
   n.points[2].x() = std::numeric_limits<double>::quiet_NaN();
   EXPECT_THROW((void)to_trimesh(n), InvalidInput);
+}
+
+// The definitions of ManifoldCheck's counts, computed the slow and obvious way.
+ManifoldCheck reference_check(const TriangleSoup& soup) {
+  ManifoldCheck check;
+  const std::size_t n = soup.points.size();
+  std::map<std::pair<std::uint32_t, std::uint32_t>, int> directed;
+  std::vector<std::array<std::uint32_t, 3>> good;
+  for (const auto& t : soup.triangles) {
+    if (t[0] >= n || t[1] >= n || t[2] >= n) {
+      ++check.n_bad_indices;
+    } else if (t[0] == t[1] || t[1] == t[2] || t[2] == t[0]) {
+      ++check.n_repeated_index;
+    } else {
+      good.push_back(t);
+      for (int k = 0; k < 3; ++k) ++directed[{t[k], t[(k + 1) % 3]}];
+    }
+  }
+  std::map<std::pair<std::uint32_t, std::uint32_t>, int> undirected;
+  for (const auto& [e, count] : directed) {
+    if (count >= 2) ++check.n_misoriented_edges;
+    undirected[{std::min(e.first, e.second), std::max(e.first, e.second)}] += count;
+  }
+  for (const auto& [e, count] : undirected) check.n_nonmanifold_edges += count > 2 ? 1 : 0;
+  if (!check.ok()) return check;
+  // One fan per vertex: the triangles around it are connected through shared edges.
+  for (std::uint32_t v = 0; v < n; ++v) {
+    std::vector<std::array<std::uint32_t, 3>> around;
+    for (const auto& t : good) {
+      if (std::find(t.begin(), t.end(), v) != t.end()) around.push_back(t);
+    }
+    if (around.size() <= 1) continue;
+    std::vector<bool> reached(around.size(), false);
+    std::vector<std::size_t> stack{0};
+    reached[0] = true;
+    while (!stack.empty()) {
+      const auto i = stack.back();
+      stack.pop_back();
+      for (std::size_t j = 0; j < around.size(); ++j) {
+        if (reached[j]) continue;
+        int shared = 0;  // vertices shared besides v: one means a common edge at v
+        for (auto a : around[i]) shared += a != v && std::find(around[j].begin(), around[j].end(), a) != around[j].end() ? 1 : 0;
+        if (shared > 0) {
+          reached[j] = true;
+          stack.push_back(j);
+        }
+      }
+    }
+    if (std::find(reached.begin(), reached.end(), false) != reached.end()) ++check.n_nonmanifold_vertices;
+  }
+  return check;
+}
+
+TEST(Soup, CheckManifoldMatchesTheDefinitionsOnRandomSoups) {
+  std::mt19937 random(5);
+  int n_manifold = 0, n_fan_failures = 0;
+  for (int round = 0; round < 400; ++round) {
+    // A closed or open shape, then a few random edits: extra, flipped, removed triangles.
+    TriangleSoup s = round % 3 == 0 ? test::icosphere(1) : (round % 3 == 1 ? test::torus(6, 4) : test::grid_patch(4, 3));
+    const auto n = static_cast<std::uint32_t>(s.points.size());
+    std::uniform_int_distribution<std::uint32_t> vertex(0, n);  // n: out of range
+    const int n_edits = static_cast<int>(random() % 4);
+    for (int e = 0; e < n_edits; ++e) {
+      const auto kind = random() % 4;
+      if (kind == 0 && !s.triangles.empty()) {
+        s.triangles.erase(s.triangles.begin() + static_cast<std::ptrdiff_t>(random() % s.triangles.size()));
+      } else if (kind == 1 && !s.triangles.empty()) {
+        auto& t = s.triangles[random() % s.triangles.size()];
+        std::swap(t[1], t[2]);
+      } else if (kind == 2 && !s.triangles.empty()) {
+        s.triangles.push_back(s.triangles[random() % s.triangles.size()]);
+      } else {
+        s.triangles.push_back({vertex(random) % n, vertex(random) % n, round % 50 == 0 ? vertex(random) : vertex(random) % n});
+      }
+    }
+    const ManifoldCheck fast = check_manifold(s);
+    const ManifoldCheck slow = reference_check(s);
+    ASSERT_EQ(fast.n_bad_indices, slow.n_bad_indices) << round;
+    ASSERT_EQ(fast.n_repeated_index, slow.n_repeated_index) << round;
+    ASSERT_EQ(fast.n_nonmanifold_edges, slow.n_nonmanifold_edges) << round;
+    ASSERT_EQ(fast.n_misoriented_edges, slow.n_misoriented_edges) << round;
+    ASSERT_EQ(fast.n_nonmanifold_vertices, slow.n_nonmanifold_vertices) << round;
+    n_manifold += fast.ok() ? 1 : 0;
+    n_fan_failures += fast.n_nonmanifold_vertices > 0 ? 1 : 0;
+  }
+  // Both outcomes and the fan test were exercised.
+  EXPECT_GT(n_manifold, 20);
+  EXPECT_LT(n_manifold, 380);
+  EXPECT_GT(n_fan_failures, 5);
 }
 
 TEST(Soup, BoundingBoxDiagonal) {

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // Read/write throughput of the mesh formats and clean() on a generated torus of
-// 2 * n * n/2 triangles (argument n = 1000: 1M triangles, 500k vertices).
+// 2 * n * n/2 triangles (argument n = 1000: 1M triangles, 500k vertices); read_mesh()
+// (read, clean, manifold check, halfedge mesh) and its two core steps alone.
 #include <benchmark/benchmark.h>
 
 #include <cmath>
@@ -92,6 +93,38 @@ void BM_CleanStl(benchmark::State& state) {
                                                benchmark::Counter::kIsRate);
 }
 
+void BM_ReadMesh(benchmark::State& state) {
+  // What the remesh tool and the pipeline benchmark's files case do with a binary PLY.
+  const TriangleSoup& s = shared_torus(static_cast<int>(state.range(0)));
+  const auto path = bench_file("read_mesh.ply");
+  nurbsfront::write_soup(s, path);
+  for (auto _ : state) {
+    const nurbsfront::TriMesh mesh = nurbsfront::read_mesh(path);
+    benchmark::DoNotOptimize(mesh.n_faces());
+  }
+  set_counters(state, s, path);
+}
+
+void BM_CheckManifold(benchmark::State& state) {
+  const TriangleSoup& s = shared_torus(static_cast<int>(state.range(0)));
+  for (auto _ : state) {
+    const nurbsfront::ManifoldCheck check = nurbsfront::check_manifold(s);
+    benchmark::DoNotOptimize(check.n_nonmanifold_vertices);
+  }
+  state.counters["tri/s"] = benchmark::Counter(static_cast<double>(s.triangles.size()) * state.iterations(),
+                                               benchmark::Counter::kIsRate);
+}
+
+void BM_ToTriMesh(benchmark::State& state) {
+  const TriangleSoup& s = shared_torus(static_cast<int>(state.range(0)));
+  for (auto _ : state) {
+    const nurbsfront::TriMesh mesh = nurbsfront::to_trimesh(s);
+    benchmark::DoNotOptimize(mesh.n_faces());
+  }
+  state.counters["tri/s"] = benchmark::Counter(static_cast<double>(s.triangles.size()) * state.iterations(),
+                                               benchmark::Counter::kIsRate);
+}
+
 }  // namespace
 
 BENCHMARK_CAPTURE(BM_Write, ply_binary, "m.ply", true)->Arg(1000)->Unit(benchmark::kMillisecond);
@@ -103,5 +136,8 @@ BENCHMARK_CAPTURE(BM_Read, obj, "m.obj", false)->Arg(1000)->Unit(benchmark::kMil
 BENCHMARK_CAPTURE(BM_Write, vtk_binary, "m.vtk", true)->Arg(1000)->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(BM_Read, vtk_binary, "m.vtk", true)->Arg(1000)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_CleanStl)->Arg(1000)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_ReadMesh)->Arg(1000)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_CheckManifold)->Arg(1000)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_ToTriMesh)->Arg(1000)->Unit(benchmark::kMillisecond);
 
 BENCHMARK_MAIN();
