@@ -3,6 +3,7 @@
 // single outer loop) and the split of a patch that fails it.
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <iterator>
 #include <unordered_map>
@@ -59,19 +60,28 @@ std::vector<std::pair<int, int>> find_crossings(const std::vector<Segment>& segm
   auto cell_of = [&](double value, double origin, double width) {
     return std::clamp(static_cast<int>((value - origin) / width), 0, cells - 1);
   };
-  std::vector<std::pair<int, int>> entries;  // (cell, segment)
-  entries.reserve(static_cast<std::size_t>(n) * 2);
-  for (int i = 0; i < n; ++i) {
+  // (cell, segment) entries ordered by cell, then segment: a counting sort by cell over
+  // the segments in index order.
+  auto cell_range = [&](int i) {
     const Eigen::Vector2d& p = xy[segments[i].a];
     const Eigen::Vector2d& q = xy[segments[i].b];
-    const int x0 = cell_of(std::min(p.x(), q.x()), lo.x(), width_x);
-    const int x1 = cell_of(std::max(p.x(), q.x()), lo.x(), width_x);
-    const int y0 = cell_of(std::min(p.y(), q.y()), lo.y(), width_y);
-    const int y1 = cell_of(std::max(p.y(), q.y()), lo.y(), width_y);
+    return std::array<int, 4>{cell_of(std::min(p.x(), q.x()), lo.x(), width_x), cell_of(std::max(p.x(), q.x()), lo.x(), width_x),
+                              cell_of(std::min(p.y(), q.y()), lo.y(), width_y), cell_of(std::max(p.y(), q.y()), lo.y(), width_y)};
+  };
+  std::vector<int> cell_start(static_cast<std::size_t>(cells) * cells + 1, 0);
+  for (int i = 0; i < n; ++i) {
+    const auto [x0, x1, y0, y1] = cell_range(i);
     for (int y = y0; y <= y1; ++y)
-      for (int x = x0; x <= x1; ++x) entries.emplace_back(y * cells + x, i);
+      for (int x = x0; x <= x1; ++x) ++cell_start[y * cells + x + 1];
   }
-  std::sort(entries.begin(), entries.end());
+  for (std::size_t c = 1; c < cell_start.size(); ++c) cell_start[c] += cell_start[c - 1];
+  std::vector<std::pair<int, int>> entries(static_cast<std::size_t>(cell_start.back()));
+  std::vector<int> fill(cell_start.begin(), cell_start.end() - 1);
+  for (int i = 0; i < n; ++i) {
+    const auto [x0, x1, y0, y1] = cell_range(i);
+    for (int y = y0; y <= y1; ++y)
+      for (int x = x0; x <= x1; ++x) entries[fill[y * cells + x]++] = {y * cells + x, i};
+  }
   std::vector<std::pair<int, int>> found;
   for (std::size_t begin = 0; begin < entries.size();) {
     std::size_t end = begin;
@@ -92,6 +102,48 @@ std::vector<std::pair<int, int>> find_crossings(const std::vector<Segment>& segm
   // A pair in several common cells is found once per cell.
   std::sort(found.begin(), found.end());
   found.erase(std::unique(found.begin(), found.end()), found.end());
+  if (found.size() > max_pairs) found.resize(max_pairs);
+  return found;
+}
+
+// find_crossings() when the segments before n_known are known to meet none of each other
+// (a patch's border that passed the check in the same plane): only pairs with a later
+// segment are tested, against the segments whose boxes meet the later ones' box. Falls back
+// to the grid when that would test too many pairs.
+std::vector<std::pair<int, int>> find_crossings_after(const std::vector<Segment>& segments, const std::vector<Eigen::Vector2d>& xy,
+                                                      std::size_t n_known, std::size_t max_pairs) {
+  const std::size_t n = segments.size();
+  if (n_known == 0 || n_known >= n) return n_known >= n ? std::vector<std::pair<int, int>>{} : find_crossings(segments, xy, max_pairs);
+  Eigen::Vector2d lo = xy[segments[n_known].a], hi = lo;
+  for (std::size_t j = n_known; j < n; ++j) {
+    for (int v : {segments[j].a, segments[j].b}) {
+      lo = lo.cwiseMin(xy[v]);
+      hi = hi.cwiseMax(xy[v]);
+    }
+  }
+  std::vector<int> near;  // known segments whose box meets the later segments' box
+  for (std::size_t i = 0; i < n_known; ++i) {
+    const Eigen::Vector2d& p = xy[segments[i].a];
+    const Eigen::Vector2d& q = xy[segments[i].b];
+    if (std::max(p.x(), q.x()) < lo.x() || std::min(p.x(), q.x()) > hi.x() || std::max(p.y(), q.y()) < lo.y() ||
+        std::min(p.y(), q.y()) > hi.y())
+      continue;
+    near.push_back(static_cast<int>(i));
+  }
+  const std::size_t n_new = n - n_known;
+  if (n_new * (near.size() + n_new) > 16 * n) return find_crossings(segments, xy, max_pairs);
+  std::vector<std::pair<int, int>> found;
+  auto test = [&](int i, int j) {
+    const Segment& s = segments[i];
+    const Segment& t = segments[j];
+    if (s.a == t.a || s.a == t.b || s.b == t.a || s.b == t.b) return;
+    if (segments_meet(xy[s.a], xy[s.b], xy[t.a], xy[t.b])) found.emplace_back(i, j);
+  };
+  for (std::size_t j = n_known; j < n; ++j) {
+    for (const int i : near) test(i, static_cast<int>(j));
+    for (std::size_t k = n_known; k < j; ++k) test(static_cast<int>(k), static_cast<int>(j));
+  }
+  std::sort(found.begin(), found.end());
   if (found.size() > max_pairs) found.resize(max_pairs);
   return found;
 }
@@ -188,7 +240,8 @@ ProjectionCheck check_projection(const FaceGraph& graph, const std::vector<int>&
 }
 
 ProjectionCheck check_projection(const FaceGraph& graph, const std::vector<OpenMesh::HalfedgeHandle>& border,
-                                 const std::vector<int>& face_patch, const Eigen::Vector3d& axis, Scratch& scratch) {
+                                 const std::vector<int>& face_patch, const Eigen::Vector3d& axis, Scratch& scratch,
+                                 std::size_t n_known) {
   if (border.empty()) return {false, {}};  // a closed surface is never a height field
   const TriMesh& mesh = *graph.mesh;
   const int patch = face_patch[mesh.face_handle(border[0]).idx()];
@@ -205,11 +258,22 @@ ProjectionCheck check_projection(const FaceGraph& graph, const std::vector<OpenM
     for (int v : {a, b}) {
       if (scratch.vertex_stamp[v] == epoch) continue;
       scratch.vertex_stamp[v] = epoch;
+      scratch.border_out[v] = -2;  // none seen yet
       const Eigen::Vector3d& p = graph.points[v];
       scratch.xy[v] = Eigen::Vector2d(p.dot(e1), p.dot(e2));
     }
+    scratch.border_out[a] = scratch.border_out[a] == -2 ? h.idx() : -1;
     segments.push_back({a, b});
   }
+  // The border halfedge after h: the one leaving h's end, found by turning through the
+  // patch's faces around that vertex where several leave it.
+  auto next_border = [&](OpenMesh::HalfedgeHandle h) {
+    const int out = scratch.border_out[mesh.to_vertex_handle(h).idx()];
+    if (out >= 0) return OpenMesh::HalfedgeHandle(out);
+    auto next = mesh.next_halfedge_handle(h);
+    while (in_patch(mesh.opposite_halfedge_handle(next))) next = mesh.next_halfedge_handle(mesh.opposite_halfedge_handle(next));
+    return next;
+  };
   // Loops, traced through the patch's own faces around each vertex, so a loop passing a
   // vertex twice (where the patch touches itself) stays apart from the other. At most one
   // loop may be counter-clockwise (the outer loop); two would mean a region covered twice.
@@ -223,17 +287,24 @@ ProjectionCheck check_projection(const FaceGraph& graph, const std::vector<OpenM
     auto h = start;
     std::size_t steps = 0;
     loop_vertices.clear();
+    const int loop = ++scratch.loop_epoch;
+    bool repeats = false;
     do {
       scratch.halfedge_stamp[h.idx()] = epoch;
-      loop_vertices.push_back(mesh.from_vertex_handle(h).idx());
-      twice_area += orient(origin, scratch.xy[mesh.from_vertex_handle(h).idx()], scratch.xy[mesh.to_vertex_handle(h).idx()]);
-      auto next = mesh.next_halfedge_handle(h);
-      while (in_patch(mesh.opposite_halfedge_handle(next))) next = mesh.next_halfedge_handle(mesh.opposite_halfedge_handle(next));
-      h = next;
+      const int from = mesh.from_vertex_handle(h).idx();
+      loop_vertices.push_back(from);
+      repeats = repeats || scratch.loop_stamp[from] == loop;
+      scratch.loop_stamp[from] = loop;
+      twice_area += orient(origin, scratch.xy[from], scratch.xy[mesh.to_vertex_handle(h).idx()]);
+      h = next_border(h);
       NURBSFRONT_ASSERT(++steps <= segments.size());
     } while (h != start);
-    std::vector<std::vector<int>> split = split_at_repeated_vertices(loop_vertices);
-    cycles.insert(cycles.end(), std::make_move_iterator(split.begin()), std::make_move_iterator(split.end()));
+    if (repeats) {
+      std::vector<std::vector<int>> split = split_at_repeated_vertices(loop_vertices);
+      cycles.insert(cycles.end(), std::make_move_iterator(split.begin()), std::make_move_iterator(split.end()));
+    } else {
+      cycles.push_back(loop_vertices);
+    }
     if (twice_area > 0) outer.emplace_back(steps, start);
   }
   if (outer.size() > 1) {
@@ -246,9 +317,7 @@ ProjectionCheck check_projection(const FaceGraph& graph, const std::vector<OpenM
       auto h = outer[k].second;
       do {
         check.trouble.push_back(mesh.from_vertex_handle(h).idx());
-        auto next = mesh.next_halfedge_handle(h);
-        while (in_patch(mesh.opposite_halfedge_handle(next))) next = mesh.next_halfedge_handle(mesh.opposite_halfedge_handle(next));
-        h = next;
+        h = next_border(h);
       } while (h != outer[k].second);
     }
     return check;
@@ -258,7 +327,7 @@ ProjectionCheck check_projection(const FaceGraph& graph, const std::vector<OpenM
   // region inside both is covered twice although the loop's total area looks right.
   const std::vector<int> nested = nested_ccw_cycle(cycles, scratch.xy);
   if (!nested.empty()) return {false, nested.size() <= kMaxTroubleLoopEdges ? nested : std::vector<int>{}};
-  const std::vector<std::pair<int, int>> crossings = find_crossings(segments, scratch.xy, kMaxTroubleCrossings);
+  const std::vector<std::pair<int, int>> crossings = find_crossings_after(segments, scratch.xy, n_known, kMaxTroubleCrossings);
   if (crossings.empty()) return {true, {}};
   ProjectionCheck check{false, {}};
   for (const auto& [i, j] : crossings) check.trouble.insert(check.trouble.end(), {segments[i].a, segments[i].b, segments[j].a, segments[j].b});

@@ -373,6 +373,10 @@ void merge_patches(const Grouping& grouping, std::size_t min_faces, Patches& pat
         for (int f : patches.faces[p]) patches.face_patch[f] = q.patch;
         auto& target = patches.faces[q.patch];
         target.insert(target.end(), patches.faces[p].begin(), patches.faces[p].end());
+        // Every patch passed the projection check with its current axis (split_folds, then
+        // every kept merge): where the axis stays, q's remaining border segments are known
+        // not to cross each other.
+        std::size_t n_known = 0;
         if (scratch != nullptr) {
           merged_border.clear();
           for (const auto* part : {&border[q.patch], &border[p]}) {
@@ -380,10 +384,12 @@ void merge_patches(const Grouping& grouping, std::size_t min_faces, Patches& pat
               const auto g = graph.mesh->opposite_face_handle(h);
               if (!g.is_valid() || patches.face_patch[g.idx()] != q.patch) merged_border.push_back(h);
             }
+            if (part == &border[q.patch] && patches.axes[q.patch] == old_axis) n_known = merged_border.size();
           }
         }
         if (scratch != nullptr &&
-            !segment_detail::check_projection(graph, merged_border, patches.face_patch, patches.axes[q.patch], *scratch)
+            !segment_detail::check_projection(graph, merged_border, patches.face_patch, patches.axes[q.patch], *scratch,
+                                              n_known)
                  .is_simple) {
           target.resize(target.size() - patches.faces[p].size());
           for (int f : patches.faces[p]) patches.face_patch[f] = p;

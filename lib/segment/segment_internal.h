@@ -31,12 +31,19 @@ struct FaceGraph {
 struct Scratch {
   std::vector<int> vertex_stamp, halfedge_stamp;
   std::vector<Eigen::Vector2d> xy;
+  //! Per vertex (valid where vertex_stamp is the current epoch): the border halfedge
+  //! leaving it, or -1 where several do (the patch touches itself there).
+  std::vector<int> border_out;
+  //! Per vertex: the last loop (loop_epoch) that passed it.
+  std::vector<int> loop_stamp;
   std::vector<int> face_stamp, face_owner;
   int vertex_epoch = 0;
+  int loop_epoch = 0;
   int face_epoch = 0;
   explicit Scratch(const TriMesh& mesh)
       : vertex_stamp(mesh.n_vertices(), -1), halfedge_stamp(mesh.n_halfedges(), -1), xy(mesh.n_vertices()),
-        face_stamp(mesh.n_faces(), -1), face_owner(mesh.n_faces(), -1) {}
+        border_out(mesh.n_vertices(), -1), loop_stamp(mesh.n_vertices(), -1), face_stamp(mesh.n_faces(), -1),
+        face_owner(mesh.n_faces(), -1) {}
 };
 
 //! The result of check_projection().
@@ -62,10 +69,14 @@ struct ProjectionCheck {
 
 //! check_projection() of the patch with these border halfedges (patch_border()): the cost
 //! is that of the border, not of the faces. An empty border (a closed surface) fails.
+//! `n_known`: the first n_known border halfedges are known to cross none of each other in
+//! this plane (they were all of a patch's border when it passed the check with this axis),
+//! so only pairs with a later one are tested for crossings; is_simple is the same, the
+//! crossing pairs reported as trouble may be others (also at most 256).
 [[nodiscard]] ProjectionCheck check_projection(const FaceGraph& graph,
                                                const std::vector<OpenMesh::HalfedgeHandle>& border,
                                                const std::vector<int>& face_patch, const Eigen::Vector3d& axis,
-                                               Scratch& scratch);
+                                               Scratch& scratch, std::size_t n_known = 0);
 
 //! Splits a connected patch of at least two faces in two connected parts: breadth-first
 //! regions around two faces far apart (the farthest face from the farthest face of

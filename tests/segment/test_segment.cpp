@@ -15,6 +15,7 @@
 #include "nurbsfront/core/error.h"
 #include "nurbsfront/core/soup.h"
 #include "nurbsfront/segment/segment.h"
+#include "nurbsfront/segment/segment_internal.h"
 #include "segment/contracts.h"
 
 namespace nurbsfront {
@@ -179,6 +180,59 @@ TEST(Segment, SmoothedNormalsKeepATerracedRampInOnePiece) {
   const Segmentation raw = run(mesh, options, 0.0);
   EXPECT_LE(smoothed.patches.size(), 2u);
   EXPECT_GT(raw.patches.size(), 4 * smoothed.patches.size());
+}
+
+// The merge check's shortcut: with the border of a patch that passed the check first
+// (n_known), only pairs with a later segment are tested for crossings; the verdict must
+// be that of the full check. The ramp's first and last turns cross in projection.
+TEST(Segment, ProjectionCheckWithAKnownSimplePrefixAgrees) {
+  const TriMesh mesh = to_trimesh(ramp(1.5, 24, 3));
+  segment_detail::FaceGraph graph;
+  graph.mesh = &mesh;
+  for (const auto v : mesh.vertices()) graph.points.push_back(to_eigen(mesh.point(v)));
+  segment_detail::Scratch scratch(mesh);
+  const Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();
+  const int n_faces = static_cast<int>(mesh.n_faces());
+  int n_simple = 0, n_not_simple = 0;
+  for (const int split : {n_faces / 4, n_faces / 2, 2 * n_faces / 3}) {
+    for (const int end : {split + 6, n_faces * 5 / 6, n_faces}) {
+      // Patch 0: faces [0, split), known simple; patch 1: faces [split, end); the rest 2.
+      std::vector<int> face_patch(n_faces, 2);
+      std::vector<int> first, second;
+      for (int f = 0; f < n_faces; ++f) {
+        if (f < split) {
+          face_patch[f] = 0;
+          first.push_back(f);
+        } else if (f < end) {
+          face_patch[f] = 1;
+          second.push_back(f);
+        }
+      }
+      ASSERT_TRUE(segment_detail::check_projection(graph, first, face_patch, axis, scratch).is_simple);
+      const auto border_first = segment_detail::patch_border(graph, first, face_patch);
+      const auto border_second = segment_detail::patch_border(graph, second, face_patch);
+      // Merge as merge_patches does: the first part's remaining border, then the second's.
+      for (int f : second) face_patch[f] = 0;
+      std::vector<OpenMesh::HalfedgeHandle> merged;
+      std::size_t n_known = 0;
+      for (const auto* part : {&border_first, &border_second}) {
+        for (const auto h : *part) {
+          const auto g = mesh.opposite_face_handle(h);
+          if (!g.is_valid() || face_patch[g.idx()] != 0) merged.push_back(h);
+        }
+        if (part == &border_first) n_known = merged.size();
+      }
+      const bool full = segment_detail::check_projection(graph, merged, face_patch, axis, scratch).is_simple;
+      const bool shortcut = segment_detail::check_projection(graph, merged, face_patch, axis, scratch, n_known).is_simple;
+      EXPECT_EQ(full, shortcut) << split << " " << end;
+      std::vector<int> all = first;
+      all.insert(all.end(), second.begin(), second.end());
+      EXPECT_EQ(full, segment_detail::check_projection(graph, all, face_patch, axis, scratch).is_simple);
+      (full ? n_simple : n_not_simple) += 1;
+    }
+  }
+  EXPECT_GT(n_simple, 0);
+  EXPECT_GT(n_not_simple, 0);
 }
 
 TEST(Segment, IsDeterministic) {
