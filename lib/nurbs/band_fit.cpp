@@ -250,6 +250,11 @@ BandFitResult fit_height_field_to_bands(const std::vector<BandSample>& samples, 
     return f;
   };
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver;
+  // The symbolic analysis (fill-reducing ordering, elimination tree) depends only on the
+  // sparsity pattern, which the active set rarely changes: it is redone only when the
+  // pattern differs from the last one (the factorisation is then exactly what compute()
+  // gives).
+  std::vector<int> pattern_outer, pattern_inner;
   // Solves the quadratic model: the fixed part plus every band in `active` pulled to its
   // centre (0) or its nearer end (1, 2).
   auto solve = [&](const std::vector<int>& active) {
@@ -268,7 +273,17 @@ BandFitResult fit_height_field_to_bands(const std::vector<BandSample>& samples, 
     Eigen::SparseMatrix<double> matrix(n_coef, n_coef);
     matrix.setFromTriplets(a.begin(), a.end());
     matrix += fixed_matrix;
-    solver.compute(matrix);
+    matrix.makeCompressed();
+    const auto* outer = matrix.outerIndexPtr();
+    const auto* inner = matrix.innerIndexPtr();
+    const auto n_nonzeros = static_cast<std::size_t>(matrix.nonZeros());
+    if (pattern_inner.size() != n_nonzeros || !std::equal(pattern_outer.begin(), pattern_outer.end(), outer) ||
+        !std::equal(pattern_inner.begin(), pattern_inner.end(), inner)) {
+      pattern_outer.assign(outer, outer + n_coef + 1);
+      pattern_inner.assign(inner, inner + n_nonzeros);
+      solver.analyzePattern(matrix);
+    }
+    solver.factorize(matrix);
     if (solver.info() != Eigen::Success) throw SolverError("fit_height_field_to_bands: the sparse Cholesky factorisation failed");
     Eigen::VectorXd c = solver.solve(rhs);
     if (solver.info() != Eigen::Success || !c.allFinite()) throw SolverError("fit_height_field_to_bands: the sparse solve failed");
