@@ -163,14 +163,64 @@ TriMesh to_trimesh(const TriangleSoup& soup) {
   }
   const ManifoldCheck check = check_manifold(soup);
   if (!check.ok()) throw TopologyError("nurbsfront: mesh is not an oriented 2-manifold: " + check.message());
+  // The halfedge structure is built directly (the soup is an oriented 2-manifold), exactly
+  // as OpenMesh's add_face() would build it face by face: edges numbered in order of first
+  // use, each edge's first halfedge in the direction of that use; a face's halfedge is
+  // its third one; an interior vertex keeps the halfedge leaving it in its last face; a
+  // boundary vertex and a boundary halfedge's successor are the vertex's one outgoing
+  // boundary halfedge. (Test Soup.DirectBuildMatchesAddFace compares with add_face.)
   TriMesh mesh;
-  mesh.reserve(soup.points.size(), soup.triangles.size() * 3 / 2 + soup.points.size(), soup.triangles.size());
-  std::vector<TriMesh::VertexHandle> handles;
-  handles.reserve(soup.points.size());
-  for (const auto& p : soup.points) handles.push_back(mesh.add_vertex(to_openmesh(p)));
+  const std::size_t n_points = soup.points.size(), n_corners = 3 * soup.triangles.size();
+  mesh.reserve(n_points, n_corners / 2 + n_points, soup.triangles.size());
+  for (const auto& p : soup.points) mesh.add_vertex(to_openmesh(p));
+  // Corners c = 3 f + k (edge t[k] -> t[k + 1]) listed by their start vertex.
+  std::vector<std::uint32_t> first(n_points + 1, 0);
   for (const auto& t : soup.triangles) {
-    const auto f = mesh.add_face(handles[t[0]], handles[t[1]], handles[t[2]]);
-    if (!f.is_valid()) throw InternalError("nurbsfront: OpenMesh rejected a face that passed check_manifold");
+    for (const std::uint32_t v : t) ++first[v + 1];
+  }
+  for (std::size_t i = 1; i < first.size(); ++i) first[i] += first[i - 1];
+  std::vector<std::uint32_t> outgoing(n_corners);
+  {
+    std::vector<std::uint32_t> fill(first.begin(), first.end() - 1);
+    for (std::size_t c = 0; c < n_corners; ++c) outgoing[fill[soup.triangles[c / 3][c % 3]]++] = static_cast<std::uint32_t>(c);
+  }
+  auto corner_end = [&](std::size_t c) { return soup.triangles[c / 3][(c % 3 + 1) % 3]; };
+  constexpr auto kNoCorner = std::numeric_limits<std::uint32_t>::max();
+  std::vector<TriMesh::HalfedgeHandle> halfedge(n_corners);
+  std::vector<std::uint32_t> boundary;  // corners whose edge has no other face
+  for (std::size_t c = 0; c < n_corners; ++c) {
+    const std::uint32_t a = soup.triangles[c / 3][c % 3], b = corner_end(c);
+    std::uint32_t twin = kNoCorner;  // the corner b -> a, if any
+    for (std::uint32_t i = first[b]; i < first[b + 1]; ++i) {
+      if (corner_end(outgoing[i]) == a) {
+        twin = outgoing[i];
+        break;
+      }
+    }
+    if (twin != kNoCorner && twin < c) {
+      halfedge[c] = mesh.opposite_halfedge_handle(halfedge[twin]);
+    } else {
+      halfedge[c] = mesh.new_edge(TriMesh::VertexHandle(static_cast<int>(a)), TriMesh::VertexHandle(static_cast<int>(b)));
+      if (twin == kNoCorner) boundary.push_back(static_cast<std::uint32_t>(c));
+    }
+  }
+  for (std::size_t f = 0; f < soup.triangles.size(); ++f) {
+    const auto fh = mesh.new_face();
+    mesh.set_halfedge_handle(fh, halfedge[3 * f + 2]);
+    for (std::size_t k = 0; k < 3; ++k) {
+      const auto h = halfedge[3 * f + k];
+      mesh.set_face_handle(h, fh);
+      mesh.set_next_halfedge_handle(h, halfedge[3 * f + (k + 1) % 3]);
+      mesh.set_halfedge_handle(TriMesh::VertexHandle(static_cast<int>(soup.triangles[f][k])), h);
+    }
+  }
+  for (const std::uint32_t c : boundary) {
+    const auto h = mesh.opposite_halfedge_handle(halfedge[c]);
+    mesh.set_halfedge_handle(mesh.from_vertex_handle(h), h);
+  }
+  for (const std::uint32_t c : boundary) {
+    const auto h = mesh.opposite_halfedge_handle(halfedge[c]);
+    mesh.set_next_halfedge_handle(h, mesh.halfedge_handle(mesh.to_vertex_handle(h)));
   }
   return mesh;
 }

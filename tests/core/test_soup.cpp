@@ -163,6 +163,47 @@ TEST(Soup, CheckManifoldMatchesTheDefinitionsOnRandomSoups) {
   EXPECT_GT(n_fan_failures, 5);
 }
 
+// to_trimesh() builds the halfedge structure itself; it must be the very mesh OpenMesh's
+// add_face() builds (same handles everywhere), or every later stage could differ.
+TEST(Soup, DirectBuildMatchesAddFace) {
+  std::mt19937 random(11);
+  std::vector<TriangleSoup> shapes{test::tetrahedron(), test::cube(), test::icosphere(2), test::torus(12, 8),
+                                   test::grid_patch(5, 4)};
+  int n_compared = 0;
+  for (int round = 0; round < 60; ++round) {
+    TriangleSoup s = shapes[round % shapes.size()];
+    if (round >= 5) std::shuffle(s.triangles.begin(), s.triangles.end(), random);
+    if (round >= 20 && s.triangles.size() > 8) {  // holes
+      for (int k = 0; k < 3; ++k) s.triangles.erase(s.triangles.begin() + static_cast<std::ptrdiff_t>(random() % s.triangles.size()));
+    }
+    if (round % 4 == 3) {  // rotated corners: another halfedge is each face's first
+      for (auto& t : s.triangles) std::rotate(t.begin(), t.begin() + 1, t.end());
+    }
+    if (!check_manifold(s).ok()) continue;
+    TriMesh expected;
+    std::vector<TriMesh::VertexHandle> handles;
+    for (const auto& p : s.points) handles.push_back(expected.add_vertex(to_openmesh(p)));
+    for (const auto& t : s.triangles) ASSERT_TRUE(expected.add_face(handles[t[0]], handles[t[1]], handles[t[2]]).is_valid());
+    const TriMesh built = to_trimesh(s);
+    ASSERT_EQ(built.n_vertices(), expected.n_vertices());
+    ASSERT_EQ(built.n_edges(), expected.n_edges());
+    ASSERT_EQ(built.n_faces(), expected.n_faces());
+    for (const auto h : expected.halfedges()) {
+      ASSERT_EQ(built.to_vertex_handle(h), expected.to_vertex_handle(h)) << round;
+      ASSERT_EQ(built.next_halfedge_handle(h), expected.next_halfedge_handle(h)) << round;
+      ASSERT_EQ(built.prev_halfedge_handle(h), expected.prev_halfedge_handle(h)) << round;
+      ASSERT_EQ(built.face_handle(h), expected.face_handle(h)) << round;
+    }
+    for (const auto v : expected.vertices()) {
+      ASSERT_EQ(built.halfedge_handle(v), expected.halfedge_handle(v)) << round << " vertex " << v.idx();
+      ASSERT_EQ(built.point(v), expected.point(v));
+    }
+    for (const auto f : expected.faces()) ASSERT_EQ(built.halfedge_handle(f), expected.halfedge_handle(f)) << round;
+    ++n_compared;
+  }
+  EXPECT_GT(n_compared, 40);
+}
+
 TEST(Soup, BoundingBoxDiagonal) {
   EXPECT_DOUBLE_EQ(bounding_box(test::cube()).diagonal(), std::sqrt(3.0));
   EXPECT_EQ(bounding_box(TriangleSoup{}).diagonal(), 0.0);
