@@ -240,3 +240,101 @@ ManifoldRepair make_manifold(const TriangleSoup& soup) {
 }
 
 }  // namespace nurbsfront
+
+namespace nurbsfront {
+namespace {
+
+bool has_zero_area(const TriMesh& mesh, TriMesh::FaceHandle f) {
+  auto it = mesh.cfv_iter(f);
+  const Eigen::Vector3d a = to_eigen(mesh.point(*it));
+  const Eigen::Vector3d b = to_eigen(mesh.point(*++it));
+  const Eigen::Vector3d c = to_eigen(mesh.point(*++it));
+  return (b - a).cross(c - a).squaredNorm() == 0.0;
+}
+
+//! Rounds of flips over the faces of exactly zero area (three distinct collinear corners:
+//! a needle a, m, b with m on the segment ab). Flipping the long edge ab replaces the
+//! needle and its neighbour (b, a, y) by (a, m, y) and (m, b, y), which cover the same
+//! area. A needle on the boundary is dropped when m is inside the surface: the boundary
+//! then runs a, m, b, which is the same curve. Stops when a round changes nothing.
+void remove_zero_area_faces(TriMesh& mesh, PrepareReport& report) {
+  bool deleted = false;
+  for (int round = 0; round < 16; ++round) {
+    std::size_t n_changed = 0;
+    for (auto f : mesh.faces()) {
+      if (mesh.status(f).deleted() || !has_zero_area(mesh, f)) continue;
+      TriMesh::HalfedgeHandle longest;
+      double longest_length = -1.0;
+      for (auto h : mesh.fh_range(f)) {
+        const double length = mesh.calc_edge_sqr_length(h);
+        if (length > longest_length) {
+          longest_length = length;
+          longest = h;
+        }
+      }
+      const auto e = mesh.edge_handle(longest);
+      const auto apex = mesh.to_vertex_handle(mesh.next_halfedge_handle(longest));
+      if (mesh.is_boundary(e)) {
+        if (mesh.is_boundary(apex)) continue;
+        mesh.delete_face(f, true);
+        deleted = true;
+        ++report.n_zero_area_dropped;
+        ++n_changed;
+      } else if (mesh.is_flip_ok(e)) {
+        mesh.flip(e);
+        ++report.n_zero_area_flipped;
+        ++n_changed;
+      }
+    }
+    if (n_changed == 0) break;
+  }
+  if (deleted) mesh.garbage_collection();
+  for (auto f : mesh.faces()) report.n_zero_area_left += has_zero_area(mesh, f) ? 1 : 0;
+}
+
+void append_count(std::string& text, std::size_t n, const char* what) {
+  if (n == 0) return;
+  text += (text.empty() ? "" : ", ") + std::to_string(n) + " " + what;
+}
+
+}  // namespace
+
+std::string PrepareReport::summary() const {
+  std::string text;
+  append_count(text, clean.n_welded_vertices, "duplicate vertices welded");
+  append_count(text, clean.n_degenerate_faces, "collapsed triangles dropped");
+  append_count(text, clean.n_duplicate_faces, "duplicate triangles dropped");
+  append_count(text, clean.n_unreferenced_vertices, "unreferenced vertices dropped");
+  append_count(text, manifold.n_flipped_faces, "triangles reoriented");
+  append_count(text, manifold.n_paired_edges, "non-manifold edges split into pairs of faces");
+  append_count(text, manifold.n_cut_edges, "non-manifold edges cut open");
+  append_count(text, manifold.n_nonorientable_edges, "edges cut where the surface cannot be oriented");
+  append_count(text, manifold.n_split_vertices, "vertices duplicated at non-manifold points");
+  append_count(text, n_zero_area_flipped, "zero-area triangles removed by an edge flip");
+  append_count(text, n_zero_area_dropped, "zero-area triangles dropped from the boundary");
+  append_count(text, n_zero_area_left, "zero-area triangles left");
+  return text.empty() ? "nothing to repair" : text;
+}
+
+PreparedMesh prepare_mesh(const TriangleSoup& soup, const CleanOptions& options) {
+  PreparedMesh result;
+  PrepareReport& report = result.report;
+  CleanResult cleaned = clean(soup, options);
+  report.clean = cleaned.report;
+  if (cleaned.soup.triangles.empty()) {
+    throw InvalidInput("the input has no triangles" +
+                       std::string(soup.triangles.empty() ? "" : " left after dropping collapsed ones (" + report.summary() + ")"));
+  }
+  ManifoldRepair repaired = make_manifold(cleaned.soup);
+  report.manifold = repaired.report;
+  const ManifoldCheck check = check_manifold(repaired.soup);
+  if (!check.ok()) {
+    throw InvalidInput("the input is not an oriented 2-manifold even after repair (" + report.summary() + "): " +
+                       check.message() + "; a non-orientable part (such as a Moebius band) cannot be remeshed");
+  }
+  result.mesh = to_trimesh(repaired.soup);
+  remove_zero_area_faces(result.mesh, report);
+  return result;
+}
+
+}  // namespace nurbsfront

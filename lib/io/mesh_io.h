@@ -132,6 +132,32 @@ struct ManifoldRepair {
 //! 	hrow InvalidInput for out-of-range indices or a triangle repeating a vertex.
 [[nodiscard]] ManifoldRepair make_manifold(const TriangleSoup& soup);
 
+//! What prepare_mesh() did.
+struct PrepareReport {
+  CleanReport clean;                    //!< clean()'s counts
+  ManifoldRepairReport manifold;        //!< make_manifold()'s counts
+  std::size_t n_zero_area_flipped = 0;  //!< zero-area triangles removed by flipping their long edge
+  std::size_t n_zero_area_dropped = 0;  //!< zero-area triangles on the boundary dropped
+  std::size_t n_zero_area_left = 0;     //!< zero-area triangles that could be neither flipped nor dropped
+  //! One line naming every non-zero count ("nothing to repair" when all are zero).
+  [[nodiscard]] std::string summary() const;
+};
+
+//! A surface ready for remesh() and what was done to get it.
+struct PreparedMesh {
+  TriMesh mesh;
+  PrepareReport report;
+};
+
+//! Makes any triangle soup that describes a surface a valid remesh() input:
+//! clean() (weld, drop collapsed and duplicate triangles), make_manifold() (orientation,
+//! non-manifold edges and vertices), then removes triangles of exactly zero area (three
+//! distinct collinear corners) by flipping their long edge, or dropping them where that
+//! edge is on the boundary (the boundary curve stays the same). Positions never move.
+//! 	hrow InvalidInput for non-finite points, bad options, no triangle left, or a soup
+//! that is still not an oriented 2-manifold (non-orientable); the message names the problem.
+[[nodiscard]] PreparedMesh prepare_mesh(const TriangleSoup& soup, const CleanOptions& options = {});
+
 //! read_soup + clean + to_trimesh.
 //! \throw IoError if the file cannot be read, TopologyError if the cleaned soup is not an
 //! oriented 2-manifold (the message names the problems).

@@ -149,3 +149,82 @@ TEST(MakeManifold, RejectsAnUncleanedSoup) {
 
 }  // namespace
 }  // namespace nurbsfront
+
+namespace nurbsfront {
+namespace {
+
+std::size_t count_zero_area(const TriMesh& mesh) {
+  std::size_t n = 0;
+  for (auto f : mesh.faces()) n += mesh.calc_face_area(f) == 0.0 ? 1 : 0;
+  return n;
+}
+
+TEST(PrepareMesh, ZeroAreaTriangleIsFlippedAway) {
+  const TriangleSoup s = test::needle_cube();
+  ASSERT_TRUE(check_manifold(s).ok());
+  const PreparedMesh p = prepare_mesh(s);
+  EXPECT_EQ(p.report.n_zero_area_flipped, 1u);
+  EXPECT_EQ(p.report.n_zero_area_left, 0u);
+  EXPECT_EQ(count_zero_area(p.mesh), 0u);
+  EXPECT_EQ(p.mesh.n_faces(), 14u);  // a flip keeps the count
+  const TopologyReport t = mesh_report(to_soup(p.mesh)).topology;
+  EXPECT_TRUE(t.is_closed);
+  EXPECT_TRUE(t.is_consistently_oriented);
+  ASSERT_TRUE(t.volume.has_value());
+  EXPECT_NEAR(*t.volume, 1.0, 1e-12);
+  EXPECT_EQ(t.n_self_intersecting_pairs.value_or(1), 0u);
+  EXPECT_NE(p.report.summary().find("1 zero-area triangles removed by an edge flip"), std::string::npos);
+}
+
+TEST(PrepareMesh, ZeroAreaTriangleOnTheBoundaryIsDropped) {
+  // The square (0,0)-(2,1) as a fan around (1, 0.5), plus the needle (0, 1, 2) on the bottom
+  // side whose middle point 1 is inside the fan.
+  TriangleSoup s;
+  s.points = {{0, 0, 0}, {1, 0, 0}, {2, 0, 0}, {2, 1, 0}, {0, 1, 0}, {1, 0.5, 0}};
+  s.triangles = {Tri{0, 1, 5}, Tri{1, 2, 5}, Tri{2, 3, 5}, Tri{3, 4, 5}, Tri{4, 0, 5}, Tri{0, 2, 1}};
+  ASSERT_TRUE(check_manifold(s).ok());
+  const PreparedMesh p = prepare_mesh(s);
+  EXPECT_EQ(p.report.n_zero_area_dropped, 1u);
+  EXPECT_EQ(p.mesh.n_faces(), 5u);
+  EXPECT_EQ(count_zero_area(p.mesh), 0u);
+  EXPECT_TRUE(check_manifold(to_soup(p.mesh)).ok());
+}
+
+TEST(PrepareMesh, WeldsRepairsAndNamesWhatItDid) {
+  // Two cubes touching at a vertex, the second with its own copy of the shared point.
+  TriangleSoup s = cube();
+  TriangleSoup other = shifted_cube({1, 1, 1});
+  for (auto& t : other.triangles) {
+    for (auto& v : t) v += 8;
+  }
+  s.points.insert(s.points.end(), other.points.begin(), other.points.end());
+  s.triangles.insert(s.triangles.end(), other.triangles.begin(), other.triangles.end());
+  const PreparedMesh p = prepare_mesh(s);
+  EXPECT_EQ(p.report.clean.n_welded_vertices, 1u);
+  EXPECT_EQ(p.report.manifold.n_split_vertices, 1u);
+  EXPECT_EQ(p.mesh.n_vertices(), 16u);
+  EXPECT_EQ(p.report.summary(), "1 duplicate vertices welded, 1 vertices duplicated at non-manifold points");
+  EXPECT_EQ(prepare_mesh(cube()).report.summary(), "nothing to repair");
+}
+
+TEST(PrepareMesh, WhatCannotBeRepairedIsNamed) {
+  auto expect_invalid = [](const TriangleSoup& s, const std::string& word) {
+    try {
+      (void)prepare_mesh(s);
+      ADD_FAILURE() << "no exception, expected one naming " << word;
+    } catch (const InvalidInput& e) {
+      EXPECT_NE(std::string(e.what()).find(word), std::string::npos) << e.what();
+    }
+  };
+  expect_invalid(TriangleSoup{}, "no triangles");
+  TriangleSoup collapsed;
+  collapsed.points = {{0, 0, 0}, {0, 0, 0}, {1, 0, 0}};
+  collapsed.triangles = {Tri{0, 1, 2}};
+  expect_invalid(collapsed, "collapsed");
+  TriangleSoup nan = cube();
+  nan.points[3].x() = std::nan("");
+  expect_invalid(nan, "finite");
+}
+
+}  // namespace
+}  // namespace nurbsfront
