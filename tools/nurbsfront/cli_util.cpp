@@ -67,7 +67,7 @@ std::string input_self_intersections(const TriMesh& input, unsigned threads) {
   return "the input surface itself has " + std::to_string(pairs.size()) + " self-intersecting triangle pairs (" +
          std::to_string(n_between) +
          " between different components), so the remeshed surface cannot be free of them; separate or repair "
-         "the overlapping parts first (`nurbsfront stats` lists the input's topology)";
+         "the overlapping parts first (`nurbsfront stats --clean` lists the input's components)";
 }
 
 void print_error(std::string_view message) {
