@@ -325,14 +325,19 @@ PreparedMesh prepare_mesh(const TriangleSoup& soup, const CleanOptions& options)
     throw InvalidInput("the input has no triangles" +
                        std::string(soup.triangles.empty() ? "" : " left after dropping collapsed ones (" + report.summary() + ")"));
   }
-  ManifoldRepair repaired = make_manifold(cleaned.soup);
-  report.manifold = repaired.report;
-  const ManifoldCheck check = check_manifold(repaired.soup);
-  if (!check.ok()) {
-    throw InvalidInput("the input is not an oriented 2-manifold even after repair (" + report.summary() + "): " +
-                       check.message() + "; a non-orientable part (such as a Moebius band) cannot be remeshed");
+  // The common case, an oriented 2-manifold, costs one check (inside to_trimesh), as before.
+  try {
+    result.mesh = to_trimesh(cleaned.soup);
+  } catch (const TopologyError&) {
+    const ManifoldRepair repaired = make_manifold(cleaned.soup);
+    report.manifold = repaired.report;
+    try {
+      result.mesh = to_trimesh(repaired.soup);
+    } catch (const TopologyError& e) {
+      throw InvalidInput("the input is not an oriented 2-manifold even after repair (" + report.summary() + "): " +
+                         e.what() + "; a non-orientable part (such as a Moebius band) cannot be remeshed");
+    }
   }
-  result.mesh = to_trimesh(repaired.soup);
   remove_zero_area_faces(result.mesh, report);
   return result;
 }
