@@ -339,6 +339,23 @@ std::vector<CorpusItem> collect(const std::vector<std::string>& directories) {
   return items;
 }
 
+// The value of a text field of a JSON line written by json::Object, unescaped enough for
+// a table cell ('|' and newlines replaced), cut to `max_size` characters; "" when absent.
+std::string table_text(const std::string& line, const std::string& key, std::size_t max_size) {
+  std::string text;
+  const std::string pattern = "\"" + key + "\": \"";
+  const auto at = line.find(pattern);
+  if (at == std::string::npos) return text;
+  for (std::size_t k = at + pattern.size(); k < line.size() && line[k] != '"'; ++k) {
+    if (line[k] == '\\' && k + 1 < line.size()) ++k;
+    text += line[k];
+  }
+  std::replace(text.begin(), text.end(), '|', '/');
+  std::replace(text.begin(), text.end(), '\n', ' ');
+  if (text.size() > max_size) text = text.substr(0, max_size - 3) + "...";
+  return text;
+}
+
 std::string read_text(const fs::path& path) {
   std::ifstream f(path, std::ios::binary);
   std::ostringstream s;
@@ -443,7 +460,8 @@ void run_corpus(const CorpusArgs& a) {
   std::map<std::string, int> counts;
   std::ostringstream md;
   md << "| input | outcome | input faces | output faces | alpha mean | min angle | obtuse % | self-int. | "
-        "Hausdorff / input mean edge | wall s | peak RSS MB | first error |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+        "Hausdorff / input mean edge | wall s | peak RSS MB | input repairs | first error |\n"
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
   for (std::size_t i = 0; i < items.size(); ++i) {
     const CorpusItem& item = items[i];
     std::vector<std::string> argv{exe, "corpus-one", item.path.string(), "--threads", std::to_string(a.threads)};
@@ -486,22 +504,11 @@ void run_corpus(const CorpusArgs& a) {
             json::number(double(child.max_rss_kb) / 1024.0) + "}";
     ++counts[outcome];
     {
-      std::string first_error = child.outcome_override.empty() ? "" : child.message;
-      if (first_error.empty()) {  // the child's "message" value, unescaped enough for a table
-        const auto key = line.find("\"message\": \"");
-        if (key != std::string::npos) {
-          for (std::size_t k = key + 12; k < line.size() && line[k] != '"'; ++k) {
-            if (line[k] == '\\' && k + 1 < line.size()) ++k;
-            first_error += line[k];
-          }
-        }
-      }
-      std::replace(first_error.begin(), first_error.end(), '|', '/');
-      std::replace(first_error.begin(), first_error.end(), '\n', ' ');
-      if (first_error.size() > 120) first_error = first_error.substr(0, 117) + "...";
+      const std::string first_error = table_text(line, "message", 120);
+      const std::string repairs = table_text(line, "input_repairs", 80);
       md << "| " << label << " | " << outcome << " | " << (child.cells.empty() ? "- | - | - | - | - | - | -" : child.cells)
          << " | " << fixed(child.wall_seconds, 1) << " | " << fixed(double(child.max_rss_kb) / 1024.0, 0) << " | "
-         << first_error << " |\n";
+         << (repairs == "nothing to repair" ? "" : repairs) << " | " << first_error << " |\n";
     }
     std::cout << line << std::endl;
     if (output.is_open()) output << line << '\n' << std::flush;
