@@ -96,6 +96,68 @@ struct CleanResult {
 //! \throw InvalidInput for out-of-range indices, non-finite coordinates or bad options.
 [[nodiscard]] CleanResult clean(const TriangleSoup& soup, const CleanOptions& options = {});
 
+//! What make_manifold() changed.
+struct ManifoldRepairReport {
+  std::size_t n_flipped_faces = 0;        //!< faces reversed to agree with their component
+  std::size_t n_paired_edges = 0;         //!< edges with more than two faces, split into pairs of faces
+  std::size_t n_cut_edges = 0;            //!< edges with more than two faces that could not be paired (cut open)
+  std::size_t n_nonorientable_edges = 0;  //!< edges cut because their band cannot be oriented
+  std::size_t n_split_vertices = 0;       //!< vertex copies added, one per extra face fan
+  //! Sum of the counts: 0 when the soup was already an oriented 2-manifold.
+  [[nodiscard]] std::size_t n_changes() const;
+};
+
+//! Result of make_manifold(): the repaired soup and the counts.
+struct ManifoldRepair {
+  TriangleSoup soup;
+  ManifoldRepairReport report;
+};
+
+//! Makes a cleaned soup an oriented 2-manifold (with boundary where it must be cut) that
+//! keeps every triangle and every point position:
+//! 1. orientation: each connected component (faces joined across edges with two faces)
+//!    takes the orientation of the majority of its faces; an edge where that is impossible
+//!    (a non-orientable band) is cut;
+//! 2. edges with more than two faces (solids touching along an edge, fins): the faces are
+//!    sorted by angle around the edge and each is paired with the neighbour that bounds the
+//!    same solid, which needs their directions to alternate around the edge; otherwise
+//!    all of them are cut off the edge (each keeps its own copy: boundary edges);
+//! 3. vertices where several fans of faces meet (solids touching at a point, and the ends
+//!    of the edges split above) get one copy of the point per extra fan.
+//! Triangle i of the result is triangle i of the input (possibly reversed); points keep
+//! their indices and copies are appended. An input that is already an oriented 2-manifold
+//! comes back unchanged (report.n_changes() == 0). The result passes check_manifold()
+//! except around non-orientable bands whose cut edges still meet at one fan.
+//! \pre clean() has run: no triangle repeats a vertex.
+//! 	hrow InvalidInput for out-of-range indices or a triangle repeating a vertex.
+[[nodiscard]] ManifoldRepair make_manifold(const TriangleSoup& soup);
+
+//! What prepare_mesh() did.
+struct PrepareReport {
+  CleanReport clean;                    //!< clean()'s counts
+  ManifoldRepairReport manifold;        //!< make_manifold()'s counts
+  std::size_t n_zero_area_flipped = 0;  //!< zero-area triangles removed by flipping their long edge
+  std::size_t n_zero_area_dropped = 0;  //!< zero-area triangles on the boundary dropped
+  std::size_t n_zero_area_left = 0;     //!< zero-area triangles that could be neither flipped nor dropped
+  //! One line naming every non-zero count ("nothing to repair" when all are zero).
+  [[nodiscard]] std::string summary() const;
+};
+
+//! A surface ready for remesh() and what was done to get it.
+struct PreparedMesh {
+  TriMesh mesh;
+  PrepareReport report;
+};
+
+//! Makes any triangle soup that describes a surface a valid remesh() input:
+//! clean() (weld, drop collapsed and duplicate triangles), make_manifold() (orientation,
+//! non-manifold edges and vertices), then removes triangles of exactly zero area (three
+//! distinct collinear corners) by flipping their long edge, or dropping them where that
+//! edge is on the boundary (the boundary curve stays the same). Positions never move.
+//! 	hrow InvalidInput for non-finite points, bad options, no triangle left, or a soup
+//! that is still not an oriented 2-manifold (non-orientable); the message names the problem.
+[[nodiscard]] PreparedMesh prepare_mesh(const TriangleSoup& soup, const CleanOptions& options = {});
+
 //! read_soup + clean + to_trimesh.
 //! \throw IoError if the file cannot be read, TopologyError if the cleaned soup is not an
 //! oriented 2-manifold (the message names the problems).

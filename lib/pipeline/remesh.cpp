@@ -5,6 +5,8 @@
 #include <string>
 #include <utility>
 
+#include <Eigen/Geometry>
+
 #include "nurbsfront/core/error.h"
 #include "nurbsfront/core/stopwatch.h"
 
@@ -58,6 +60,21 @@ void check_input(const TriMesh& input) {
   if (n_non_manifold > 0) {
     throw InvalidInput("remesh: the input mesh has " + std::to_string(n_non_manifold) +
                        " non-manifold vertices (several face fans meet at one vertex)");
+  }
+  // A triangle of exactly zero area has no normal: segmentation cannot place it and the
+  // output silently loses the region around it (issue 6). io's prepare_mesh() flips them away.
+  std::size_t n_zero_area = 0;
+  for (auto f : input.faces()) {
+    auto it = input.cfv_iter(f);
+    const Eigen::Vector3d a = to_eigen(input.point(*it));
+    const Eigen::Vector3d b = to_eigen(input.point(*++it));
+    const Eigen::Vector3d c = to_eigen(input.point(*++it));
+    if ((b - a).cross(c - a).squaredNorm() == 0.0) ++n_zero_area;
+  }
+  if (n_zero_area > 0) {
+    throw InvalidInput("remesh: the input mesh has " + std::to_string(n_zero_area) +
+                       " triangles of zero area (three collinear corners); io's prepare_mesh() removes them "
+                       "by edge flips (the nurbsfront tool does so on reading)");
   }
 }
 

@@ -11,6 +11,7 @@
 #include <set>
 #include <string>
 
+#include "fixtures/shapes.h"
 #include "nurbsfront/core/error.h"
 #include "nurbsfront/isosurface/marching_cubes.h"
 #include "nurbsfront/isosurface/scenes.h"
@@ -203,6 +204,8 @@ TEST(Pipeline, BadInputIsNamed) {
   bowtie.add_face(o, a, b);
   bowtie.add_face(o, c, d);
   expect_invalid(bowtie, "non-manifold");
+  // A triangle of exactly zero area has no normal (issue 6: it used to lose half the cube).
+  expect_invalid(to_trimesh(test::needle_cube()), "zero area");
   SceneInput in = scene_input("sphere", 12, SampleMode::LevelSet);
   in.mesh.set_point(TriMesh::VertexHandle(3), {std::nan(""), 0, 0});
   expect_invalid(in.mesh, "non-finite");

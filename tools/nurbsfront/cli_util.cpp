@@ -8,6 +8,11 @@
 #include <cstdio>
 #include <iostream>
 #include <memory>
+#include <numeric>
+#include <vector>
+
+#include "nurbsfront/core/soup.h"
+#include "nurbsfront/quality/report.h"
 
 namespace nurbsfront::cli {
 
@@ -38,6 +43,31 @@ ProgressCallback terminal_progress(bool quiet) {
     *last_percent = percent;
     return true;
   };
+}
+
+std::string input_self_intersections(const TriMesh& input, unsigned threads) {
+  const TriangleSoup soup = to_soup(input);
+  const auto pairs = self_intersecting_pairs(soup, threads);
+  if (pairs.empty()) return "";
+  // Components through shared vertices (union-find, lowest index as representative).
+  std::vector<std::uint32_t> parent(soup.points.size());
+  std::iota(parent.begin(), parent.end(), std::uint32_t{0});
+  auto find = [&](std::uint32_t x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  };
+  for (const auto& t : soup.triangles) {
+    for (int k = 1; k < 3; ++k) {
+      const std::uint32_t a = find(t[0]), b = find(t[k]);
+      if (a != b) parent[std::max(a, b)] = std::min(a, b);
+    }
+  }
+  std::size_t n_between = 0;
+  for (const auto& [f, g] : pairs) n_between += find(soup.triangles[f][0]) != find(soup.triangles[g][0]) ? 1 : 0;
+  return "the input surface itself has " + std::to_string(pairs.size()) + " self-intersecting triangle pairs (" +
+         std::to_string(n_between) +
+         " between different components), so the remeshed surface cannot be free of them; separate or repair "
+         "the overlapping parts first (`nurbsfront stats --clean` lists the input's components)";
 }
 
 void print_error(std::string_view message) {

@@ -5,6 +5,7 @@
 #include <string>
 #include <string_view>
 
+#include "nurbsfront/core/mesh_types.h"
 #include "nurbsfront/core/progress.h"
 
 namespace nurbsfront::cli {
@@ -15,6 +16,11 @@ ProgressCallback terminal_progress(bool quiet = false);
 
 //! The path's extension in lower case, with its dot (".ply"), or "".
 std::string lower_extension(const std::filesystem::path& path);
+
+//! "" when the surface has no self-intersecting triangle pairs; otherwise a sentence naming
+//! their number and how many join different connected components, for an output whose
+//! self-intersections come from its input.
+std::string input_self_intersections(const TriMesh& input, unsigned threads);
 
 //! Prints "nurbsfront: error: <message>" on stderr.
 void print_error(std::string_view message);

@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// nurbsfront convert IN OUT [--ascii] [--no-clean]: mesh format conversion (by extension).
+// nurbsfront convert IN OUT [--ascii] [--no-clean | --repair]: mesh format conversion (by
+// extension), welding and cleaning, optionally the repair remesh applies on reading.
 #include <iostream>
 #include <memory>
 #include <string>
@@ -15,6 +16,7 @@ struct ConvertArgs {
   std::string output;
   bool ascii = false;
   bool no_clean = false;
+  bool repair = false;
   double weld_tolerance_relative = CleanOptions{}.weld_tolerance_relative;
 };
 }  // namespace
@@ -26,6 +28,10 @@ void add_convert_command(CLI::App& app) {
   cmd->add_option("output", args->output, "Output mesh (.obj .ply .stl .off .vtk .vtu)")->required();
   cmd->add_flag("--ascii", args->ascii, "Write ASCII instead of binary (PLY, STL, VTK, VTU)");
   cmd->add_flag("--no-clean", args->no_clean, "Do not weld duplicate points nor drop degenerate/duplicate faces");
+  auto* repair = cmd->add_flag("--repair", args->repair,
+                               "Also make the mesh a valid remesh input: orient every component, split non-manifold "
+                               "edges and vertices, flip away zero-area triangles (what remesh does on reading)");
+  repair->excludes(cmd->get_option("--no-clean"));
   cmd->add_option("--weld-tolerance", args->weld_tolerance_relative,
                   "Welding distance relative to the bounding-box diagonal")
       ->capture_default_str();
@@ -39,7 +45,11 @@ void add_convert_command(CLI::App& app) {
     const std::size_t n_points_in = soup.points.size();
     const std::size_t n_triangles_in = soup.triangles.size();
     std::string cleaned = "not cleaned";
-    if (!args->no_clean) {
+    if (args->repair) {
+      const PreparedMesh prepared = prepare_mesh(soup, clean_options);
+      soup = to_soup(prepared.mesh);
+      cleaned = "repair: " + prepared.report.summary();
+    } else if (!args->no_clean) {
       CleanResult result = clean(soup, clean_options);
       soup = std::move(result.soup);
       const CleanReport& r = result.report;

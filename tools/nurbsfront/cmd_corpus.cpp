@@ -3,10 +3,12 @@
 // given directories, each in a child process (posix_spawn of this executable's hidden
 // `corpus-one` command) under a time limit, so a crash or a hang is an outcome, not an
 // assumption. One JSON line per input: outcome (ok, invalid_input, patch_failed,
-// broken_output, error, timeout, crash) and figures.
+// broken_output, error, timeout, crash) and figures. Surfaces are read as `remesh` reads
+// them (prepare_mesh: weld, clean, make manifold, no zero-area triangles; the repairs are
+// listed); 2D domains (.poly .node .edg) are meshed by the advancing front as `mesh2d` does.
 //
-// nurbsfront corpus-one FILE [--volume --iso V]: the child side, one input, one JSON line
-// on stdout.
+// nurbsfront corpus-one FILE [--volume --iso V | --pslg]: the child side, one input, one
+// JSON line on stdout.
 #include <fcntl.h>
 #include <spawn.h>
 #include <sys/resource.h>
@@ -38,11 +40,14 @@
 #include "commands.h"
 #include "nurbsfront/core/error.h"
 #include "nurbsfront/core/stopwatch.h"
+#include "nurbsfront/front2d/front.h"
+#include "nurbsfront/front2d/pslg.h"
 #include "nurbsfront/io/mesh_io.h"
 #include "nurbsfront/isosurface/marching_cubes.h"
 #include "nurbsfront/isosurface/volume_io.h"
 #include "nurbsfront/pipeline/remesh.h"
 #include "nurbsfront/quality/json.h"
+#include "nurbsfront/quality/report.h"
 
 extern char** environ;
 
@@ -57,19 +62,41 @@ namespace {
 struct OneArgs {
   std::string input;
   bool volume = false;
+  bool pslg = false;  // a 2D domain for mesh_pslg()
   std::optional<double> iso;
   unsigned threads = 1;
   std::string output;  // optional: write the remeshed mesh
   bool self_test_crash = false;  // abort, to test the parent's crash detection
 };
 
+const char* kind_of(bool volume, bool pslg) { return volume ? "volume" : pslg ? "pslg" : "mesh"; }
+
+//! The figures of a 2D run: the planar mesh's report and the front's status.
+struct PlanarRun {
+  std::size_t n_segments = 0;
+  std::size_t n_points = 0;
+  bool enclosed_convex_hull = false;
+  MeshReport report;
+};
+
 std::string outcome_json(const OneArgs& a, const std::string& outcome, const std::string& message, double iso,
-                         const TriMesh* input, const RemeshReport* report, double seconds) {
+                         const TriMesh* input, const std::string& repairs, const RemeshReport* report,
+                         const PlanarRun* planar, double seconds) {
   json::Object o;
-  o.text("input", a.input).text("kind", a.volume ? "volume" : "mesh");
+  o.text("input", a.input).text("kind", kind_of(a.volume, a.pslg));
   o.add("iso", a.volume ? json::number(iso) : "null");
   o.text("outcome", outcome).text("message", message).num("seconds", seconds);
   if (input != nullptr) o.count("input_vertices", input->n_vertices()).count("input_faces", input->n_faces());
+  if (!repairs.empty()) o.text("input_repairs", repairs);
+  if (planar != nullptr) {
+    const MeshReport& out = planar->report;
+    o.count("input_points", planar->n_points).count("input_segments", planar->n_segments);
+    o.flag("enclosed_convex_hull", planar->enclosed_convex_hull);
+    o.count("output_vertices", out.topology.n_vertices).count("output_faces", out.topology.n_faces);
+    o.num("alpha_mean", out.quality.alpha_mean).num("alpha_min", out.quality.alpha_min);
+    o.num("min_angle_deg", out.quality.min_angle_deg).num("max_angle_deg", out.quality.max_angle_deg);
+    o.num("obtuse_fraction", out.quality.obtuse_fraction);
+  }
   if (report != nullptr) {
     const MeshReport& out = report->output;
     o.count("output_vertices", out.topology.n_vertices).count("output_faces", out.topology.n_faces);
@@ -104,7 +131,15 @@ std::string fixed(double x, int digits) {
 
 // The figures of the Markdown table row: input faces, output faces, alpha mean, min angle,
 // obtuse %, self-intersecting pairs, Hausdorff / input mean edge.
-std::string markdown_cells(const TriMesh* input, const RemeshReport* report) {
+std::string markdown_cells(const TriMesh* input, const RemeshReport* report, const PlanarRun* planar) {
+  if (planar != nullptr) {
+    const MeshReport& out = planar->report;
+    return std::to_string(planar->n_segments) + " segments | " + std::to_string(out.topology.n_faces) + " | " +
+           fixed(out.quality.alpha_mean, 3) + " | " + fixed(out.quality.min_angle_deg, 1) + " | " +
+           fixed(100.0 * out.quality.obtuse_fraction, 2) + " | " +
+           (out.topology.n_self_intersecting_pairs ? std::to_string(*out.topology.n_self_intersecting_pairs) : "-") +
+           " | -";
+  }
   std::string row = (input != nullptr ? std::to_string(input->n_faces()) : "-") + " | ";
   if (report == nullptr) return row + "- | - | - | - | - | -";
   const MeshReport& out = report->output;
@@ -115,12 +150,58 @@ std::string markdown_cells(const TriMesh* input, const RemeshReport* report) {
   return row;
 }
 
+// A 2D domain as `mesh2d` meshes it (default size: bounding-box diagonal / 40). CGAL's
+// .edg files are constraint sets whose domain is the convex hull (as CGAL::Mesh_2 meshes
+// them), so their hull is enclosed; .poly and .node follow Triangle's -p.
+PlanarRun run_planar(const OneArgs& a, std::string& outcome, std::string& message) {
+  PlanarRun run;
+  const Pslg pslg = read_pslg(a.input);
+  run.n_points = pslg.points.size();
+  run.n_segments = pslg.segments.size();
+  FrontOptions options;
+  options.enclose_convex_hull = run.enclosed_convex_hull = lower_extension(a.input) == ".edg";
+  Mesh2d mesh;
+  try {
+    mesh = mesh_pslg(pslg, options);
+  } catch (const InvalidInput& e) {
+    std::string what = e.what();
+    if (what.find("domain is empty") != std::string::npos) {
+      what += "; the segments enclose no region: `nurbsfront mesh2d --convex-hull` meshes the convex hull (Triangle -c)";
+    }
+    throw InvalidInput(what);
+  }
+  if (mesh.report.status != FrontStatus::Ok) {
+    outcome = "patch_failed";
+    message = "mesh2d: " + mesh.report.message;
+  }
+  TriangleSoup soup;
+  for (const auto& p : mesh.points) soup.points.emplace_back(p.x(), p.y(), 0.0);
+  for (const auto& t : mesh.triangles) {
+    soup.triangles.push_back({static_cast<std::uint32_t>(t[0]), static_cast<std::uint32_t>(t[1]), static_cast<std::uint32_t>(t[2])});
+  }
+  ReportOptions report_options;
+  report_options.n_threads = a.threads;
+  run.report = mesh_report(soup, report_options);
+  const auto& n_self = run.report.topology.n_self_intersecting_pairs;
+  // Regions of a domain may touch at a point (non-manifold vertices are legitimate in 2D);
+  // edges with more than two triangles or overlapping triangles are not.
+  const std::size_t n_bad_edges = run.report.topology.n_nonmanifold_edges;
+  if (outcome == "ok" && (n_bad_edges > 0 || (n_self && *n_self > 0))) {
+    outcome = "broken_output";
+    message = "mesh2d: the planar mesh has " + std::to_string(n_bad_edges) + " edges with more than two triangles and " +
+              std::to_string(n_self.value_or(0)) + " overlapping triangle pairs";
+  }
+  return run;
+}
+
 void run_one(const OneArgs& a) {
   if (a.self_test_crash) std::abort();
   Stopwatch watch;
   double iso = 0.0;
   std::optional<TriMesh> input;
+  std::string repairs;
   std::optional<RemeshResult> result;
+  std::optional<PlanarRun> planar;
   std::string outcome = "ok";
   std::string message;
   try {
@@ -135,26 +216,43 @@ void run_one(const OneArgs& a) {
         iso = a.iso ? *a.iso : 0.5 * (double(range[0]) + double(range[1]));
         options.iso = iso;
         soup = marching_cubes(grid, options);
+      } else if (a.pslg) {
+        planar = run_planar(a, outcome, message);
       } else {
         soup = read_soup(a.input);
       }
-      input = to_trimesh(clean(soup).soup);
+      if (!a.pslg) {
+        PreparedMesh prepared = prepare_mesh(soup);
+        repairs = prepared.report.summary();
+        input = std::move(prepared.mesh);
+      }
     } catch (const IoError& e) {
       throw InvalidInput(std::string("cannot read the input: ") + e.what());
     } catch (const TopologyError& e) {
       throw InvalidInput(std::string("the input is not an oriented 2-manifold: ") + e.what());
     }
-    RemeshOptions options;
-    options.set_threads(a.threads);
-    result = remesh(*input, options);
-    const RemeshReport& r = result->report;
-    if (r.n_failed_patches > 0) {
-      outcome = "patch_failed";
-    } else if (!r.ok()) {
-      outcome = "broken_output";
+    if (!a.pslg) {
+      RemeshOptions options;
+      options.set_threads(a.threads);
+      result = remesh(*input, options);
+      const RemeshReport& r = result->report;
+      if (r.n_failed_patches > 0) {
+        outcome = "patch_failed";
+      } else if (!r.ok()) {
+        outcome = "broken_output";
+      }
+      if (!r.ok()) message = r.errors.front();
+      // Self-intersections the input already has are the input's: a named invalid input.
+      const auto& n_self = r.output.topology.n_self_intersecting_pairs;
+      if (n_self && *n_self > 0) {
+        const std::string note = input_self_intersections(*input, a.threads);
+        if (!note.empty()) {
+          outcome = "invalid_input";
+          message = note + " (remeshed anyway: " + (r.errors.empty() ? "" : r.errors.front()) + ")";
+        }
+      }
+      if (!a.output.empty()) write_mesh(result->mesh, a.output);
     }
-    if (!r.ok()) message = r.errors.front();
-    if (!a.output.empty()) write_mesh(result->mesh, a.output);
   } catch (const InvalidInput& e) {
     outcome = "invalid_input";
     message = e.what();
@@ -162,10 +260,12 @@ void run_one(const OneArgs& a) {
     outcome = "error";
     message = e.what();
   }
-  std::cout << outcome_json(a, outcome, message, iso, input ? &*input : nullptr, result ? &result->report : nullptr,
-                            watch.seconds())
+  const PlanarRun* planar_run = planar ? &*planar : nullptr;
+  std::cout << outcome_json(a, outcome, message, iso, input ? &*input : nullptr, repairs,
+                            result ? &result->report : nullptr, planar_run, watch.seconds())
             << '\n'
-            << "MD\t" << markdown_cells(input ? &*input : nullptr, result ? &result->report : nullptr) << std::endl;
+            << "MD\t" << markdown_cells(input ? &*input : nullptr, result ? &result->report : nullptr, planar_run)
+            << std::endl;
 }
 
 // ---------------------------------------------------------------- parent: the corpus
@@ -184,6 +284,7 @@ struct CorpusArgs {
 struct CorpusItem {
   fs::path path;
   bool volume = false;
+  bool pslg = false;
   std::optional<double> iso;
 };
 
@@ -225,14 +326,34 @@ std::vector<CorpusItem> collect(const std::vector<std::string>& directories) {
       const bool volume_ext = ends_with(s, ".mha") || ends_with(s, ".mhd") || ends_with(s, ".inr") || ends_with(s, ".inr.gz");
       const bool vtk = ends_with(s, ".vtk");
       const bool mesh_ext = ends_with(s, ".off") || ends_with(s, ".obj") || ends_with(s, ".ply") || ends_with(s, ".stl");
+      const bool pslg_ext = ends_with(s, ".poly") || ends_with(s, ".node") || ends_with(s, ".edg");
       if (volume_ext || (vtk && is_vtk_volume(p))) {
-        for (const auto& iso : iso_values(p)) items.push_back({p, true, iso});
+        for (const auto& iso : iso_values(p)) items.push_back({p, true, false, iso});
       } else if (mesh_ext || vtk) {
-        items.push_back({p, false, std::nullopt});
+        items.push_back({p, false, false, std::nullopt});
+      } else if (pslg_ext) {
+        items.push_back({p, false, true, std::nullopt});
       }
     }
   }
   return items;
+}
+
+// The value of a text field of a JSON line written by json::Object, unescaped enough for
+// a table cell ('|' and newlines replaced), cut to `max_size` characters; "" when absent.
+std::string table_text(const std::string& line, const std::string& key, std::size_t max_size) {
+  std::string text;
+  const std::string pattern = "\"" + key + "\": \"";
+  const auto at = line.find(pattern);
+  if (at == std::string::npos) return text;
+  for (std::size_t k = at + pattern.size(); k < line.size() && line[k] != '"'; ++k) {
+    if (line[k] == '\\' && k + 1 < line.size()) ++k;
+    text += line[k];
+  }
+  std::replace(text.begin(), text.end(), '|', '/');
+  std::replace(text.begin(), text.end(), '\n', ' ');
+  if (text.size() > max_size) text = text.substr(0, max_size - 3) + "...";
+  return text;
 }
 
 std::string read_text(const fs::path& path) {
@@ -326,7 +447,7 @@ void run_corpus(const CorpusArgs& a) {
   if (a.timeout <= 0.0) throw InvalidInput("corpus: --timeout must be positive");
   if (a.threads == 0) throw InvalidInput("corpus: --threads must be at least 1");
   const std::vector<CorpusItem> items = collect(a.directories);
-  if (items.empty()) throw InvalidInput("corpus: no mesh or volume files under the given directories");
+  if (items.empty()) throw InvalidInput("corpus: no mesh, volume or 2D domain files under the given directories");
   const std::string exe = self_executable();
   const fs::path scratch = fs::temp_directory_path() / ("nurbsfront-corpus-" + std::to_string(getpid()));
   fs::create_directories(scratch);
@@ -339,11 +460,13 @@ void run_corpus(const CorpusArgs& a) {
   std::map<std::string, int> counts;
   std::ostringstream md;
   md << "| input | outcome | input faces | output faces | alpha mean | min angle | obtuse % | self-int. | "
-        "Hausdorff / input mean edge | wall s | peak RSS MB | first error |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+        "Hausdorff / input mean edge | wall s | peak RSS MB | input repairs | first error |\n"
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
   for (std::size_t i = 0; i < items.size(); ++i) {
     const CorpusItem& item = items[i];
     std::vector<std::string> argv{exe, "corpus-one", item.path.string(), "--threads", std::to_string(a.threads)};
     std::string label = item.path.filename().string();
+    if (item.pslg) argv.push_back("--pslg");
     if (item.volume) {
       argv.push_back("--volume");
       if (item.iso) {
@@ -353,7 +476,7 @@ void run_corpus(const CorpusArgs& a) {
       }
     }
     if (a.self_test_crash) argv.push_back("--self-test-crash");
-    if (!a.out_dir.empty()) {
+    if (!a.out_dir.empty() && !item.pslg) {
       argv.push_back("-o");
       argv.push_back((fs::path(a.out_dir) / (label + ".ply")).string());
     }
@@ -364,7 +487,7 @@ void run_corpus(const CorpusArgs& a) {
     if (!child.outcome_override.empty()) {
       outcome = child.outcome_override;
       json::Object o;
-      o.text("input", item.path.string()).text("kind", item.volume ? "volume" : "mesh");
+      o.text("input", item.path.string()).text("kind", kind_of(item.volume, item.pslg));
       o.add("iso", item.iso ? json::number(*item.iso) : "null");
       o.text("outcome", outcome).text("message", child.message);
       line = o.str();
@@ -381,22 +504,11 @@ void run_corpus(const CorpusArgs& a) {
             json::number(double(child.max_rss_kb) / 1024.0) + "}";
     ++counts[outcome];
     {
-      std::string first_error = child.outcome_override.empty() ? "" : child.message;
-      if (first_error.empty()) {  // the child's "message" value, unescaped enough for a table
-        const auto key = line.find("\"message\": \"");
-        if (key != std::string::npos) {
-          for (std::size_t k = key + 12; k < line.size() && line[k] != '"'; ++k) {
-            if (line[k] == '\\' && k + 1 < line.size()) ++k;
-            first_error += line[k];
-          }
-        }
-      }
-      std::replace(first_error.begin(), first_error.end(), '|', '/');
-      std::replace(first_error.begin(), first_error.end(), '\n', ' ');
-      if (first_error.size() > 120) first_error = first_error.substr(0, 117) + "...";
+      const std::string first_error = table_text(line, "message", 120);
+      const std::string repairs = table_text(line, "input_repairs", 80);
       md << "| " << label << " | " << outcome << " | " << (child.cells.empty() ? "- | - | - | - | - | - | -" : child.cells)
          << " | " << fixed(child.wall_seconds, 1) << " | " << fixed(double(child.max_rss_kb) / 1024.0, 0) << " | "
-         << first_error << " |\n";
+         << (repairs == "nothing to repair" ? "" : repairs) << " | " << first_error << " |\n";
     }
     std::cout << line << std::endl;
     if (output.is_open()) output << line << '\n' << std::flush;
@@ -421,10 +533,12 @@ void run_corpus(const CorpusArgs& a) {
 void add_corpus_command(CLI::App& app) {
   auto args = std::make_shared<CorpusArgs>();
   auto* cmd = app.add_subcommand(
-      "corpus", "Remesh every mesh and volume under DIR... in child processes under a time limit; one JSON line each");
+      "corpus",
+      "Remesh every mesh and volume (and mesh every 2D domain) under DIR... in child processes under a time limit; "
+      "one JSON line each");
   cmd->add_option("directories", args->directories,
                   "Directories searched recursively: meshes (.off .obj .ply .stl .vtk POLYDATA) and volumes "
-                  "(.mha .mhd .inr .inr.gz .vtk STRUCTURED_POINTS)")
+                  "(.mha .mhd .inr .inr.gz .vtk STRUCTURED_POINTS), 2D domains (.poly .node .edg)")
       ->required();
   cmd->add_option("--timeout", args->timeout, "Seconds per input before the child is killed")->capture_default_str();
   cmd->add_option("--threads", args->threads, "Threads of each run")->capture_default_str();
@@ -441,6 +555,7 @@ void add_corpus_command(CLI::App& app) {
   child->group("");  // hidden from --help: an implementation detail of `corpus`
   child->add_option("input", one->input, "Mesh or volume file")->required();
   child->add_flag("--volume", one->volume, "The input is a volume: marching cubes first (inside above iso, padded)");
+  child->add_flag("--pslg", one->pslg, "The input is a 2D domain: advancing front in the plane");
   child->add_option("--iso", one->iso, "Iso-value of the volume (default: middle of the value range)");
   child->add_option("--threads", one->threads, "Threads")->capture_default_str();
   child->add_option("-o,--output", one->output, "Write the remeshed surface");

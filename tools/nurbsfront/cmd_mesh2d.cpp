@@ -74,7 +74,14 @@ void add_mesh2d_command(CLI::App& app) {
     options.smoothing_passes = args->smoothing_passes;
     options.swap_edges = !args->no_swaps;
     options.progress = terminal_progress(args->quiet);
-    const Mesh2d mesh = mesh_pslg(pslg, options);
+    Mesh2d mesh;
+    try {
+      mesh = mesh_pslg(pslg, options);
+    } catch (const InvalidInput& e) {
+      const std::string what = e.what();
+      if (args->convex_hull || what.find("domain is empty") == std::string::npos) throw;
+      throw InvalidInput(what + "; the segments enclose no region: --convex-hull meshes the convex hull (Triangle -c)");
+    }
     if (mesh.report.status != FrontStatus::Ok) std::cerr << "nurbsfront: warning: " << mesh.report.message << "\n";
     const TriangleSoup soup = lift(mesh);
     if (!args->output.empty()) {

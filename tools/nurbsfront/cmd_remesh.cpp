@@ -47,7 +47,7 @@ struct RemeshArgs {
 
 // Loads IN or samples the scene. An occupancy scene switches the band fit on with its
 // grid (CellGrid) unless --no-cell-grid is given.
-TriMesh load_input(const RemeshArgs& args, RemeshOptions& remesh_options) {
+PreparedMesh load_input(const RemeshArgs& args, RemeshOptions& remesh_options) {
   const ProgressCallback& progress = remesh_options.progress;
   if (args.input.empty() == args.scene.empty()) {
     throw InvalidInput("remesh: give either an input mesh IN or --scene NAME (exactly one)");
@@ -64,8 +64,7 @@ TriMesh load_input(const RemeshArgs& args, RemeshOptions& remesh_options) {
     if (args.occupancy) throw InvalidInput("remesh: --occupancy applies to --scene only");
     soup = read_soup(args.input);
   }
-  const CleanResult cleaned = clean(soup);
-  return to_trimesh(cleaned.soup);
+  return prepare_mesh(soup);
 }
 
 void run_remesh(RemeshArgs& args) {
@@ -96,7 +95,8 @@ void run_remesh(RemeshArgs& args) {
   if (!args.vtk.empty()) (void)mesh_format_from_path(args.vtk);
 
   Stopwatch watch;
-  const TriMesh input = load_input(args, options);
+  const PreparedMesh prepared = load_input(args, options);
+  const TriMesh& input = prepared.mesh;
   options.validate();
   const double seconds_input = watch.seconds();
   const RemeshResult result = remesh(input, options);
@@ -115,9 +115,15 @@ void run_remesh(RemeshArgs& args) {
     if (!file) throw IoError("remesh: cannot write the report " + args.report);
   }
   const double seconds_output = watch.seconds();
-  std::cout << to_summary(result.report) << "input " << seconds_input << " s, output " << seconds_output << " s\n"
+  std::cout << "input repairs: " << prepared.report.summary() << '\n'
+            << to_summary(result.report) << "input " << seconds_input << " s, output " << seconds_output << " s\n"
             << "wrote " << args.output << (args.vtk.empty() ? "" : ", " + args.vtk)
             << (args.report.empty() ? "" : ", " + args.report) << '\n';
+  const auto& n_self = result.report.output.topology.n_self_intersecting_pairs;
+  if (n_self && *n_self > 0) {
+    const std::string note = input_self_intersections(input, options.stitch.n_threads);
+    if (!note.empty()) std::cout << "note: " << note << '\n';
+  }
   if (!result.report.ok()) {
     throw std::runtime_error("remesh: the report has " + std::to_string(result.report.errors.size()) +
                              " errors (listed above); the mesh was written for inspection");
@@ -130,7 +136,8 @@ void add_remesh_command(CLI::App& app) {
   auto args = std::make_shared<RemeshArgs>();
   auto* cmd = app.add_subcommand("remesh", "Remesh a surface: slope-bounded patches, NURBS fits, advancing front, stitch");
   cmd->add_option("files", args->files,
-                  "IN OUT: input mesh (.obj .ply .stl .off .vtk; welded and cleaned first) and output mesh "
+                  "IN OUT: input mesh (.obj .ply .stl .off .vtk; welded, cleaned and made manifold first, see "
+                  "`convert --repair`) and output mesh "
                   "(.ply .obj .stl .off .vtk .vtu); only OUT with --scene")
       ->required()
       ->expected(1, 2);

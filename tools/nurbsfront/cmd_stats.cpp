@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // nurbsfront stats MESH [--json] [--ref REF] [--vtk OUT.vtk] [--no-self-intersections]:
 // topology, quality and (with --ref) distance report of a mesh file, read raw (no
-// cleaning) so its defects are reported, not repaired.
+// cleaning) so its defects are reported, not repaired; with --clean, of the surface as
+// `remesh` reads it (prepare_mesh), after listing the repairs.
 #include <iostream>
 #include <memory>
 #include <string>
@@ -20,6 +21,7 @@ struct StatsArgs {
   std::string vtk;
   bool json = false;
   bool no_self_intersections = false;
+  bool clean = false;
   bool quiet = false;
   unsigned threads = ReportOptions{}.n_threads;
   double sample_spacing_relative = DistanceOptions{}.sample_spacing_relative;
@@ -33,6 +35,8 @@ void add_stats_command(CLI::App& app) {
   cmd->add_flag("--json", args->json, "Print the report as one JSON object");
   cmd->add_option("--ref", args->reference, "Reference mesh: adds Hausdorff/mean distances and volume change");
   cmd->add_option("--vtk", args->vtk, "Write the mesh with per-face alpha and min_angle_deg fields (.vtk/.vtu)");
+  cmd->add_flag("--clean", args->clean,
+                "Report on the surface as remesh reads it: welded, cleaned, made manifold (the repairs are listed)");
   cmd->add_flag("--no-self-intersections", args->no_self_intersections, "Skip the exact self-intersection check");
   cmd->add_option("--threads", args->threads, "Worker threads")->capture_default_str();
   cmd->add_option("--sample-spacing", args->sample_spacing_relative,
@@ -47,7 +51,13 @@ void add_stats_command(CLI::App& app) {
     options.distance.sample_spacing_relative = args->sample_spacing_relative;
     options.progress = terminal_progress(args->quiet);
     options.validate();
-    const TriangleSoup soup = read_soup(args->input);
+    TriangleSoup soup = read_soup(args->input);
+    std::string repairs;
+    if (args->clean) {
+      const PreparedMesh prepared = prepare_mesh(soup);
+      repairs = prepared.report.summary();
+      soup = to_soup(prepared.mesh);
+    }
     MeshReport report;
     if (args->reference.empty()) {
       report = mesh_report(soup, options);
@@ -64,7 +74,9 @@ void add_stats_command(CLI::App& app) {
     if (args->json) {
       std::cout << to_json(report) << '\n';
     } else {
-      std::cout << args->input << '\n' << to_text(report);
+      std::cout << args->input << '\n';
+      if (args->clean) std::cout << "input repairs: " << repairs << '\n';
+      std::cout << to_text(report);
     }
   });
 }
