@@ -849,7 +849,10 @@ class Optimiser {
   // and the star's smallest angle strictly grows. Returns the number of points moved.
   // Segment split points (slide[v] = the input segment's endpoints, {-1, -1} elsewhere) move
   // along their segment only.
-  std::size_t improve_min_angle(int first_free, const std::vector<std::array<int, 2>>& slide) {
+  // With keep_good, a move must also keep every star triangle that has no angle below
+  // kMinAngleTargetDeg so (after the refinement, whose excused triangles would otherwise pull
+  // good neighbours below the target).
+  std::size_t improve_min_angle(int first_free, const std::vector<std::array<int, 2>>& slide, bool keep_good = false) {
     const double target = std::cos(kMinAngleTargetDeg * std::numbers::pi / 180.0);
     std::vector<int> todo;
     for (const auto& t : T_) {
@@ -867,13 +870,19 @@ class Optimiser {
       const int b0 = inc.start[vi], b1 = inc.start[vi + 1];
       // The star's quality: the largest cosine of its angles (smaller is better), or
       // +inf if a triangle is not positively oriented.
+      int n_good = -1;  // good triangles of the star at the start (keep_good)
       auto star = [&]() {
         double worst = -1.0;
+        int good = 0;
         for (int k = b0; k < b1; ++k) {
           const auto& t = T_[static_cast<std::size_t>(inc.tri[static_cast<std::size_t>(k)])];
           if (orient2d(pt(t[0]), pt(t[1]), pt(t[2])) <= 0) return std::numeric_limits<double>::infinity();
-          worst = std::max(worst, max_cos(t));
+          const double mc = max_cos(t);
+          worst = std::max(worst, mc);
+          good += mc <= target;
         }
+        if (keep_good && good < n_good) return std::numeric_limits<double>::infinity();
+        if (n_good < 0) n_good = good;
         return worst;
       };
       double best = star();
@@ -980,7 +989,7 @@ class Optimiser {
       const int s = encroached_piece(loc, c, rc);
       if (s == -2) continue;  // encroaches a piece in a gap too narrow to resolve: the triangle stays
       if (s >= 0) {
-        if (!split_piece(s, rc, touched)) continue;  // cannot split: the triangle stays
+        if (!split_piece(s, rc, touched)) continue;
         queue.push(item);                           // retried after the split
       } else {
         P_.push_back(c);
@@ -1636,7 +1645,7 @@ Mesh2d mesh_pslg(const Pslg& pslg, const FrontOptions& options) {
     mesh.report.n_refinement_points = opt.refine(rc);
     if (mesh.report.n_refinement_points > 0 && options.smoothing_passes > 0)
       for (int round = 0; round < kRelocateRounds; ++round) {
-        if (opt.improve_min_angle(first_free, slide) == 0) break;
+        if (opt.improve_min_angle(first_free, slide, true) == 0) break;
         mesh.report.n_swaps += opt.delaunay_swaps();
       }
   }
