@@ -26,6 +26,10 @@
 //!     triangles with an angle below 30 deg move by a compass search that maximises the
 //!     smallest angle of their star (a move is kept only if every triangle stays valid),
 //!     then swaps again.
+//!  8. Min-angle refinement (without a metric, with split_segments): Delaunay refinement
+//!     (Ruppert; Shewchuk) of the triangles still below 30 deg: circumcentres inserted,
+//!     encroached segment pieces split (concentric shells at small input angles), triangles
+//!     at input angles below 60 deg excused, gaps narrower than h / 100 left; capped.
 //!
 //! Output: counter-clockwise triangles, every input segment a chain of mesh edges, every
 //! input point kept at its input index.
