@@ -8,6 +8,7 @@
 #include <functional>
 #include <limits>
 #include <numbers>
+#include <queue>
 #include <unordered_map>
 #include <unordered_set>
 
@@ -39,6 +40,11 @@ constexpr double kMinAngleTargetDeg = 30.0; // relocation treats new points of t
 constexpr double kRelocateFirstStep = 0.1;  // first compass step, times the shortest star edge
 constexpr int kRelocateIterations = 24;     // compass search iterations per point
 constexpr int kRelocateRounds = 2;          // relocation + swaps rounds
+// Delaunay refinement (Optimiser::refine).
+constexpr std::size_t kMaxCavity = 4096;          // triangles examined for encroachment per circumcentre
+constexpr double kRefineMinLengthRelative = 1e-9;  // no piece shorter than twice this times the bbox diagonal is split
+constexpr double kRefineMinGapFraction = 0.01;     // gaps narrower than this times h are not resolved
+constexpr double kRefineMaxPointsFactor = 2.0;     // at most this times the triangles (+1000) new points
 constexpr double kAutoSizeDivisor = 40.0;  // automatic uniform size: bbox diagonal / this
 constexpr int kSizingGridCells = 128;      // background grid of callback sizing fields, per side
 constexpr int kSegmentSamples = 16;        // sizing samples per segment when splitting it
@@ -683,13 +689,51 @@ class AdvancingFront {
   std::vector<std::pair<double, int>> near_;
 };
 
+// What the Delaunay refinement (Optimiser::refine) reads and updates besides the mesh.
+struct RefineContext {
+  std::unordered_map<std::uint64_t, int>* pieces = nullptr;       // constrained piece (ukey) -> domain segment
+  std::vector<std::vector<int>>* chains = nullptr;                // per domain segment, its nodes in order
+  std::vector<std::array<int, 2>>* slide = nullptr;               // per point: its segment's endpoints, or {-1, -1}
+  std::unordered_map<std::uint64_t, int>* side_marker = nullptr;  // region marker of each directed piece
+  const std::vector<std::array<int, 2>>* segments = nullptr;      // the domain segments
+  std::vector<bool> acute;   // per input point: two consecutive segments there make < 60 deg (or a dangling end)
+  int n_input = 0;           // input points precede every other point
+  double min_length = 0;     // pieces shorter than twice this are not split
+  const Sizing* size = nullptr;  // the sizing field h
+  double min_gap_fraction = 0;   // a vertex closer than this times h to a piece does not encroach it
+  std::size_t max_points = 0;  // cap on the points the refinement inserts
+};
+
+// Per point: whether two consecutive segments at it make an angle below 60 deg, or a segment
+// ends there without another (a dangling end).
+std::vector<bool> acute_vertices(const std::vector<Vec>& pts, const std::vector<std::array<int, 2>>& segments) {
+  std::vector<std::vector<double>> dirs(pts.size());
+  for (const auto& sg : segments)
+    for (int e = 0; e < 2; ++e) {
+      const Vec d = pts[static_cast<std::size_t>(sg[static_cast<std::size_t>(1 - e)])] - pts[static_cast<std::size_t>(sg[static_cast<std::size_t>(e)])];
+      dirs[static_cast<std::size_t>(sg[static_cast<std::size_t>(e)])].push_back(std::atan2(d.y(), d.x()));
+    }
+  std::vector<bool> acute(pts.size(), false);
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    auto& d = dirs[i];
+    if (d.size() == 1) acute[i] = true;
+    if (d.size() < 2) continue;
+    std::sort(d.begin(), d.end());
+    for (std::size_t j = 0; j < d.size(); ++j) {
+      const double gap = (j + 1 < d.size() ? d[j + 1] : d[0] + 2.0 * std::numbers::pi) - d[j];
+      if (gap < std::numbers::pi / 3.0) acute[i] = true;
+    }
+  }
+  return acute;
+}
+
 // Triangles with adjacency, for swaps and smoothing. With a metric, every quality measure
 // (swap criterion, smoothing acceptance, angles of the relocation) is evaluated in the
 // metric: per triangle, the mean of its vertices' tensors (cached per vertex, refreshed when
 // a vertex moves).
 class Optimiser {
  public:
-  Optimiser(std::vector<Vec>& pts, std::vector<std::array<int, 3>>& tris, const std::unordered_set<std::uint64_t>& constraints,
+  Optimiser(std::vector<Vec>& pts, std::vector<std::array<int, 3>>& tris, const std::unordered_map<std::uint64_t, int>& constraints,
             int first_free, const Metric* metric)
       : P_(pts), T_(tris), metric_(metric) {
     if (metric_) {
@@ -805,7 +849,10 @@ class Optimiser {
   // and the star's smallest angle strictly grows. Returns the number of points moved.
   // Segment split points (slide[v] = the input segment's endpoints, {-1, -1} elsewhere) move
   // along their segment only.
-  std::size_t improve_min_angle(int first_free, const std::vector<std::array<int, 2>>& slide) {
+  // With keep_good, a move must also keep every star triangle that has no angle below
+  // kMinAngleTargetDeg so (after the refinement, whose excused triangles would otherwise pull
+  // good neighbours below the target).
+  std::size_t improve_min_angle(int first_free, const std::vector<std::array<int, 2>>& slide, bool keep_good = false) {
     const double target = std::cos(kMinAngleTargetDeg * std::numbers::pi / 180.0);
     std::vector<int> todo;
     for (const auto& t : T_) {
@@ -823,13 +870,19 @@ class Optimiser {
       const int b0 = inc.start[vi], b1 = inc.start[vi + 1];
       // The star's quality: the largest cosine of its angles (smaller is better), or
       // +inf if a triangle is not positively oriented.
+      int n_good = -1;  // good triangles of the star at the start (keep_good)
       auto star = [&]() {
         double worst = -1.0;
+        int good = 0;
         for (int k = b0; k < b1; ++k) {
           const auto& t = T_[static_cast<std::size_t>(inc.tri[static_cast<std::size_t>(k)])];
           if (orient2d(pt(t[0]), pt(t[1]), pt(t[2])) <= 0) return std::numeric_limits<double>::infinity();
-          worst = std::max(worst, max_cos(t));
+          const double mc = max_cos(t);
+          worst = std::max(worst, mc);
+          good += mc <= target;
         }
+        if (keep_good && good < n_good) return std::numeric_limits<double>::infinity();
+        if (n_good < 0) n_good = good;
         return worst;
       };
       double best = star();
@@ -839,7 +892,7 @@ class Optimiser {
           if (x != vtx) step = std::min(step, (pt(x) - P_[vi]).norm());
       step *= kRelocateFirstStep;
       const Vec start_pos = P_[vi];
-      const bool on_segment = vtx < first_free;
+      const bool on_segment = slide[vi][0] >= 0;
       Vec sa = Vec::Zero(), sd = Vec::Zero();
       double t_cur = 0.0, seg_len = 1.0;
       if (on_segment) {
@@ -878,6 +931,81 @@ class Optimiser {
     return moved;
   }
 
+  // Delaunay refinement of the triangles with an angle below kMinAngleTargetDeg (Ruppert
+  // 1995; Shewchuk 2002, as Triangle's -q): the mesh is made constrained Delaunay by swaps,
+  // the constrained pieces encroached by a vertex (in their diametral circle) are split, then,
+  // worst bad triangle first, its circumcentre is inserted (Lawson: split the triangle or
+  // edge that contains it, swap until Delaunay again) unless it encroaches a constrained
+  // piece: then that piece is split instead, at its midpoint, or on a concentric shell (a
+  // power of 2 from the apex) when one end is an input vertex with a small angle; new points
+  // that encroach pieces make them split too. Triangles are excused (never split) when their
+  // smallest angle is at an input vertex with an input angle below 60 deg, or when their
+  // shortest edge joins two segments meeting at such an angle (Shewchuk's rule: the narrow
+  // wedge near the apex). A vertex closer to a piece than kRefineMinGapFraction h does not
+  // encroach it: gaps that narrow are left as they are (resolving them takes points all along
+  // the gap at its width). Every insertion or split keeps every triangle exactly
+  // counter-clockwise (checked; a split that would not is skipped) and the inserted points
+  // are capped, so the loop ends. Returns the number of points inserted. A mesh without bad
+  // triangles costs one scan.
+  std::size_t refine(RefineContext& rc) {
+    const double c30 = std::cos(kMinAngleTargetDeg * std::numbers::pi / 180.0);
+    auto is_bad = [&](int t) {
+      const auto& tr = T_[static_cast<std::size_t>(t)];
+      return has_small_angle(tr, c30 * c30) && !excused(tr, rc);
+    };
+    bool any = false;
+    for (std::size_t t = 0; t < T_.size() && !any; ++t) any = is_bad(static_cast<int>(t));
+    if (!any) return 0;
+    delaunay_swaps();
+    struct Item {
+      double key;  // cosine of the smallest angle: the worst triangle first
+      int t;
+      std::array<int, 3> v;
+      bool operator<(const Item& o) const { return key < o.key || (key == o.key && t > o.t); }
+    };
+    std::priority_queue<Item> queue;
+    auto push = [&](int t) {
+      if (is_bad(t)) queue.push({max_cos(T_[static_cast<std::size_t>(t)]), t, T_[static_cast<std::size_t>(t)]});
+    };
+    for (std::size_t t = 0; t < T_.size(); ++t) push(static_cast<int>(t));
+    std::size_t inserted = 0;
+    std::vector<int> touched;
+    // Encroached pieces first (Ruppert): afterwards no piece has a vertex in its diametral
+    // circle, so every circumcentre is visible from its triangle.
+    std::vector<int> all(T_.size());
+    for (std::size_t t = 0; t < all.size(); ++t) all[t] = static_cast<int>(t);
+    split_encroached(all, rc, inserted, push);
+    while (!queue.empty() && inserted < rc.max_points) {
+      const Item item = queue.top();
+      queue.pop();
+      if (T_[static_cast<std::size_t>(item.t)] != item.v) continue;  // stale: the triangle changed
+      const Vec c = circumcentre(item.v);
+      if (!c.allFinite()) continue;
+      const Located loc = locate(item.t, c);
+      // Hidden behind a piece (only when a piece could not be split), on a vertex, or lost:
+      // the triangle stays.
+      if (loc.kind != Located::Inside && loc.kind != Located::OnEdge) continue;
+      touched.clear();
+      const int s = encroached_piece(loc, c, rc);
+      if (s == -2) continue;  // encroaches a piece in a gap too narrow to resolve: the triangle stays
+      if (s >= 0) {
+        if (!split_piece(s, rc, touched)) continue;
+        queue.push(item);                           // retried after the split
+      } else {
+        P_.push_back(c);
+        rc.slide->push_back({-1, -1});
+        const int p = static_cast<int>(P_.size()) - 1;
+        if (loc.kind == Located::OnEdge) split_edge(loc.slot, p, touched);
+        else split_triangle(loc.tri, p, touched);
+        legalise(p, touched);
+      }
+      ++inserted;
+      for (int t : touched) push(t);
+      split_encroached(touched, rc, inserted, push);
+    }
+    return inserted;
+  }
+
   // Region marker per triangle by flood fill from the boundary sides.
   std::vector<int> regions(const std::unordered_map<std::uint64_t, int>& side_marker) const {
     std::vector<int> r(T_.size(), 0);
@@ -909,6 +1037,294 @@ class Optimiser {
   }
 
  private:
+  // ---- Delaunay refinement helpers (see refine()).
+  [[nodiscard]] bool excused(const std::array<int, 3>& t, const RefineContext& rc) const {
+    // The vertex with the smallest angle: the one opposite the shortest edge.
+    int i_min = 0;
+    double l_min = std::numeric_limits<double>::infinity();
+    for (int i = 0; i < 3; ++i) {
+      const double l = (pt(t[static_cast<std::size_t>((i + 1) % 3)]) - pt(t[static_cast<std::size_t>((i + 2) % 3)])).squaredNorm();
+      if (l < l_min) {
+        l_min = l;
+        i_min = i;
+      }
+    }
+    const int apex = t[static_cast<std::size_t>(i_min)];
+    if (apex < rc.n_input && rc.acute[static_cast<std::size_t>(apex)]) return true;
+    const int p = t[static_cast<std::size_t>((i_min + 1) % 3)], q = t[static_cast<std::size_t>((i_min + 2) % 3)];
+    const auto& sq = (*rc.slide)[static_cast<std::size_t>(q)];
+    return sq[0] >= 0 && in_wedge(p, sq, rc);
+  }
+
+  // Whether the split point x lies on a segment other than e = {e0, e1} that meets e at an
+  // input vertex under an angle below 60 deg (x is then in the narrow wedge of that angle).
+  [[nodiscard]] bool in_wedge(int x, const std::array<int, 2>& e, const RefineContext& rc) const {
+    const auto& sx = (*rc.slide)[static_cast<std::size_t>(x)];
+    if (sx[0] < 0 || (sx[0] == e[0] && sx[1] == e[1]) || (sx[0] == e[1] && sx[1] == e[0])) return false;
+    for (int a : sx) {
+      if (a != e[0] && a != e[1]) continue;
+      const Vec d1 = pt(sx[0] == a ? sx[1] : sx[0]) - pt(a);
+      const Vec d2 = pt(e[0] == a ? e[1] : e[0]) - pt(a);
+      if (d1.dot(d2) > 0.5 * d1.norm() * d2.norm()) return true;  // angle below 60 deg
+    }
+    return false;
+  }
+
+  // Whether the vertex x encroaches the piece of slot s: x in its diametral circle, but not
+  // closer to it than the smallest gap resolved (a gap of width g between two boundary
+  // pieces needs points all along it at spacing about g: far too many when g << h).
+  [[nodiscard]] bool encroached_by(int s, int x, const RefineContext& rc) const {
+    const int u = v(s), w = v(nxt(s));
+    if (!encroaches(pt(u), pt(w), pt(x))) return false;
+    return !too_close(pt(u), pt(w), pt(x), rc);
+  }
+
+  // Whether x is closer to the piece uw than the smallest gap the refinement resolves.
+  [[nodiscard]] static bool too_close(const Vec& u, const Vec& w, const Vec& x, const RefineContext& rc) {
+    const Vec d = w - u;
+    const double t = std::clamp((x - u).dot(d) / d.squaredNorm(), 0.0, 1.0);
+    return (u + t * d - x).norm() < rc.min_gap_fraction * (*rc.size)(0.5 * (u + w));
+  }
+  // Whether x lies in the diametral circle of the piece uw.
+  [[nodiscard]] static bool encroaches(const Vec& u, const Vec& w, const Vec& x) { return (u - x).dot(w - x) < 0.0; }
+
+  // Splits every constrained piece of the given triangles that the opposite vertex
+  // encroaches, and the pieces the splits expose, until none is left (or the cap is hit).
+  // A stacked slot is re-tested when popped: splits reassign slots, but every triangle they
+  // change is examined again.
+  template <class Push>
+  void split_encroached(const std::vector<int>& tris, RefineContext& rc, std::size_t& inserted, Push&& push) {
+    std::vector<int>& stack = seg_stack_;
+    stack.clear();
+    auto scan = [&](const std::vector<int>& ts) {
+      for (int t : ts)
+        for (int k = 0; k < 3; ++k) {
+          const int s = 3 * t + k;
+          if (C_[static_cast<std::size_t>(s)] && encroached_by(s, v(prv(s)), rc)) stack.push_back(s);
+        }
+    };
+    scan(tris);
+    std::vector<int> touched;
+    while (!stack.empty() && inserted < rc.max_points) {
+      const int s = stack.back();
+      stack.pop_back();
+      if (!C_[static_cast<std::size_t>(s)] || !encroached_by(s, v(prv(s)), rc)) continue;
+      touched.clear();
+      if (!split_piece(s, rc, touched)) continue;
+      ++inserted;
+      for (int t : touched) push(t);
+      scan(touched);
+    }
+  }
+
+  [[nodiscard]] Vec circumcentre(const std::array<int, 3>& t) const {
+    const Vec& a = pt(t[0]);
+    const Vec b = pt(t[1]) - a, c = pt(t[2]) - a;
+    const double d = 2.0 * (b.x() * c.y() - b.y() * c.x());
+    return a + Vec(c.y() * b.squaredNorm() - b.y() * c.squaredNorm(), b.x() * c.squaredNorm() - c.x() * b.squaredNorm()) / d;
+  }
+
+  struct Located {
+    enum Kind { Inside, OnEdge, OnVertex, Blocked, Lost } kind = Lost;
+    int tri = -1;   // Inside, OnEdge: the triangle
+    int slot = -1;  // OnEdge: the edge; Blocked: the constrained edge the walk cannot cross
+  };
+  // Visibility walk from triangle t towards x (exact orientations); stops at a constrained
+  // edge. The start edge rotates with the step so that the walk cannot cycle.
+  [[nodiscard]] Located locate(int t, const Vec& x) const {
+    const std::size_t max_steps = T_.size() + 16;
+    for (std::size_t step = 0; step < max_steps; ++step) {
+      int zero = -1, n_zero = 0, cross = -1;
+      for (int k = 0; k < 3; ++k) {
+        const int i = static_cast<int>((static_cast<std::size_t>(k) + step) % 3);
+        const int s = 3 * t + i;
+        const int o = orient2d(pt(v(s)), pt(v(nxt(s))), x);
+        if (o < 0) {
+          cross = s;
+          break;
+        }
+        if (o == 0) {
+          zero = s;
+          ++n_zero;
+        }
+      }
+      if (cross < 0) {
+        if (n_zero == 0) return {Located::Inside, t, -1};
+        if (n_zero == 1) return {Located::OnEdge, t, zero};
+        return {Located::OnVertex, t, -1};
+      }
+      if (C_[static_cast<std::size_t>(cross)]) return {Located::Blocked, t, cross};
+      t = N_[static_cast<std::size_t>(cross)] / 3;
+    }
+    return {};
+  }
+
+  // A constrained edge of the cavity of x (the triangles whose circumcircle contains x,
+  // reached from the located triangle without crossing a constrained edge) whose diametral
+  // circle contains x; -1 if none; -2 if x is in such a circle but closer to the piece than
+  // the smallest gap resolved. On a constrained edge, x encroaches that edge.
+  [[nodiscard]] int encroached_piece(const Located& loc, const Vec& x, const RefineContext& rc) {
+    if (loc.kind == Located::OnEdge && C_[static_cast<std::size_t>(loc.slot)]) return loc.slot;
+    cavity_.clear();
+    cavity_.push_back(loc.tri);
+    if (loc.kind == Located::OnEdge) cavity_.push_back(N_[static_cast<std::size_t>(loc.slot)] / 3);
+    for (std::size_t i = 0; i < cavity_.size() && i < kMaxCavity; ++i) {
+      const int t = cavity_[i];
+      for (int k = 0; k < 3; ++k) {
+        const int s = 3 * t + k;
+        const Vec& a = pt(v(s));
+        const Vec& b = pt(v(nxt(s)));
+        if (C_[static_cast<std::size_t>(s)]) {
+          if (encroaches(a, b, x)) return too_close(a, b, x, rc) ? -2 : s;
+          continue;
+        }
+        const int u = N_[static_cast<std::size_t>(s)] / 3;
+        if (std::find(cavity_.begin(), cavity_.end(), u) != cavity_.end()) continue;
+        const auto& tu = T_[static_cast<std::size_t>(u)];
+        if (front2d::incircle(pt(tu[0]), pt(tu[1]), pt(tu[2]), x) > 0) cavity_.push_back(u);
+      }
+    }
+    return -1;
+  }
+
+  // Appends a triangle (three slots) and returns its index.
+  int new_triangle(const std::array<int, 3>& t) {
+    T_.push_back(t);
+    N_.insert(N_.end(), 3, -1);
+    C_.insert(C_.end(), 3, false);
+    return static_cast<int>(T_.size()) - 1;
+  }
+  // Links slot s with nb (or none: -1) and sets the constraint flag of both.
+  void set_slot(int s, int nb, bool constrained) {
+    set_nb(s, nb);
+    C_[static_cast<std::size_t>(s)] = constrained;
+    if (nb >= 0) C_[static_cast<std::size_t>(nb)] = constrained;
+  }
+
+  // Splits triangle t = (a, b, c) at the interior point p into (a, b, p), (b, c, p), (c, a, p);
+  // each has p last, so slot 0 is the edge opposite p.
+  void split_triangle(int t, int p, std::vector<int>& touched) {
+    const auto [a, b, c] = T_[static_cast<std::size_t>(t)];
+    const int s0 = 3 * t;
+    const int n_ab = N_[static_cast<std::size_t>(s0)], n_bc = N_[static_cast<std::size_t>(s0 + 1)], n_ca = N_[static_cast<std::size_t>(s0 + 2)];
+    const bool c_ab = C_[static_cast<std::size_t>(s0)], c_bc = C_[static_cast<std::size_t>(s0 + 1)], c_ca = C_[static_cast<std::size_t>(s0 + 2)];
+    T_[static_cast<std::size_t>(t)] = {a, b, p};
+    const int t1 = new_triangle({b, c, p});
+    const int t2 = new_triangle({c, a, p});
+    set_slot(s0, n_ab, c_ab);
+    set_slot(3 * t1, n_bc, c_bc);
+    set_slot(3 * t2, n_ca, c_ca);
+    set_slot(s0 + 1, 3 * t1 + 2, false);
+    set_slot(3 * t1 + 1, 3 * t2 + 2, false);
+    set_slot(3 * t2 + 1, s0 + 2, false);
+    touched.insert(touched.end(), {t, t1, t2});
+  }
+
+  // Splits the edge of slot s (a -> b in t = (a, b, c), twin b -> a in (b, a, d) if any) at p,
+  // which lies on or next to it: (c, a, p), (b, c, p) and (a, d, p), (d, b, p). The halves keep
+  // the edge's constraint flag.
+  void split_edge(int s, int p, std::vector<int>& touched) {
+    const int t = s / 3, o = N_[static_cast<std::size_t>(s)];
+    const int a = v(s), b = v(nxt(s)), c = v(prv(s));
+    const bool con = C_[static_cast<std::size_t>(s)];
+    const int n_bc = N_[static_cast<std::size_t>(nxt(s))], n_ca = N_[static_cast<std::size_t>(prv(s))];
+    const bool c_bc = C_[static_cast<std::size_t>(nxt(s))], c_ca = C_[static_cast<std::size_t>(prv(s))];
+    T_[static_cast<std::size_t>(t)] = {c, a, p};
+    const int t1 = new_triangle({b, c, p});
+    const int s0 = 3 * t;
+    set_slot(s0, n_ca, c_ca);
+    set_slot(3 * t1, n_bc, c_bc);
+    set_slot(s0 + 2, 3 * t1 + 1, false);  // p -> c with c -> p
+    set_slot(s0 + 1, -1, true);           // a -> p, twin below
+    set_slot(3 * t1 + 2, -1, true);       // p -> b
+    touched.insert(touched.end(), {t, t1});
+    if (o < 0) return;
+    const int u = o / 3;
+    const int d = v(prv(o));
+    const int n_ad = N_[static_cast<std::size_t>(nxt(o))], n_db = N_[static_cast<std::size_t>(prv(o))];
+    const bool c_ad = C_[static_cast<std::size_t>(nxt(o))], c_db = C_[static_cast<std::size_t>(prv(o))];
+    T_[static_cast<std::size_t>(u)] = {a, d, p};
+    const int u1 = new_triangle({d, b, p});
+    const int u0 = 3 * u;
+    set_slot(u0, n_ad, c_ad);
+    set_slot(3 * u1, n_db, c_db);
+    set_slot(u0 + 1, 3 * u1 + 2, false);  // d -> p with p -> d
+    set_slot(u0 + 2, s0 + 1, con);        // p -> a with a -> p
+    set_slot(3 * u1 + 1, 3 * t1 + 2, con);  // b -> p with p -> b
+    C_[static_cast<std::size_t>(s0 + 1)] = con;
+    C_[static_cast<std::size_t>(3 * t1 + 2)] = con;
+    touched.insert(touched.end(), {u, u1});
+  }
+
+  // Lawson swaps after inserting p: the edges opposite p in the touched triangles (slot 0 of
+  // each, p last) are swapped while not Delaunay; each swap exposes two new edges opposite p.
+  void legalise(int p, std::vector<int>& touched) {
+    std::vector<int>& stack = legal_stack_;
+    stack.clear();
+    for (int t : touched) stack.push_back(3 * t);
+    while (!stack.empty()) {
+      const int s = stack.back();
+      stack.pop_back();
+      const int o = N_[static_cast<std::size_t>(s)];
+      if (o < 0 || C_[static_cast<std::size_t>(s)] || v(prv(s)) != p) continue;
+      const int a = v(s), b = v(nxt(s)), d = v(prv(o));
+      if (!should_swap(a, b, p, d)) continue;
+      if (orient2d(pt(a), pt(d), pt(p)) <= 0 || orient2d(pt(d), pt(b), pt(p)) <= 0) continue;
+      flip(s);  // (a, b, p), (b, a, d) -> (p, a, d), (d, b, p)
+      const int t = s / 3, u = o / 3;
+      touched.push_back(u);
+      stack.push_back(3 * t + 1);  // a -> d
+      stack.push_back(3 * u);      // d -> b
+    }
+  }
+
+  // Splits the constrained piece of slot s (midpoint, or a concentric shell around an input
+  // vertex with a small angle) and updates the segment bookkeeping. False if the piece is too
+  // short or a triangle would not stay exactly counter-clockwise.
+  bool split_piece(int s, RefineContext& rc, std::vector<int>& touched) {
+    const int u = v(s), w = v(nxt(s));
+    const auto it = rc.pieces->find(ukey(u, w));
+    if (it == rc.pieces->end()) return false;
+    const int k = it->second;
+    const Vec U = pt(u), W = pt(w);
+    const double len = (W - U).norm();
+    if (len < 2.0 * rc.min_length) return false;
+    const bool acute_u = u < rc.n_input && rc.acute[static_cast<std::size_t>(u)];
+    const bool acute_w = w < rc.n_input && rc.acute[static_cast<std::size_t>(w)];
+    double f = 0.5;
+    if (acute_u != acute_w) {  // the power of 2 nearest to len / 2, from the apex: in [0.35, 0.71] len
+      const double r = std::exp2(std::round(std::log2(0.5 * len)));
+      f = acute_u ? r / len : 1.0 - r / len;
+    }
+    const Vec m = U + f * (W - U);
+    const int o = N_[static_cast<std::size_t>(s)];
+    const Vec& Cc = pt(v(prv(s)));
+    if (orient2d(U, m, Cc) <= 0 || orient2d(m, W, Cc) <= 0) return false;
+    if (o >= 0) {
+      const Vec& D = pt(v(prv(o)));
+      if (orient2d(W, m, D) <= 0 || orient2d(m, U, D) <= 0) return false;
+    }
+    P_.push_back(m);
+    const int p = static_cast<int>(P_.size()) - 1;
+    rc.slide->push_back((*rc.segments)[static_cast<std::size_t>(k)]);
+    rc.pieces->erase(it);
+    (*rc.pieces)[ukey(u, p)] = k;
+    (*rc.pieces)[ukey(p, w)] = k;
+    auto& ch = (*rc.chains)[static_cast<std::size_t>(k)];
+    const auto pos = std::find(ch.begin(), ch.end(), u);
+    ch.insert(pos + 1 != ch.end() && *(pos + 1) == w ? pos + 1 : pos, p);
+    for (const auto& [x, y] : {std::pair{u, w}, std::pair{w, u}})
+      if (const auto sm = rc.side_marker->find(dkey(x, y)); sm != rc.side_marker->end()) {
+        const int marker = sm->second;
+        rc.side_marker->erase(sm);
+        (*rc.side_marker)[dkey(x, p)] = marker;
+        (*rc.side_marker)[dkey(p, y)] = marker;
+      }
+    split_edge(s, p, touched);
+    legalise(p, touched);
+    return true;
+  }
+
   // Vertex -> incident triangles (CSR).
   struct Incidence {
     std::vector<int> start;
@@ -1053,6 +1469,9 @@ class Optimiser {
   std::vector<Mat> Mv_;  // per vertex tensor (empty without a metric)
   std::vector<int> N_;
   std::vector<bool> C_;
+  std::vector<int> cavity_;       // refinement scratch
+  std::vector<int> legal_stack_;  // refinement scratch
+  std::vector<int> seg_stack_;    // refinement scratch
 };
 
 }  // namespace
@@ -1127,7 +1546,7 @@ Mesh2d mesh_pslg(const Pslg& pslg, const FrontOptions& options) {
     for (std::size_t i = 1; i + 1 < chains[k].size(); ++i) slide[static_cast<std::size_t>(chains[k][i])] = dom.segments[k];
 
   // Initial front, constraint edges and region markers of each side.
-  std::unordered_set<std::uint64_t> constraints;
+  std::unordered_map<std::uint64_t, int> constraints;  // constrained piece -> its domain segment
   std::unordered_map<std::uint64_t, int> side_marker;
   std::vector<std::array<int, 2>> front0;
   double area2 = 0;
@@ -1135,7 +1554,7 @@ Mesh2d mesh_pslg(const Pslg& pslg, const FrontOptions& options) {
     const auto& ch = chains[k];
     for (std::size_t i = 0; i + 1 < ch.size(); ++i) {
       const int u = ch[i], w = ch[i + 1];
-      constraints.insert(ukey(u, w));
+      constraints[ukey(u, w)] = static_cast<int>(k);
       const Vec& U = P[static_cast<std::size_t>(u)];
       const Vec& W = P[static_cast<std::size_t>(w)];
       const Vec rel = 0.5 * (U + W) - lo;
@@ -1199,6 +1618,7 @@ Mesh2d mesh_pslg(const Pslg& pslg, const FrontOptions& options) {
 
   clock.restart();
   report_progress(options.progress, "front2d: optimise", 0.0);
+  slide.resize(P.size(), {-1, -1});  // the front's points are free
   Optimiser opt(P, mesh.triangles, constraints, first_free, metric);
   if (options.swap_edges) mesh.report.n_swaps += opt.delaunay_swaps();
   if (options.smoothing_passes > 0) {
@@ -1208,6 +1628,26 @@ Mesh2d mesh_pslg(const Pslg& pslg, const FrontOptions& options) {
       if (opt.improve_min_angle(first_free, slide) == 0) break;
       if (options.swap_edges) mesh.report.n_swaps += opt.delaunay_swaps();
     }
+  }
+  if (options.refine_min_angle && options.split_segments && !metric) {
+    RefineContext rc;
+    rc.pieces = &constraints;
+    rc.chains = &chains;
+    rc.slide = &slide;
+    rc.side_marker = &side_marker;
+    rc.segments = &dom.segments;
+    rc.acute = acute_vertices(pslg.points, dom.segments);
+    rc.n_input = static_cast<int>(pslg.points.size());
+    rc.min_length = kRefineMinLengthRelative * (hi - lo).norm();
+    rc.size = &size;
+    rc.min_gap_fraction = kRefineMinGapFraction;
+    rc.max_points = static_cast<std::size_t>(kRefineMaxPointsFactor * static_cast<double>(mesh.triangles.size())) + 1000;
+    mesh.report.n_refinement_points = opt.refine(rc);
+    if (mesh.report.n_refinement_points > 0 && options.smoothing_passes > 0)
+      for (int round = 0; round < kRelocateRounds; ++round) {
+        if (opt.improve_min_angle(first_free, slide, true) == 0) break;
+        mesh.report.n_swaps += opt.delaunay_swaps();
+      }
   }
   mesh.triangle_regions = opt.regions(side_marker);
   mesh.report.seconds_optimise = clock.seconds();

@@ -26,6 +26,10 @@
 //!     triangles with an angle below 30 deg move by a compass search that maximises the
 //!     smallest angle of their star (a move is kept only if every triangle stays valid),
 //!     then swaps again.
+//!  8. Min-angle refinement (without a metric, with split_segments): Delaunay refinement
+//!     (Ruppert; Shewchuk) of the triangles still below 30 deg: circumcentres inserted,
+//!     encroached segment pieces split (concentric shells at small input angles), triangles
+//!     at input angles below 60 deg excused, gaps narrower than h / 100 left; capped.
 //!
 //! Output: counter-clockwise triangles, every input segment a chain of mesh edges, every
 //! input point kept at its input index.
@@ -61,6 +65,10 @@ struct FrontOptions {
   int smoothing_passes = 3;
   //! Edge swaps after the front (Delaunay criterion, input segments kept). Default true.
   bool swap_edges = true;
+  //! Delaunay refinement of the triangles with an angle below 30 deg after the optimisation
+  //! (circumcentres inserted, encroached segment pieces split; triangles at input angles
+  //! below 60 deg excused). Runs only with split_segments and without a metric. Default true.
+  bool refine_min_angle = true;
   //! The front may create at most this many times the expected number of points before it
   //! stops creating new ones and closes with existing nodes only. Must be >= 1. Default 4.
   double work_budget_factor = 4.0;
@@ -86,6 +94,7 @@ struct FrontReport {
   std::size_t n_repairs = 0;          //!< front edges closed by the fallback search
   std::size_t n_open_edges = 0;       //!< front edges left open (0 when Ok)
   std::size_t n_swaps = 0;            //!< edge swaps in the optimisation
+  std::size_t n_refinement_points = 0;  //!< points inserted by the min-angle refinement (segment splits included)
   std::size_t n_dropped_points = 0;   //!< input points outside the domain (left unreferenced)
   double domain_area = 0.0;           //!< area enclosed by the initial front
   double seconds_front = 0.0;         //!< wall time of the front

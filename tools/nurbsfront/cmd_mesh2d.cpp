@@ -29,6 +29,7 @@ struct Mesh2dArgs {
   bool keep_segments = false;
   int smoothing_passes = FrontOptions{}.smoothing_passes;
   bool no_swaps = false;
+  bool no_refine = false;
   bool json = false;
   bool quiet = false;
 };
@@ -56,6 +57,7 @@ void add_mesh2d_command(CLI::App& app) {
   cmd->add_flag("--keep-segments", args->keep_segments, "Do not split the input segments (already discretised)");
   cmd->add_option("--smooth", args->smoothing_passes, "Smoothing passes")->capture_default_str();
   cmd->add_flag("--no-swaps", args->no_swaps, "No edge swaps after the front");
+  cmd->add_flag("--no-refine", args->no_refine, "No Delaunay refinement of the triangles below 30 deg");
   cmd->add_flag("--json", args->json, "Print the quality report as JSON");
   cmd->add_flag("--quiet", args->quiet, "No progress on stderr");
   cmd->callback([args] {
@@ -73,6 +75,7 @@ void add_mesh2d_command(CLI::App& app) {
     options.split_segments = !args->keep_segments;
     options.smoothing_passes = args->smoothing_passes;
     options.swap_edges = !args->no_swaps;
+    options.refine_min_angle = !args->no_refine;
     options.progress = terminal_progress(args->quiet);
     Mesh2d mesh;
     try {
@@ -101,7 +104,7 @@ void add_mesh2d_command(CLI::App& app) {
       std::cout << to_json(report) << "\n";
     } else {
       std::cout << "triangles " << mesh.triangles.size() << ", points " << mesh.points.size() << " (new "
-                << mesh.report.n_new_points << "), repairs " << mesh.report.n_repairs << ", swaps " << mesh.report.n_swaps
+                << mesh.report.n_new_points << ", refinement " << mesh.report.n_refinement_points << "), repairs " << mesh.report.n_repairs << ", swaps " << mesh.report.n_swaps
                 << ", domain area " << mesh.report.domain_area << ", front " << mesh.report.seconds_front << " s, optimise "
                 << mesh.report.seconds_optimise << " s\n"
                 << to_text(report);
