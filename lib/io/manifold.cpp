@@ -244,13 +244,7 @@ ManifoldRepair make_manifold(const TriangleSoup& soup) {
 namespace nurbsfront {
 namespace {
 
-bool has_zero_area(const TriMesh& mesh, TriMesh::FaceHandle f) {
-  auto it = mesh.cfv_iter(f);
-  const Eigen::Vector3d a = to_eigen(mesh.point(*it));
-  const Eigen::Vector3d b = to_eigen(mesh.point(*++it));
-  const Eigen::Vector3d c = to_eigen(mesh.point(*++it));
-  return (b - a).cross(c - a).squaredNorm() == 0.0;
-}
+bool has_zero_area(const TriMesh& mesh, TriMesh::FaceHandle f) { return mesh.calc_face_area(f) == 0.0; }
 
 //! Rounds of flips over the faces of exactly zero area (three distinct collinear corners:
 //! a needle a, m, b with m on the segment ab). Flipping the long edge ab replaces the

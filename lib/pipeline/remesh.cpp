@@ -5,8 +5,6 @@
 #include <string>
 #include <utility>
 
-#include <Eigen/Geometry>
-
 #include "nurbsfront/core/error.h"
 #include "nurbsfront/core/stopwatch.h"
 
@@ -64,13 +62,7 @@ void check_input(const TriMesh& input) {
   // A triangle of exactly zero area has no normal: segmentation cannot place it and the
   // output silently loses the region around it (issue 6). io's prepare_mesh() flips them away.
   std::size_t n_zero_area = 0;
-  for (auto f : input.faces()) {
-    auto it = input.cfv_iter(f);
-    const Eigen::Vector3d a = to_eigen(input.point(*it));
-    const Eigen::Vector3d b = to_eigen(input.point(*++it));
-    const Eigen::Vector3d c = to_eigen(input.point(*++it));
-    if ((b - a).cross(c - a).squaredNorm() == 0.0) ++n_zero_area;
-  }
+  for (auto f : input.faces()) n_zero_area += input.calc_face_area(f) == 0.0 ? 1 : 0;
   if (n_zero_area > 0) {
     throw InvalidInput("remesh: the input mesh has " + std::to_string(n_zero_area) +
                        " triangles of zero area (three collinear corners); io's prepare_mesh() removes them "
