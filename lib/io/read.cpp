@@ -941,7 +941,8 @@ TriMesh read_mesh(const std::filesystem::path& path, const CleanOptions& options
   CleanResult cleaned = clean(read_soup(path), options);
   const ManifoldCheck check = check_manifold(cleaned.soup);
   if (!check.ok()) {
-    throw TopologyError("'" + path.string() + "' is not an oriented 2-manifold after cleaning: " + check.message());
+    throw TopologyError("'" + path.string() + "' is not an oriented 2-manifold after cleaning: " + check.message() +
+                        " (prepare_mesh() repairs that: `nurbsfront convert --repair`)");
   }
   return to_trimesh(cleaned.soup);
 }
