@@ -62,7 +62,13 @@ void check_input(const TriMesh& input) {
   // A triangle of exactly zero area has no normal: segmentation cannot place it and the
   // output silently loses the region around it (issue 6). io's prepare_mesh() flips them away.
   std::size_t n_zero_area = 0;
-  for (auto f : input.faces()) n_zero_area += input.calc_face_area(f) == 0.0 ? 1 : 0;
+  for (auto f : input.faces()) {
+    const auto h = input.halfedge_handle(f);
+    const auto& a = input.point(input.from_vertex_handle(h));
+    const auto& b = input.point(input.to_vertex_handle(h));
+    const auto& c = input.point(input.to_vertex_handle(input.next_halfedge_handle(h)));
+    n_zero_area += ((b - a) % (c - a)).sqrnorm() == 0.0 ? 1 : 0;
+  }
   if (n_zero_area > 0) {
     throw InvalidInput("remesh: the input mesh has " + std::to_string(n_zero_area) +
                        " triangles of zero area (three collinear corners); io's prepare_mesh() removes them "
