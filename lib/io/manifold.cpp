@@ -312,7 +312,7 @@ std::string PrepareReport::summary() const {
 
 //! The cleaned soup as a TriMesh, repaired by make_manifold() only when to_trimesh refuses
 //! it: the common case, an oriented 2-manifold, costs one check, as before. Returned by
-//! value into its final place (OpenMesh meshes have no move constructor: a copy of a 1 M
+//! value into its final place (OpenMesh meshes declare no move operations: a copy of a 1 M
 //! face mesh costs about 75 ms).
 TriMesh manifold_mesh(const TriangleSoup& cleaned, PrepareReport& report) {
   try {
