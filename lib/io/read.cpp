@@ -945,7 +945,8 @@ TriMesh read_mesh(const std::filesystem::path& path, const CleanOptions& options
     return to_trimesh(cleaned.soup);
   } catch (const TopologyError&) {
     const ManifoldCheck check = check_manifold(cleaned.soup);
-    throw TopologyError("'" + path.string() + "' is not an oriented 2-manifold after cleaning: " + check.message());
+    throw TopologyError("'" + path.string() + "' is not an oriented 2-manifold after cleaning: " + check.message() +
+                        " (prepare_mesh() repairs that: `nurbsfront convert --repair`)");
   }
 }
 

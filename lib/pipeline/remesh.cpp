@@ -5,8 +5,6 @@
 #include <string>
 #include <utility>
 
-#include <Eigen/Geometry>
-
 #include "nurbsfront/core/error.h"
 #include "nurbsfront/core/stopwatch.h"
 
@@ -65,11 +63,11 @@ void check_input(const TriMesh& input) {
   // output silently loses the region around it (issue 6). io's prepare_mesh() flips them away.
   std::size_t n_zero_area = 0;
   for (auto f : input.faces()) {
-    auto it = input.cfv_iter(f);
-    const Eigen::Vector3d a = to_eigen(input.point(*it));
-    const Eigen::Vector3d b = to_eigen(input.point(*++it));
-    const Eigen::Vector3d c = to_eigen(input.point(*++it));
-    if ((b - a).cross(c - a).squaredNorm() == 0.0) ++n_zero_area;
+    const auto h = input.halfedge_handle(f);
+    const auto& a = input.point(input.from_vertex_handle(h));
+    const auto& b = input.point(input.to_vertex_handle(h));
+    const auto& c = input.point(input.to_vertex_handle(input.next_halfedge_handle(h)));
+    n_zero_area += ((b - a) % (c - a)).sqrnorm() == 0.0 ? 1 : 0;
   }
   if (n_zero_area > 0) {
     throw InvalidInput("remesh: the input mesh has " + std::to_string(n_zero_area) +

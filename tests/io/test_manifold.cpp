@@ -7,6 +7,7 @@
 #include "nurbsfront/core/error.h"
 #include "nurbsfront/io/mesh_io.h"
 #include "nurbsfront/quality/report.h"
+#include "support/test_data.h"
 
 namespace nurbsfront {
 namespace {
@@ -205,6 +206,19 @@ TEST(PrepareMesh, WeldsRepairsAndNamesWhatItDid) {
   EXPECT_EQ(p.mesh.n_vertices(), 16u);
   EXPECT_EQ(p.report.summary(), "1 duplicate vertices welded, 1 vertices duplicated at non-manifold points");
   EXPECT_EQ(prepare_mesh(cube()).report.summary(), "nothing to repair");
+}
+
+TEST(PrepareMesh, ReadMeshPointsToTheRepair) {
+  const auto path = test::test_data("io/touching_cubes.off");
+  try {
+    (void)read_mesh(path);
+    ADD_FAILURE() << "read_mesh accepted a non-manifold edge";
+  } catch (const TopologyError& e) {
+    EXPECT_NE(std::string(e.what()).find("convert --repair"), std::string::npos) << e.what();
+  }
+  const PreparedMesh p = prepare_mesh(read_soup(path));
+  EXPECT_EQ(p.report.manifold.n_paired_edges, 1u);
+  EXPECT_EQ(p.mesh.n_faces(), 24u);
 }
 
 TEST(PrepareMesh, WhatCannotBeRepairedIsNamed) {

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// Read/write throughput of the mesh formats and clean() on a generated torus of
-// 2 * n * n/2 triangles (argument n = 1000: 1M triangles, 500k vertices); read_mesh()
+// Read/write throughput of the mesh formats, clean() and prepare_mesh() on a generated torus
+// of 2 * n * n/2 triangles (argument n = 1000: 1M triangles, 500k vertices); read_mesh()
 // (read, clean, manifold check, halfedge mesh) and its two core steps alone.
 #include <benchmark/benchmark.h>
 
@@ -115,6 +115,24 @@ void BM_CheckManifold(benchmark::State& state) {
                                                benchmark::Counter::kIsRate);
 }
 
+// prepare_mesh() on a valid oriented manifold (argument 0: the fast path, clean + to_trimesh
+// + the zero-area scan, what remesh's reading costs) and with every 7th triangle reversed
+// (argument 1: make_manifold's orientation pass and a second to_trimesh).
+void BM_PrepareMesh(benchmark::State& state) {
+  TriangleSoup s = shared_torus(static_cast<int>(state.range(0)));
+  std::size_t n_reversed = 0;
+  if (state.range(1) == 1) {
+    for (std::size_t f = 0; f < s.triangles.size(); f += 7, ++n_reversed) std::swap(s.triangles[f][1], s.triangles[f][2]);
+  }
+  for (auto _ : state) {
+    nurbsfront::PreparedMesh p = nurbsfront::prepare_mesh(s);
+    benchmark::DoNotOptimize(p.mesh.n_faces());
+  }
+  state.counters["reversed"] = static_cast<double>(n_reversed);
+  state.counters["tri/s"] = benchmark::Counter(static_cast<double>(s.triangles.size()) * state.iterations(),
+                                               benchmark::Counter::kIsRate);
+}
+
 void BM_ToTriMesh(benchmark::State& state) {
   const TriangleSoup& s = shared_torus(static_cast<int>(state.range(0)));
   for (auto _ : state) {
@@ -125,8 +143,21 @@ void BM_ToTriMesh(benchmark::State& state) {
                                                benchmark::Counter::kIsRate);
 }
 
+// What reading cost before prepare_mesh(): clean + to_trimesh (the baseline of BM_PrepareMesh/n/0).
+void BM_CleanToTriMesh(benchmark::State& state) {
+  const TriangleSoup& s = shared_torus(static_cast<int>(state.range(0)));
+  for (auto _ : state) {
+    nurbsfront::TriMesh mesh = nurbsfront::to_trimesh(nurbsfront::clean(s).soup);
+    benchmark::DoNotOptimize(mesh.n_faces());
+  }
+  state.counters["tri/s"] = benchmark::Counter(static_cast<double>(s.triangles.size()) * state.iterations(),
+                                               benchmark::Counter::kIsRate);
+}
+
 }  // namespace
 
+BENCHMARK(BM_CleanToTriMesh)->Arg(1000)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_PrepareMesh)->Args({1000, 0})->Args({1000, 1})->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(BM_Write, ply_binary, "m.ply", true)->Arg(1000)->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(BM_Read, ply_binary, "m.ply", true)->Arg(1000)->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(BM_Write, stl_binary, "m.stl", true)->Arg(1000)->Unit(benchmark::kMillisecond);
