@@ -403,10 +403,9 @@ void merge_patches(const Grouping& grouping, std::size_t min_faces, Patches& pat
             if (part == &border[q.patch] && patches.axes[q.patch] == old_axis) n_known = merged_border.size();
           }
         }
-        if (scratch != nullptr &&
-            !segment_detail::check_projection(graph, merged_border, patches.face_patch, patches.axes[q.patch], *scratch,
-                                              n_known)
-                 .is_simple) {
+        if (scratch != nullptr && !segment_detail::check_projection(graph, merged_border, patches.face_patch,
+                                                                    patches.axes[q.patch], *scratch, n_known)
+                                       .is_simple) {
           target.resize(target.size() - patches.faces[p].size());
           for (int f : patches.faces[p]) patches.face_patch[f] = p;
           cones[q.patch] = old_cones;
