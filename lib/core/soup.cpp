@@ -50,7 +50,9 @@ ManifoldCheck check_manifold(const TriangleSoup& soup) {
   auto is_bad_index = [&](const std::array<std::uint32_t, 3>& t) {
     return t[0] >= n_points || t[1] >= n_points || t[2] >= n_points;
   };
-  auto is_repeated = [](const std::array<std::uint32_t, 3>& t) { return t[0] == t[1] || t[1] == t[2] || t[2] == t[0]; };
+  auto is_repeated = [](const std::array<std::uint32_t, 3>& t) {
+    return t[0] == t[1] || t[1] == t[2] || t[2] == t[0];
+  };
   for (const auto& t : soup.triangles) {
     if (is_bad_index(t)) {
       ++check.n_bad_indices;
@@ -182,7 +184,8 @@ TriMesh to_trimesh(const TriangleSoup& soup) {
   std::vector<std::uint32_t> outgoing(n_corners);
   {
     std::vector<std::uint32_t> fill(first.begin(), first.end() - 1);
-    for (std::size_t c = 0; c < n_corners; ++c) outgoing[fill[soup.triangles[c / 3][c % 3]]++] = static_cast<std::uint32_t>(c);
+    for (std::size_t c = 0; c < n_corners; ++c)
+      outgoing[fill[soup.triangles[c / 3][c % 3]]++] = static_cast<std::uint32_t>(c);
   }
   auto corner_end = [&](std::size_t c) { return soup.triangles[c / 3][(c % 3 + 1) % 3]; };
   constexpr auto kNoCorner = std::numeric_limits<std::uint32_t>::max();
@@ -200,7 +203,8 @@ TriMesh to_trimesh(const TriangleSoup& soup) {
     if (twin != kNoCorner && twin < c) {
       halfedge[c] = mesh.opposite_halfedge_handle(halfedge[twin]);
     } else {
-      halfedge[c] = mesh.new_edge(TriMesh::VertexHandle(static_cast<int>(a)), TriMesh::VertexHandle(static_cast<int>(b)));
+      halfedge[c] = mesh.new_edge(TriMesh::VertexHandle(static_cast<int>(a)),
+                                  TriMesh::VertexHandle(static_cast<int>(b)));
       if (twin == kNoCorner) boundary.push_back(static_cast<std::uint32_t>(c));
     }
   }

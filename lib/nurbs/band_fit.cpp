@@ -277,7 +277,8 @@ BandFitResult fit_height_field_to_bands(const std::vector<BandSample>& samples, 
     const auto* outer = matrix.outerIndexPtr();
     const auto* inner = matrix.innerIndexPtr();
     const auto n_nonzeros = static_cast<std::size_t>(matrix.nonZeros());
-    if (pattern_inner.size() != n_nonzeros || !std::equal(pattern_outer.begin(), pattern_outer.end(), outer) ||
+    if (pattern_inner.size() != n_nonzeros ||
+        !std::equal(pattern_outer.begin(), pattern_outer.end(), outer) ||
         !std::equal(pattern_inner.begin(), pattern_inner.end(), inner)) {
       pattern_outer.assign(outer, outer + n_coef + 1);
       pattern_inner.assign(inner, inner + n_nonzeros);

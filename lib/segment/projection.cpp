@@ -65,8 +65,9 @@ std::vector<std::pair<int, int>> find_crossings(const std::vector<Segment>& segm
   auto cell_range = [&](int i) {
     const Eigen::Vector2d& p = xy[segments[i].a];
     const Eigen::Vector2d& q = xy[segments[i].b];
-    return std::array<int, 4>{cell_of(std::min(p.x(), q.x()), lo.x(), width_x), cell_of(std::max(p.x(), q.x()), lo.x(), width_x),
-                              cell_of(std::min(p.y(), q.y()), lo.y(), width_y), cell_of(std::max(p.y(), q.y()), lo.y(), width_y)};
+    return std::array<int, 4>{
+        cell_of(std::min(p.x(), q.x()), lo.x(), width_x), cell_of(std::max(p.x(), q.x()), lo.x(), width_x),
+        cell_of(std::min(p.y(), q.y()), lo.y(), width_y), cell_of(std::max(p.y(), q.y()), lo.y(), width_y)};
   };
   std::vector<int> cell_start(static_cast<std::size_t>(cells) * cells + 1, 0);
   for (int i = 0; i < n; ++i) {
@@ -110,10 +111,12 @@ std::vector<std::pair<int, int>> find_crossings(const std::vector<Segment>& segm
 // (a patch's border that passed the check in the same plane): only pairs with a later
 // segment are tested, against the segments whose boxes meet the later ones' box. Falls back
 // to the grid when that would test too many pairs.
-std::vector<std::pair<int, int>> find_crossings_after(const std::vector<Segment>& segments, const std::vector<Eigen::Vector2d>& xy,
+std::vector<std::pair<int, int>> find_crossings_after(const std::vector<Segment>& segments,
+                                                      const std::vector<Eigen::Vector2d>& xy,
                                                       std::size_t n_known, std::size_t max_pairs) {
   const std::size_t n = segments.size();
-  if (n_known == 0 || n_known >= n) return n_known >= n ? std::vector<std::pair<int, int>>{} : find_crossings(segments, xy, max_pairs);
+  if (n_known == 0 || n_known >= n)
+    return n_known >= n ? std::vector<std::pair<int, int>>{} : find_crossings(segments, xy, max_pairs);
   Eigen::Vector2d lo = xy[segments[n_known].a], hi = lo;
   for (std::size_t j = n_known; j < n; ++j) {
     for (int v : {segments[j].a, segments[j].b}) {
@@ -125,8 +128,8 @@ std::vector<std::pair<int, int>> find_crossings_after(const std::vector<Segment>
   for (std::size_t i = 0; i < n_known; ++i) {
     const Eigen::Vector2d& p = xy[segments[i].a];
     const Eigen::Vector2d& q = xy[segments[i].b];
-    if (std::max(p.x(), q.x()) < lo.x() || std::min(p.x(), q.x()) > hi.x() || std::max(p.y(), q.y()) < lo.y() ||
-        std::min(p.y(), q.y()) > hi.y())
+    if (std::max(p.x(), q.x()) < lo.x() || std::min(p.x(), q.x()) > hi.x() ||
+        std::max(p.y(), q.y()) < lo.y() || std::min(p.y(), q.y()) > hi.y())
       continue;
     near.push_back(static_cast<int>(i));
   }
@@ -240,8 +243,8 @@ ProjectionCheck check_projection(const FaceGraph& graph, const std::vector<int>&
 }
 
 ProjectionCheck check_projection(const FaceGraph& graph, const std::vector<OpenMesh::HalfedgeHandle>& border,
-                                 const std::vector<int>& face_patch, const Eigen::Vector3d& axis, Scratch& scratch,
-                                 std::size_t n_known) {
+                                 const std::vector<int>& face_patch, const Eigen::Vector3d& axis,
+                                 Scratch& scratch, std::size_t n_known) {
   if (border.empty()) return {false, {}};  // a closed surface is never a height field
   const TriMesh& mesh = *graph.mesh;
   const int patch = face_patch[mesh.face_handle(border[0]).idx()];
@@ -271,7 +274,8 @@ ProjectionCheck check_projection(const FaceGraph& graph, const std::vector<OpenM
     const int out = scratch.border_out[mesh.to_vertex_handle(h).idx()];
     if (out >= 0) return OpenMesh::HalfedgeHandle(out);
     auto next = mesh.next_halfedge_handle(h);
-    while (in_patch(mesh.opposite_halfedge_handle(next))) next = mesh.next_halfedge_handle(mesh.opposite_halfedge_handle(next));
+    while (in_patch(mesh.opposite_halfedge_handle(next)))
+      next = mesh.next_halfedge_handle(mesh.opposite_halfedge_handle(next));
     return next;
   };
   // Loops, traced through the patch's own faces around each vertex, so a loop passing a
@@ -301,7 +305,8 @@ ProjectionCheck check_projection(const FaceGraph& graph, const std::vector<OpenM
     } while (h != start);
     if (repeats) {
       std::vector<std::vector<int>> split = split_at_repeated_vertices(loop_vertices);
-      cycles.insert(cycles.end(), std::make_move_iterator(split.begin()), std::make_move_iterator(split.end()));
+      cycles.insert(cycles.end(), std::make_move_iterator(split.begin()),
+                    std::make_move_iterator(split.end()));
     } else {
       cycles.push_back(loop_vertices);
     }
@@ -327,7 +332,8 @@ ProjectionCheck check_projection(const FaceGraph& graph, const std::vector<OpenM
   // region inside both is covered twice although the loop's total area looks right.
   const std::vector<int> nested = nested_ccw_cycle(cycles, scratch.xy);
   if (!nested.empty()) return {false, nested.size() <= kMaxTroubleLoopEdges ? nested : std::vector<int>{}};
-  const std::vector<std::pair<int, int>> crossings = find_crossings_after(segments, scratch.xy, n_known, kMaxTroubleCrossings);
+  const std::vector<std::pair<int, int>> crossings =
+      find_crossings_after(segments, scratch.xy, n_known, kMaxTroubleCrossings);
   if (crossings.empty()) return {true, {}};
   ProjectionCheck check{false, {}};
   for (const auto& [i, j] : crossings) check.trouble.insert(check.trouble.end(), {segments[i].a, segments[i].b, segments[j].a, segments[j].b});

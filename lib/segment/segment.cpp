@@ -7,6 +7,8 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdint>
+#include <limits>
 #include <numbers>
 #include <string>
 
@@ -318,6 +320,16 @@ void merge_patches(const Grouping& grouping, std::size_t min_faces, Patches& pat
   for (int p = 0; p < n_patches; ++p) cones[p] = patch_cones(grouping, patches.faces[p], patches.axes[p]);
   const double max_smooth = grouping.max_slope - kAngleMarginRad;
   const double max_raw = std::acos(kSegmentMinRawNormalDot) - kAngleMarginRad;
+  // A patch's attempt depends only on its own faces and cones and on its neighbours (which
+  // faces around it are theirs, their axes and cones). Every change of a patch bumps its
+  // version; a face around p changes hands only when its patch changes. An attempt that
+  // merged nothing is not repeated while p and the neighbours it saw keep their versions.
+  std::vector<std::uint32_t> version(n_patches, 0);
+  struct Attempt {
+    std::uint32_t version = std::numeric_limits<std::uint32_t>::max();
+    std::vector<std::pair<int, std::uint32_t>> neighbours;  // (patch, version) seen
+  };
+  std::vector<Attempt> failed(n_patches);
   bool changed = true;
   while (changed) {
     changed = false;
@@ -326,6 +338,10 @@ void merge_patches(const Grouping& grouping, std::size_t min_faces, Patches& pat
       if (size == 0) continue;
       const bool is_small = size < min_faces;
       if (scratch != nullptr && !is_small) continue;
+      if (failed[p].version == version[p] &&
+          std::all_of(failed[p].neighbours.begin(), failed[p].neighbours.end(),
+                      [&](const auto& seen) { return version[seen.first] == seen.second; }))
+        continue;
       std::vector<Neighbour> neighbours;
       for (int f : patches.faces[p]) {
         for (int i = 0; i < 3; ++i) {
@@ -387,10 +403,9 @@ void merge_patches(const Grouping& grouping, std::size_t min_faces, Patches& pat
             if (part == &border[q.patch] && patches.axes[q.patch] == old_axis) n_known = merged_border.size();
           }
         }
-        if (scratch != nullptr &&
-            !segment_detail::check_projection(graph, merged_border, patches.face_patch, patches.axes[q.patch], *scratch,
-                                              n_known)
-                 .is_simple) {
+        if (scratch != nullptr && !segment_detail::check_projection(graph, merged_border, patches.face_patch,
+                                                                    patches.axes[q.patch], *scratch, n_known)
+                                       .is_simple) {
           target.resize(target.size() - patches.faces[p].size());
           for (int f : patches.faces[p]) patches.face_patch[f] = p;
           cones[q.patch] = old_cones;
@@ -403,17 +418,26 @@ void merge_patches(const Grouping& grouping, std::size_t min_faces, Patches& pat
           border_size[q.patch] = target.size();
         }
         patches.faces[p].clear();
+        ++version[p];
+        ++version[q.patch];
         merged = true;
         break;
       }
       if (!merged && is_small && scratch == nullptr) {
         for (const auto& [f, q] : dissolve(grouping, p, patches)) {
           merged = true;
+          ++version[q];
           if (grouping.normals.degenerate[f] != 0) continue;
           cones[q].raw = cone_union(cones[q].raw, {grouping.normals.raw[f], 0.0});
           if (grouping.normals.exception[f] == 0)
             cones[q].smooth = cone_union(cones[q].smooth, {grouping.normals.smooth[f], 0.0});
         }
+        if (merged) ++version[p];
+      }
+      if (!merged) {
+        failed[p].version = version[p];
+        failed[p].neighbours.clear();
+        for (const Neighbour& q : neighbours) failed[p].neighbours.emplace_back(q.patch, version[q.patch]);
       }
       changed = changed || merged;
     }

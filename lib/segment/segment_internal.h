@@ -41,8 +41,12 @@ struct Scratch {
   int loop_epoch = 0;
   int face_epoch = 0;
   explicit Scratch(const TriMesh& mesh)
-      : vertex_stamp(mesh.n_vertices(), -1), halfedge_stamp(mesh.n_halfedges(), -1), xy(mesh.n_vertices()),
-        border_out(mesh.n_vertices(), -1), loop_stamp(mesh.n_vertices(), -1), face_stamp(mesh.n_faces(), -1),
+      : vertex_stamp(mesh.n_vertices(), -1),
+        halfedge_stamp(mesh.n_halfedges(), -1),
+        xy(mesh.n_vertices()),
+        border_out(mesh.n_vertices(), -1),
+        loop_stamp(mesh.n_vertices(), -1),
+        face_stamp(mesh.n_faces(), -1),
         face_owner(mesh.n_faces(), -1) {}
 };
 
@@ -75,8 +79,9 @@ struct ProjectionCheck {
 //! crossing pairs reported as trouble may be others (also at most 256).
 [[nodiscard]] ProjectionCheck check_projection(const FaceGraph& graph,
                                                const std::vector<OpenMesh::HalfedgeHandle>& border,
-                                               const std::vector<int>& face_patch, const Eigen::Vector3d& axis,
-                                               Scratch& scratch, std::size_t n_known = 0);
+                                               const std::vector<int>& face_patch,
+                                               const Eigen::Vector3d& axis, Scratch& scratch,
+                                               std::size_t n_known = 0);
 
 //! Splits a connected patch of at least two faces in two connected parts: breadth-first
 //! regions around two faces far apart (the farthest face from the farthest face of

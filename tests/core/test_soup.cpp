@@ -113,7 +113,8 @@ ManifoldCheck reference_check(const TriangleSoup& soup) {
       for (std::size_t j = 0; j < around.size(); ++j) {
         if (reached[j]) continue;
         int shared = 0;  // vertices shared besides v: one means a common edge at v
-        for (auto a : around[i]) shared += a != v && std::find(around[j].begin(), around[j].end(), a) != around[j].end() ? 1 : 0;
+        for (auto a : around[i])
+          shared += a != v && std::find(around[j].begin(), around[j].end(), a) != around[j].end() ? 1 : 0;
         if (shared > 0) {
           reached[j] = true;
           stack.push_back(j);
@@ -130,7 +131,8 @@ TEST(Soup, CheckManifoldMatchesTheDefinitionsOnRandomSoups) {
   int n_manifold = 0, n_fan_failures = 0;
   for (int round = 0; round < 400; ++round) {
     // A closed or open shape, then a few random edits: extra, flipped, removed triangles.
-    TriangleSoup s = round % 3 == 0 ? test::icosphere(1) : (round % 3 == 1 ? test::torus(6, 4) : test::grid_patch(4, 3));
+    TriangleSoup s =
+        round % 3 == 0 ? test::icosphere(1) : (round % 3 == 1 ? test::torus(6, 4) : test::grid_patch(4, 3));
     const auto n = static_cast<std::uint32_t>(s.points.size());
     std::uniform_int_distribution<std::uint32_t> vertex(0, n);  // n: out of range
     const int n_edits = static_cast<int>(random() % 4);
@@ -144,7 +146,8 @@ TEST(Soup, CheckManifoldMatchesTheDefinitionsOnRandomSoups) {
       } else if (kind == 2 && !s.triangles.empty()) {
         s.triangles.push_back(s.triangles[random() % s.triangles.size()]);
       } else {
-        s.triangles.push_back({vertex(random) % n, vertex(random) % n, round % 50 == 0 ? vertex(random) : vertex(random) % n});
+        s.triangles.push_back(
+            {vertex(random) % n, vertex(random) % n, round % 50 == 0 ? vertex(random) : vertex(random) % n});
       }
     }
     const ManifoldCheck fast = check_manifold(s);
@@ -174,7 +177,8 @@ TEST(Soup, DirectBuildMatchesAddFace) {
     TriangleSoup s = shapes[round % shapes.size()];
     if (round >= 5) std::shuffle(s.triangles.begin(), s.triangles.end(), random);
     if (round >= 20 && s.triangles.size() > 8) {  // holes
-      for (int k = 0; k < 3; ++k) s.triangles.erase(s.triangles.begin() + static_cast<std::ptrdiff_t>(random() % s.triangles.size()));
+      for (int k = 0; k < 3; ++k)
+        s.triangles.erase(s.triangles.begin() + static_cast<std::ptrdiff_t>(random() % s.triangles.size()));
     }
     if (round % 4 == 3) {  // rotated corners: another halfedge is each face's first
       for (auto& t : s.triangles) std::rotate(t.begin(), t.begin() + 1, t.end());
@@ -183,7 +187,8 @@ TEST(Soup, DirectBuildMatchesAddFace) {
     TriMesh expected;
     std::vector<TriMesh::VertexHandle> handles;
     for (const auto& p : s.points) handles.push_back(expected.add_vertex(to_openmesh(p)));
-    for (const auto& t : s.triangles) ASSERT_TRUE(expected.add_face(handles[t[0]], handles[t[1]], handles[t[2]]).is_valid());
+    for (const auto& t : s.triangles)
+      ASSERT_TRUE(expected.add_face(handles[t[0]], handles[t[1]], handles[t[2]]).is_valid());
     const TriMesh built = to_trimesh(s);
     ASSERT_EQ(built.n_vertices(), expected.n_vertices());
     ASSERT_EQ(built.n_edges(), expected.n_edges());
@@ -198,7 +203,8 @@ TEST(Soup, DirectBuildMatchesAddFace) {
       ASSERT_EQ(built.halfedge_handle(v), expected.halfedge_handle(v)) << round << " vertex " << v.idx();
       ASSERT_EQ(built.point(v), expected.point(v));
     }
-    for (const auto f : expected.faces()) ASSERT_EQ(built.halfedge_handle(f), expected.halfedge_handle(f)) << round;
+    for (const auto f : expected.faces())
+      ASSERT_EQ(built.halfedge_handle(f), expected.halfedge_handle(f)) << round;
     ++n_compared;
   }
   EXPECT_GT(n_compared, 40);

@@ -3,13 +3,12 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <set>
 #include <string>
-
-#include <Eigen/Geometry>
 
 #include "fixtures/shapes.h"
 #include "nurbsfront/core/error.h"
@@ -223,7 +222,8 @@ TEST(Segment, ProjectionCheckWithAKnownSimplePrefixAgrees) {
         if (part == &border_first) n_known = merged.size();
       }
       const bool full = segment_detail::check_projection(graph, merged, face_patch, axis, scratch).is_simple;
-      const bool shortcut = segment_detail::check_projection(graph, merged, face_patch, axis, scratch, n_known).is_simple;
+      const bool shortcut =
+          segment_detail::check_projection(graph, merged, face_patch, axis, scratch, n_known).is_simple;
       EXPECT_EQ(full, shortcut) << split << " " << end;
       std::vector<int> all = first;
       all.insert(all.end(), second.begin(), second.end());
