@@ -234,7 +234,7 @@ class Collapser {
 
 NodeMerges collapse_short_edges(const SurfaceMesh& surface, const StitchOptions& options, const StitchResult& assembled,
                                 const std::vector<std::uint8_t>& is_feature, const std::vector<std::uint8_t>& is_frozen) {
-  if (!(options.collapse_below_angle_deg > 0.0) || surface.curve_nodes.size() != surface.curve_is_feature.size()) {
+  if (!(options.collapse_below_angle_deg > 0.0)) {
     NodeMerges none;
     none.target.resize(surface.nodes.size());
     std::iota(none.target.begin(), none.target.end(), 0);

@@ -28,7 +28,8 @@ struct NodeMerges {
 //! is a corner, a feature node or the removed node was inner (then it stays). A collapse is
 //! made only if OpenMesh's link condition holds, no remaining triangle's normal turns by more
 //! than acos(min_normal_dot) or degenerates, and the smallest alpha around both nodes grows.
-//! Nothing when the option is 0 or the SurfaceMesh has no curve_nodes.
+//! Nothing when the option is 0; only inner nodes merge when the SurfaceMesh has no
+//! curve_nodes.
 NodeMerges collapse_short_edges(const SurfaceMesh& surface, const StitchOptions& options, const StitchResult& assembled,
                                 const std::vector<std::uint8_t>& is_feature, const std::vector<std::uint8_t>& is_frozen);
 
