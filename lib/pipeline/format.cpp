@@ -60,6 +60,7 @@ std::string to_json(const RemeshReport& r) {
   json::Object stitch;
   stitch.count("input_nodes", s.n_input_nodes).count("unused_nodes", s.n_unused_nodes);
   stitch.count("input_triangles", s.n_input_triangles).count("rejected_triangles", s.n_rejected_triangles);
+  stitch.count("collapses", s.n_collapses).count("collapses_undone", s.n_collapses_undone);
   stitch.count("flips", s.n_flips).count("smoothing_moves", s.n_smoothing_moves);
   stitch.count("smoothing_rejected", s.n_smoothing_rejected).count("reverted_moves", s.n_reverted_moves);
   stitch.count("reverted_flips", s.n_reverted_flips);

@@ -137,6 +137,10 @@ struct StitchResult {
 //!    order); triangles are added in order. A triangle OpenMesh cannot take (repeated
 //!    node, an edge already used in that direction, a closed vertex fan) is counted and
 //!    reported as an error; it is never silently dropped.
+//! 1b. Short-edge collapse (collapse_below_angle_deg): the shortest edge of each triangle
+//!    with a smaller angle is collapsed when allowed (never removing or moving a feature
+//!    node) and the smallest angle around it grows; the triangles are re-assembled by the
+//!    merged node ids; merges whose faces intersect others are given up (docs/stitch.md).
 //! 2. `optimisation_passes` rounds of
 //!    a. edge flips: an interior edge whose two triangles are within the dihedral bound
 //!       (before and after), whose new edge does not exist yet, and whose flip raises the
@@ -146,7 +150,9 @@ struct StitchResult {
 //!    b. smoothing: an inner node moves towards the area-weighted centroid of its
 //!       triangles and back onto its patch surface (PatchSurface::project); a border node
 //!       of a non-feature curve onto the mean of its two patch surfaces' projections.
-//!       Corners, feature and boundary nodes never move. A move is kept only if it turns
+//!       A corner of smooth curves only onto the mean of all its patches' projections.
+//!       Feature nodes (nodes of feature curves, corners ending one) and boundary nodes
+//!       never move. A move is kept only if it turns
 //!       no incident triangle's normal too far and keeps their smallest alpha (bounds in
 //!       StitchOptions).
 //!    If the result has self-intersections (one exact check over the whole mesh, when

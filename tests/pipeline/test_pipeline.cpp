@@ -204,6 +204,9 @@ TEST(Pipeline, ReportCountsTimesAndJson) {
   EXPECT_NE(json.find("\"hausdorff\""), std::string::npos);
   EXPECT_NE(json.find("\"errors\": ["), std::string::npos);
   EXPECT_NE(to_summary(rep).find("alpha mean"), std::string::npos);
+  EXPECT_NE(json.find("\"min_angle_away_from_features_deg\""), std::string::npos);
+  EXPECT_NE(json.find("\"collapses\": " + std::to_string(rep.stitch.n_collapses)), std::string::npos);
+  EXPECT_NE(to_summary(rep).find("away from features"), std::string::npos);
   // Without distances the report has none and takes no distance time.
   options.compute_distances = false;
   EXPECT_FALSE(remesh(in.mesh, options).report.output.distance.has_value());
