@@ -60,10 +60,14 @@ std::string to_json(const RemeshReport& r) {
   json::Object stitch;
   stitch.count("input_nodes", s.n_input_nodes).count("unused_nodes", s.n_unused_nodes);
   stitch.count("input_triangles", s.n_input_triangles).count("rejected_triangles", s.n_rejected_triangles);
+  stitch.count("collapses", s.n_collapses).count("collapses_undone", s.n_collapses_undone);
   stitch.count("flips", s.n_flips).count("smoothing_moves", s.n_smoothing_moves);
   stitch.count("smoothing_rejected", s.n_smoothing_rejected).count("reverted_moves", s.n_reverted_moves);
   stitch.count("reverted_flips", s.n_reverted_flips);
   stitch.flag("optimisation_undone", s.optimisation_undone);
+  stitch.count("triangles_away_from_features", s.n_away_from_features);
+  stitch.num("min_angle_away_from_features_deg", s.min_angle_away_from_features_deg);
+  stitch.count("small_angle_away_from_features", s.n_small_angle_away_from_features);
   stitch.num("alpha_mean_before", s.alpha_mean_before).num("alpha_min_before", s.alpha_min_before);
   stitch.add("input_components", components_json(s.input_components));
   stitch.add("output_components", components_json(s.output_components));
@@ -90,6 +94,10 @@ std::string to_summary(const RemeshReport& r) {
   s += "alpha mean " + fixed(q.alpha_mean, 4) + ", min " + fixed(q.alpha_min, 4) + "; angles min " +
        fixed(q.min_angle_deg, 2) + " max " + fixed(q.max_angle_deg, 2) + " deg; obtuse " +
        fixed(100.0 * q.obtuse_fraction, 3) + "%\n";
+  s += "away from features (" + std::to_string(r.stitch.n_away_from_features) + " triangles): angle min " +
+       fixed(r.stitch.min_angle_away_from_features_deg, 2) + " deg, " +
+       std::to_string(r.stitch.n_small_angle_away_from_features) + " below " + fixed(kAwayFromFeaturesAngleBoundDeg, 0) +
+       " deg\n";
   if (r.output.distance) {
     const DistanceReport& d = *r.output.distance;
     s += "distance to input: hausdorff " + json::number(d.hausdorff) + " (" + json::number(d.hausdorff_relative) +

@@ -30,12 +30,14 @@ struct NodeInfo {
   int patch1 = -1;
   int curve = -1;           // border: its curve; -1 otherwise
   bool is_corner = false;
+  int corner_slot = -1;     // movable corner: index into Optimiser::corner_patches_
 };
 
 class Optimiser {
  public:
-  Optimiser(const SurfaceMesh& surface, const StitchOptions& options, StitchResult& result)
-      : surface_(surface), options_(options), mesh_(result.mesh), face_patch_(result.face_patch) {
+  Optimiser(const SurfaceMesh& surface, const StitchOptions& options, StitchResult& result,
+            const std::vector<std::uint8_t>& is_feature)
+      : surface_(surface), options_(options), mesh_(result.mesh), face_patch_(result.face_patch), is_feature_(is_feature) {
     const double diagonal = bounding_box(mesh_).diagonal();
     min_double_area_ = 2.0 * tolerance::kDegenerateAreaRelative * diagonal * diagonal;
     cos_dihedral_ = std::cos(options.max_flip_dihedral_deg * std::numbers::pi / 180.0);
@@ -93,7 +95,12 @@ class Optimiser {
       centroid /= total;
       const Vec target = p + options_.smoothing_relaxation * (centroid - p);
       Vec q;
-      if (info.curve < 0) {
+      if (info.corner_slot >= 0) {
+        const auto& patches = corner_patches_[static_cast<std::size_t>(info.corner_slot)];
+        q = Vec::Zero();
+        for (const int patch : patches) q += surface_.surfaces[static_cast<std::size_t>(patch)].project(target);
+        q /= static_cast<double>(patches.size());
+      } else if (info.curve < 0) {
         q = surface_.surfaces[static_cast<std::size_t>(info.patch0)].project(target);
       } else {
         q = 0.5 * (surface_.surfaces[static_cast<std::size_t>(info.patch0)].project(target) +
@@ -130,9 +137,20 @@ class Optimiser {
       const auto node = static_cast<std::size_t>(vertex_node[static_cast<std::size_t>(v.idx())]);
       NodeInfo& info = nodes_[static_cast<std::size_t>(v.idx())];
       switch (surface_.node_kind[node]) {
-        case NodeKind::Corner:
+        case NodeKind::Corner: {
           info.is_corner = true;
+          // A corner where only smooth curves meet moves onto the mean of its patches'
+          // surfaces: two corners close together otherwise keep a short edge.
+          if (is_feature_[node] != 0 || mesh_.is_boundary(v)) break;
+          std::vector<int> patches;
+          for (auto f : mesh_.vf_range(v)) patches.push_back(face_patch_[static_cast<std::size_t>(f.idx())]);
+          std::sort(patches.begin(), patches.end());
+          patches.erase(std::unique(patches.begin(), patches.end()), patches.end());
+          info.corner_slot = static_cast<int>(corner_patches_.size());
+          info.is_movable = true;
+          corner_patches_.push_back(std::move(patches));
           break;
+        }
         case NodeKind::Inner:
           info.patch0 = surface_.node_owner[node];
           info.is_movable = true;
@@ -186,7 +204,9 @@ class Optimiser {
   const StitchOptions& options_;
   TriMesh& mesh_;
   const std::vector<int>& face_patch_;
+  const std::vector<std::uint8_t>& is_feature_;
   std::vector<NodeInfo> nodes_;
+  std::vector<std::vector<int>> corner_patches_;
   std::vector<std::array<Vec, 2>> ring_;
   double min_double_area_ = 0.0;
   double cos_dihedral_ = 1.0;
@@ -206,8 +226,9 @@ std::vector<double> face_alphas(const TriMesh& mesh) {
   return alpha;
 }
 
-void optimise(const SurfaceMesh& surface, const StitchOptions& options, StitchResult& result, StitchReport& report) {
-  Optimiser optimiser(surface, options, result);
+void optimise(const SurfaceMesh& surface, const StitchOptions& options, const std::vector<std::uint8_t>& is_feature,
+              StitchResult& result, StitchReport& report) {
+  Optimiser optimiser(surface, options, result, is_feature);
   for (int pass = 0; pass < options.optimisation_passes; ++pass) {
     report_progress(options.progress, "stitch: optimise", double(pass) / options.optimisation_passes);
     report.n_flips += optimiser.flip_sweep();

@@ -24,6 +24,7 @@ void StitchOptions::validate() const {
   if (!(smoothing_relaxation > 0.0 && smoothing_relaxation <= 1.0)) fail("smoothing_relaxation must be in (0, 1]");
   if (!(min_normal_dot >= -1.0 && min_normal_dot < 1.0)) fail("min_normal_dot must be in [-1, 1)");
   if (!(alpha_floor >= 0.0 && alpha_floor <= 1.0)) fail("alpha_floor must be in [0, 1]");
+  if (!(collapse_below_angle_deg >= 0.0 && collapse_below_angle_deg < 60.0)) fail("collapse_below_angle_deg must be in [0, 60)");
   if (n_threads == 0) fail("n_threads must be >= 1");
 }
 
@@ -139,7 +140,160 @@ void compare_with_input(StitchReport& report) {
   }
 }
 
+// Per node: 1 for a feature node (a node of a feature curve, or a corner ending one; every
+// corner when the curves' node lists are missing).
+std::vector<std::uint8_t> feature_nodes(const SurfaceMesh& s) {
+  std::vector<std::uint8_t> out(s.nodes.size(), 0);
+  const bool has_curves = s.curve_nodes.size() == s.curve_is_feature.size();
+  for (std::size_t i = 0; i < s.nodes.size(); ++i) {
+    if (s.node_kind[i] == NodeKind::Border) out[i] = s.curve_is_feature[static_cast<std::size_t>(s.node_owner[i])];
+    if (s.node_kind[i] == NodeKind::Corner && !has_curves) out[i] = 1;
+  }
+  if (has_curves) {
+    for (std::size_t c = 0; c < s.curve_nodes.size(); ++c) {
+      if (s.curve_is_feature[c] == 0) continue;
+      for (const int g : s.curve_nodes[c]) {
+        if (g >= 0 && static_cast<std::size_t>(g) < out.size()) out[static_cast<std::size_t>(g)] = 1;
+      }
+    }
+  }
+  return out;
+}
+
+// The StitchReport figures of the triangles away from features.
+void measure_away_from_features(const std::vector<std::uint8_t>& feature, const StitchResult& result, StitchReport& report) {
+  const TriMesh& mesh = result.mesh;
+  double min_angle = 180.0;
+  for (auto f : mesh.faces()) {
+    std::array<Eigen::Vector3d, 3> p;
+    bool is_away = true;
+    int k = 0;
+    for (auto v : mesh.fv_range(f)) {
+      if (feature[static_cast<std::size_t>(result.vertex_node[static_cast<std::size_t>(v.idx())])] != 0) is_away = false;
+      p[static_cast<std::size_t>(k++)] = to_eigen(mesh.point(v));
+    }
+    if (!is_away) continue;
+    const std::array<double, 3> angles = triangle_angles_deg(p[0], p[1], p[2]);
+    const double smallest = std::min({angles[0], angles[1], angles[2]});
+    ++report.n_away_from_features;
+    min_angle = std::min(min_angle, smallest);
+    if (smallest < kAwayFromFeaturesAngleBoundDeg) ++report.n_small_angle_away_from_features;
+  }
+  report.min_angle_away_from_features_deg = report.n_away_from_features > 0 ? min_angle : 0.0;
+}
+
 using FacePair = std::array<std::uint32_t, 2>;
+
+// Every node used by a triangle becomes a vertex (in node order); triangles are added in
+// order, those OpenMesh cannot take are counted (n_rejected_triangles).
+void assemble(const std::vector<Eigen::Vector3d>& nodes, const std::vector<std::array<int, 3>>& triangles,
+              const std::vector<int>& triangle_patch, StitchResult& result, StitchReport& report) {
+  result.mesh = TriMesh();
+  result.vertex_node.clear();
+  result.face_patch.clear();
+  report.n_unused_nodes = 0;
+  report.n_rejected_triangles = 0;
+  std::vector<char> used(nodes.size(), 0);
+  for (const auto& t : triangles) {
+    for (int k : t) used[static_cast<std::size_t>(k)] = 1;
+  }
+  TriMesh& mesh = result.mesh;
+  std::vector<TriMesh::VertexHandle> handle(nodes.size());
+  for (std::size_t i = 0; i < nodes.size(); ++i) {
+    if (!used[i]) {
+      ++report.n_unused_nodes;
+      continue;
+    }
+    handle[i] = mesh.add_vertex(to_openmesh(nodes[i]));
+    result.vertex_node.push_back(static_cast<int>(i));
+  }
+  for (std::size_t t = 0; t < triangles.size(); ++t) {
+    const auto& tri = triangles[t];
+    const std::array<TriMesh::VertexHandle, 3> v{handle[tri[0]], handle[tri[1]], handle[tri[2]]};
+    if (!can_add_face(mesh, v) || !mesh.add_face(v[0], v[1], v[2]).is_valid()) {
+      ++report.n_rejected_triangles;
+      continue;
+    }
+    result.face_patch.push_back(triangle_patch[t]);
+  }
+}
+
+// Rounds of collapse_short_edges before its merges are given up.
+constexpr int kCollapseRounds = 3;
+
+// Collapses short edges (collapse_short_edges) and re-assembles the triangles by the merged
+// node ids. Merges whose triangles intersect others (exact check of the faces around the
+// survivors, when check_self_intersections) or that OpenMesh cannot assemble are given up:
+// their removed nodes are frozen and the collapses are decided again.
+void collapse(const SurfaceMesh& surface, const StitchOptions& options, const std::vector<std::uint8_t>& feature,
+              StitchResult& result, StitchReport& report) {
+  if (!(options.collapse_below_angle_deg > 0.0) || result.mesh.n_faces() == 0) return;
+  std::vector<std::uint8_t> frozen(surface.nodes.size(), 0);
+  for (int round = 0; round < kCollapseRounds; ++round) {
+    const stitch_detail::NodeMerges merges = stitch_detail::collapse_short_edges(surface, options, result, feature, frozen);
+    if (merges.n_merges == 0) return;
+    std::vector<Eigen::Vector3d> nodes = surface.nodes;
+    for (const auto& [g, q] : merges.moved) nodes[static_cast<std::size_t>(g)] = q;
+    std::vector<std::array<int, 3>> triangles;
+    std::vector<int> triangle_patch;
+    triangles.reserve(surface.triangles.size());
+    triangle_patch.reserve(surface.triangles.size());
+    for (std::size_t t = 0; t < surface.triangles.size(); ++t) {
+      std::array<int, 3> tri{};
+      for (int k = 0; k < 3; ++k) tri[static_cast<std::size_t>(k)] = merges.target[static_cast<std::size_t>(surface.triangles[t][static_cast<std::size_t>(k)])];
+      if (tri[0] == tri[1] || tri[1] == tri[2] || tri[2] == tri[0]) continue;
+      triangles.push_back(tri);
+      triangle_patch.push_back(surface.triangle_patch[t]);
+    }
+    StitchResult trial;
+    StitchReport trial_report;
+    assemble(nodes, triangles, triangle_patch, trial, trial_report);
+    if (trial_report.n_rejected_triangles > 0) {
+      report.n_collapses_undone += merges.n_merges;
+      return;
+    }
+    // The faces around the survivors that moved or took a node.
+    std::vector<std::uint8_t> is_survivor(surface.nodes.size(), 0);
+    for (std::size_t g = 0; g < merges.target.size(); ++g) {
+      if (merges.target[g] != static_cast<int>(g)) is_survivor[static_cast<std::size_t>(merges.target[g])] = 1;
+    }
+    std::vector<std::uint32_t> touched;
+    for (auto f : trial.mesh.faces()) {
+      for (auto v : trial.mesh.fv_range(f)) {
+        if (is_survivor[static_cast<std::size_t>(trial.vertex_node[static_cast<std::size_t>(v.idx())])] != 0) {
+          touched.push_back(static_cast<std::uint32_t>(f.idx()));
+          break;
+        }
+      }
+    }
+    std::vector<FacePair> pairs;
+    if (options.check_self_intersections) pairs = intersecting_pairs_of(to_soup(trial.mesh), touched);
+    if (pairs.empty()) {
+      const std::size_t n_unused = trial_report.n_unused_nodes;
+      result.mesh = std::move(trial.mesh);
+      result.vertex_node = std::move(trial.vertex_node);
+      result.face_patch = std::move(trial.face_patch);
+      report.n_unused_nodes = n_unused - merges.n_merges;
+      report.n_collapses = merges.n_merges;
+      return;
+    }
+    // Freeze the nodes merged into a survivor of an intersecting face.
+    for (const auto& pair : pairs) {
+      for (const std::uint32_t f : pair) {
+        for (auto v : trial.mesh.fv_range(TriMesh::FaceHandle(static_cast<int>(f)))) {
+          const int s = trial.vertex_node[static_cast<std::size_t>(v.idx())];
+          if (is_survivor[static_cast<std::size_t>(s)] == 0) continue;
+          for (std::size_t g = 0; g < merges.target.size(); ++g) {
+            if (merges.target[g] == s && static_cast<int>(g) != s && frozen[g] == 0) {
+              frozen[g] = 1;
+              ++report.n_collapses_undone;
+            }
+          }
+        }
+      }
+    }
+  }
+}
 
 // Rounds of local repair before the optimisation is undone as a whole.
 constexpr int kRepairRounds = 6;
@@ -236,29 +390,8 @@ StitchResult stitch_impl(const SurfaceMesh& surface, const TriMesh* input, const
   Stopwatch watch;
 
   // 1. Assembly by id.
-  std::vector<char> used(surface.nodes.size(), 0);
-  for (const auto& t : surface.triangles) {
-    for (int k : t) used[static_cast<std::size_t>(k)] = 1;
-  }
+  assemble(surface.nodes, surface.triangles, surface.triangle_patch, result, report);
   TriMesh& mesh = result.mesh;
-  std::vector<TriMesh::VertexHandle> handle(surface.nodes.size());
-  for (std::size_t i = 0; i < surface.nodes.size(); ++i) {
-    if (!used[i]) {
-      ++report.n_unused_nodes;
-      continue;
-    }
-    handle[i] = mesh.add_vertex(to_openmesh(surface.nodes[i]));
-    result.vertex_node.push_back(static_cast<int>(i));
-  }
-  for (std::size_t t = 0; t < surface.triangles.size(); ++t) {
-    const auto& tri = surface.triangles[t];
-    const std::array<TriMesh::VertexHandle, 3> v{handle[tri[0]], handle[tri[1]], handle[tri[2]]};
-    if (!can_add_face(mesh, v) || !mesh.add_face(v[0], v[1], v[2]).is_valid()) {
-      ++report.n_rejected_triangles;
-      continue;
-    }
-    result.face_patch.push_back(surface.triangle_patch[t]);
-  }
   if (report.n_rejected_triangles > 0) {
     report.errors.push_back(std::to_string(report.n_rejected_triangles) +
                             " triangles could not be added by node id (a repeated node, an edge used twice in one "
@@ -271,6 +404,8 @@ StitchResult stitch_impl(const SurfaceMesh& surface, const TriMesh* input, const
     for (double a : alpha) min_alpha = std::isnan(min_alpha) ? a : std::min(min_alpha, a);
     report.alpha_min_before = min_alpha;
   }
+  const std::vector<std::uint8_t> feature = feature_nodes(surface);
+  if (report.n_rejected_triangles == 0) collapse(surface, options, feature, result, report);
   report.seconds_assemble = watch.seconds();
 
   // 2. Cross-border optimisation.
@@ -281,7 +416,7 @@ StitchResult stitch_impl(const SurfaceMesh& surface, const TriMesh* input, const
   if (optimise) {
     assembled = mesh;
     assembled_patch = result.face_patch;
-    stitch_detail::optimise(surface, options, result, report);
+    stitch_detail::optimise(surface, options, feature, result, report);
   }
   report.seconds_optimise = watch.seconds();
 
@@ -333,6 +468,7 @@ StitchResult stitch_impl(const SurfaceMesh& surface, const TriMesh* input, const
                             " self-intersecting triangle pairs");
   }
   if (mesh.n_faces() == 0 && !surface.triangles.empty()) report.errors.push_back("output has no triangles");
+  measure_away_from_features(feature, result, report);
   report.output_components = component_signatures(mesh);
   if (input != nullptr) {
     report.input_components = component_signatures(*input);

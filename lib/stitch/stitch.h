@@ -19,6 +19,9 @@
 
 namespace nurbsfront {
 
+//! Issue 5's bound on the smallest angle of the triangles away from features (deg).
+inline constexpr double kAwayFromFeaturesAngleBoundDeg = 25.0;
+
 //! Options of stitch().
 struct StitchOptions {
   //! Rounds of the cross-border optimisation; each round is one sweep of edge flips and
@@ -38,6 +41,11 @@ struct StitchOptions {
   //! does not drop below min(its old value, alpha_floor) (in [0, 1]). Defaults 0.5 and 0.5.
   double min_normal_dot = 0.5;
   double alpha_floor = 0.5;
+  //! Triangles whose smallest angle (deg) is below this get their shortest edge collapsed
+  //! before the optimisation, when the merge is allowed and improves the worst triangle
+  //! around it (feature nodes never removed or moved; see docs/stitch.md), in [0, 60); 0
+  //! switches it off. Default 25 (issue 5's bound away from features).
+  double collapse_below_angle_deg = 25.0;
   //! Run the exact self-intersection check on the result (the most expensive check).
   //! Default true.
   bool check_self_intersections = true;
@@ -71,6 +79,10 @@ struct StitchReport {
   //! Triangles OpenMesh cannot add (repeated node, complex edge or vertex: a duplicated,
   //! flipped or overlapping triangle). Each is a contract violation (an error below).
   std::size_t n_rejected_triangles = 0;
+  //! Short edges collapsed (node merges) before the optimisation.
+  std::size_t n_collapses = 0;
+  //! Collapses given up because the merged triangles intersected others.
+  std::size_t n_collapses_undone = 0;
   std::size_t n_flips = 0;             //!< edge flips made
   std::size_t n_smoothing_moves = 0;   //!< node moves accepted
   std::size_t n_smoothing_rejected = 0;  //!< node moves refused by the quality/normal bounds
@@ -86,6 +98,16 @@ struct StitchReport {
   bool optimisation_undone = false;
   double alpha_mean_before = 0.0;      //!< mean alpha after assembly, before optimisation
   double alpha_min_before = 0.0;       //!< min alpha after assembly, before optimisation
+  //! Triangles of the result away from features: none of their vertices is a feature node,
+  //! i.e. a node of a feature curve (SurfaceMesh::curve_is_feature: crease or input
+  //! boundary) or a corner that ends one (with empty SurfaceMesh::curve_nodes: any corner).
+  //! Corners where only smooth curves meet are not features. Issue 5's 25 deg bound on the
+  //! smallest angle applies to these triangles.
+  std::size_t n_away_from_features = 0;
+  //! Smallest interior angle (deg) of those triangles; 0 when there is none.
+  double min_angle_away_from_features_deg = 0.0;
+  //! Those of them whose smallest angle is below kAwayFromFeaturesAngleBoundDeg (25 deg).
+  std::size_t n_small_angle_away_from_features = 0;
   //! Topology and quality of the result (no distances), from the quality module.
   MeshReport output;
   //! Components of the result, and of the input when stitch() was given one.
@@ -115,6 +137,10 @@ struct StitchResult {
 //!    order); triangles are added in order. A triangle OpenMesh cannot take (repeated
 //!    node, an edge already used in that direction, a closed vertex fan) is counted and
 //!    reported as an error; it is never silently dropped.
+//! 1b. Short-edge collapse (collapse_below_angle_deg): the shortest edge of each triangle
+//!    with a smaller angle is collapsed when allowed (never removing or moving a feature
+//!    node) and the smallest angle around it grows; the triangles are re-assembled by the
+//!    merged node ids; merges whose faces intersect others are given up (docs/stitch.md).
 //! 2. `optimisation_passes` rounds of
 //!    a. edge flips: an interior edge whose two triangles are within the dihedral bound
 //!       (before and after), whose new edge does not exist yet, and whose flip raises the
@@ -124,7 +150,9 @@ struct StitchResult {
 //!    b. smoothing: an inner node moves towards the area-weighted centroid of its
 //!       triangles and back onto its patch surface (PatchSurface::project); a border node
 //!       of a non-feature curve onto the mean of its two patch surfaces' projections.
-//!       Corners, feature and boundary nodes never move. A move is kept only if it turns
+//!       A corner of smooth curves only onto the mean of all its patches' projections.
+//!       Feature nodes (nodes of feature curves, corners ending one) and boundary nodes
+//!       never move. A move is kept only if it turns
 //!       no incident triangle's normal too far and keeps their smallest alpha (bounds in
 //!       StitchOptions).
 //!    If the result has self-intersections (one exact check over the whole mesh, when

@@ -1,17 +1,45 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Shared between the stitch sources (not part of the public API).
+#include <cstdint>
+#include <utility>
 #include <vector>
+
+#include <Eigen/Core>
 
 #include "nurbsfront/stitch/stitch.h"
 
 namespace nurbsfront::stitch_detail {
+
+//! Node merges of collapse_short_edges: target[g] is the node g merged into (g itself when
+//! it stays); moved holds the new positions of survivors, in order (later ones win).
+struct NodeMerges {
+  std::vector<int> target;
+  std::vector<std::pair<int, Eigen::Vector3d>> moved;
+  std::size_t n_merges = 0;
+};
+
+//! The triangles with a smallest angle below StitchOptions::collapse_below_angle_deg, worst
+//! first, get their shortest edge collapsed (either way round) when the removed node is no
+//! feature node (is_feature) nor frozen (is_frozen), ranks no higher than the survivor
+//! (inner < border < corner), an inner node merges within its patch or into a border node, a
+//! border node only into its neighbour along its own curve, a corner only into the other end
+//! of a one-piece curve; the survivor goes onto the fitted surface(s) (midpoint) unless it
+//! is a corner, a feature node or the removed node was inner (then it stays). A collapse is
+//! made only if OpenMesh's link condition holds, no remaining triangle's normal turns by more
+//! than acos(min_normal_dot) or degenerates, and the smallest alpha around both nodes grows.
+//! Nothing when the option is 0; only inner nodes merge when the SurfaceMesh has no
+//! curve_nodes.
+NodeMerges collapse_short_edges(const SurfaceMesh& surface, const StitchOptions& options, const StitchResult& assembled,
+                                const std::vector<std::uint8_t>& is_feature, const std::vector<std::uint8_t>& is_frozen);
 
 //! alpha of every face, in face order.
 std::vector<double> face_alphas(const TriMesh& mesh);
 
 //! Edge flips and constrained smoothing (StitchOptions::optimisation_passes rounds) on
 //! result.mesh; result.face_patch stays valid (flips keep face handles).
-void optimise(const SurfaceMesh& surface, const StitchOptions& options, StitchResult& result, StitchReport& report);
+//! is_feature: per node, 1 for a feature node (never moves); other corners move too.
+void optimise(const SurfaceMesh& surface, const StitchOptions& options, const std::vector<std::uint8_t>& is_feature,
+              StitchResult& result, StitchReport& report);
 
 }  // namespace nurbsfront::stitch_detail

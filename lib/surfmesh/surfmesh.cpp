@@ -257,6 +257,7 @@ SurfaceMesh mesh_surface(const TriMesh& input, const Segmentation& segmentation,
   out.nodes = std::move(borders.positions);
   out.node_kind = std::move(borders.kind);
   out.node_owner = std::move(borders.owner);
+  out.curve_nodes = std::move(borders.curve_nodes);
   out.surfaces.resize(n_patches);
   out.patches.resize(n_patches);
   for (std::size_t p = 0; p < n_patches; ++p) {

@@ -166,6 +166,10 @@ struct SurfaceMesh {
   //! Per curve: true when the curve is a crease (see SurfMeshOptions::crease_angle_deg) or
   //! on the input's boundary; stitch never flips across or smooths such curves.
   std::vector<std::uint8_t> curve_is_feature;
+  //! Per curve, its global node ids along the curve (an open curve starts and ends at its
+  //! corners; a closed one does not repeat its first node). May be empty (a hand-made
+  //! SurfaceMesh): stitch then counts every corner as a feature corner.
+  std::vector<std::vector<int>> curve_nodes;
   std::vector<PatchMeshReport> patches; //!< one per patch
   double target_size = 0.0;             //!< the resolved uniform target edge length
   double input_mean_edge = 0.0;         //!< mean edge length of the input

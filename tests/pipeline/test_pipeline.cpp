@@ -126,10 +126,24 @@ RemeshOptions fast_options() {
   return options;
 }
 
+// Issue 5: the smallest angle of the triangles away from features (no vertex on a crease,
+// the input's boundary or a corner ending one) is at least 25 deg.
+void expect_min_angle_away_from_features(const RemeshResult& r) {
+  const StitchReport& s = r.report.stitch;
+  EXPECT_GT(s.n_away_from_features, r.mesh.n_faces() / 2);
+  EXPECT_GE(s.min_angle_away_from_features_deg, kAwayFromFeaturesAngleBoundDeg);
+  EXPECT_EQ(s.n_small_angle_away_from_features, 0u);
+  EXPECT_LE(s.min_angle_away_from_features_deg, 60.0);
+  EXPECT_GE(s.min_angle_away_from_features_deg, r.report.output.quality.min_angle_deg);
+}
+
 TEST(Pipeline, LevelSetSphere) {
   const SceneInput in = scene_input("sphere", 40, SampleMode::LevelSet);
   const RemeshResult r = remesh(in.mesh, fast_options());
   expect_contract_and_quality(r, in, 2);
+  expect_min_angle_away_from_features(r);
+  // No crease on a sphere: every triangle is away from features.
+  EXPECT_EQ(r.report.stitch.n_away_from_features, r.mesh.n_faces());
   EXPECT_LT(volume_change(r), 0.005);
   const TruthError before = truth_error(in.mesh, in.scene), after = truth_error(r.mesh, in.scene);
   EXPECT_LE(after.mean, before.mean + 0.05 * in.voxel);
@@ -143,8 +157,29 @@ TEST(Pipeline, LevelSetTorus) {
   const SceneInput in = scene_input("torus", 64, SampleMode::LevelSet);
   const RemeshResult r = remesh(in.mesh, fast_options());
   expect_contract_and_quality(r, in, 0);
+  expect_min_angle_away_from_features(r);
   // Not asserted (not met yet, reported): volume change < 0.5% and the distance to the
   // truth within 0.05 voxel of the input's.
+}
+
+// The DRAM cell (box edges, creases, corners close together) at a small resolution: the
+// contract and issue 5's 25 deg away from features. Not asserted (not met at 48 cells):
+// the Hausdorff bound, obtuse share and volume change (the cell is 3 voxels thick there).
+TEST(Pipeline, LevelSetDramCellMinAngleAwayFromFeatures) {
+  const SceneInput in = scene_input("dram", 48, SampleMode::LevelSet);
+  RemeshOptions options = fast_options();
+  options.compute_distances = false;  // not asserted here; most of the run's time
+  const RemeshResult r = remesh(in.mesh, options);
+  EXPECT_TRUE(r.report.ok()) << errors_of(r.report);
+  const TopologyReport& t = r.report.output.topology;
+  EXPECT_TRUE(t.is_closed);
+  EXPECT_TRUE(t.is_manifold);
+  EXPECT_TRUE(t.is_consistently_oriented);
+  EXPECT_EQ(t.euler_characteristic, in.mesh.n_vertices() - in.mesh.n_edges() + in.mesh.n_faces());
+  ASSERT_TRUE(t.n_self_intersecting_pairs.has_value());
+  EXPECT_EQ(*t.n_self_intersecting_pairs, 0u);
+  EXPECT_GT(r.report.stitch.n_collapses, 0u);
+  expect_min_angle_away_from_features(r);
 }
 
 TEST(Pipeline, ReportCountsTimesAndJson) {
@@ -172,6 +207,9 @@ TEST(Pipeline, ReportCountsTimesAndJson) {
   EXPECT_NE(json.find("\"hausdorff\""), std::string::npos);
   EXPECT_NE(json.find("\"errors\": ["), std::string::npos);
   EXPECT_NE(to_summary(rep).find("alpha mean"), std::string::npos);
+  EXPECT_NE(json.find("\"min_angle_away_from_features_deg\""), std::string::npos);
+  EXPECT_NE(json.find("\"collapses\": " + std::to_string(rep.stitch.n_collapses)), std::string::npos);
+  EXPECT_NE(to_summary(rep).find("away from features"), std::string::npos);
   // Without distances the report has none and takes no distance time.
   options.compute_distances = false;
   EXPECT_FALSE(remesh(in.mesh, options).report.output.distance.has_value());

@@ -193,12 +193,59 @@ TEST(Stitch, OptimisationImprovesAJitteredSphereAcrossBorders) {
     }
     EXPECT_NEAR(p.norm(), 1.0, 0.02);
   }
-  // Without optimisation the quality stays that of the assembly.
+  // Without optimisation and collapses the quality stays that of the assembly.
   StitchOptions none;
   none.optimisation_passes = 0;
+  none.collapse_below_angle_deg = 0.0;
   const StitchResult raw = stitch(surface, to_trimesh(soup), none);
   EXPECT_EQ(raw.report.n_flips + raw.report.n_smoothing_moves, 0u);
   EXPECT_DOUBLE_EQ(raw.report.output.quality.alpha_mean, raw.report.alpha_mean_before);
+}
+
+// Issue 5: a short edge no flip or smoothing removes (an inner node planted next to
+// another) is collapsed; the result keeps the contract and its worst triangle improves.
+TEST(Stitch, CollapsesAPlantedShortEdge) {
+  TriangleSoup soup = test::icosphere(3);
+  SurfaceMesh surface = cube_map_surface(soup);
+  // An inner node and an inner neighbour of the same patch.
+  int v = -1, w = -1;
+  for (const auto& t : surface.triangles) {
+    for (int k = 0; k < 3 && v < 0; ++k) {
+      const int a = t[k], b = t[(k + 1) % 3];
+      if (surface.node_kind[a] == NodeKind::Inner && surface.node_kind[b] == NodeKind::Inner &&
+          surface.node_owner[a] == surface.node_owner[b]) {
+        v = a;
+        w = b;
+      }
+    }
+  }
+  ASSERT_GE(v, 0);
+  const double edge = (surface.nodes[v] - surface.nodes[w]).norm();
+  surface.nodes[v] = (surface.nodes[w] + 0.03 * (surface.nodes[v] - surface.nodes[w])).normalized();
+  soup.points[v] = surface.nodes[v];
+  StitchOptions off;
+  off.collapse_below_angle_deg = 0.0;
+  const StitchResult kept = stitch(surface, to_trimesh(soup), off);
+  EXPECT_EQ(kept.report.n_collapses, 0u);
+  const StitchResult r = stitch(surface, to_trimesh(soup));
+  EXPECT_TRUE(r.report.ok()) << joined(r.report.errors);
+  EXPECT_GE(r.report.n_collapses, 1u);
+  EXPECT_EQ(r.report.output.topology.euler_characteristic, 2);
+  EXPECT_TRUE(r.report.output.topology.is_closed);
+  EXPECT_EQ(r.mesh.n_vertices(), soup.points.size() - r.report.n_collapses);
+  EXPECT_EQ(r.report.n_unused_nodes, 0u);
+  double shortest = edge;
+  for (auto e : r.mesh.edges()) shortest = std::min(shortest, r.mesh.calc_edge_length(e));
+  EXPECT_GT(shortest, 0.2 * edge);
+  EXPECT_GT(r.report.output.quality.min_angle_deg, kept.report.output.quality.min_angle_deg + 5.0);
+  EXPECT_GT(r.report.min_angle_away_from_features_deg, kept.report.min_angle_away_from_features_deg);
+  // Without curve_nodes every corner counts as a feature; the curves are smooth.
+  for (auto u : r.mesh.vertices()) {
+    const auto node = static_cast<std::size_t>(r.vertex_node[static_cast<std::size_t>(u.idx())]);
+    if (surface.node_kind[node] == NodeKind::Corner) {
+      EXPECT_EQ(to_eigen(r.mesh.point(u)), surface.nodes[node]);
+    }
+  }
 }
 
 TEST(Stitch, FeatureCurvesAndCornersStayPut) {
@@ -446,6 +493,9 @@ TEST(Stitch, InvalidInputThrows) {
   EXPECT_THROW((void)stitch(surface, options), InvalidInput);
   options = {};
   options.smoothing_relaxation = 0.0;
+  EXPECT_THROW((void)stitch(surface, options), InvalidInput);
+  options = {};
+  options.collapse_below_angle_deg = 60.0;
   EXPECT_THROW((void)stitch(surface, options), InvalidInput);
 }
 

@@ -1,0 +1,247 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Constrained collapse of the short edges of the worst triangles, before the optimisation:
+// where corners sit close together, a curve's last piece is short or a front node lands
+// near a border node, no flip or smoothing move removes the short edge; merging its two
+// nodes does. Decided on a copy of the assembled mesh, returned as node merges (stitch.cpp
+// re-assembles the triangles by the merged ids, so the result is again joined by id).
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <numeric>
+
+#include <Eigen/Geometry>
+
+#include "nurbsfront/core/tolerances.h"
+#include "nurbsfront/stitch/stitch_internal.h"
+
+namespace nurbsfront::stitch_detail {
+
+namespace {
+
+using Vec = Eigen::Vector3d;
+
+Vec point(const TriMesh& mesh, TriMesh::VertexHandle v) { return to_eigen(mesh.point(v)); }
+
+int rank(NodeKind kind) {
+  switch (kind) {
+    case NodeKind::Inner: return 0;
+    case NodeKind::Border: return 1;
+    case NodeKind::Corner: return 2;
+  }
+  return 2;
+}
+
+double min_angle_deg(const Vec& a, const Vec& b, const Vec& c) {
+  const std::array<double, 3> angles = triangle_angles_deg(a, b, c);
+  return std::min({angles[0], angles[1], angles[2]});
+}
+
+class Collapser {
+ public:
+  Collapser(const SurfaceMesh& surface, const StitchOptions& options, const TriMesh& assembled,
+            const std::vector<int>& vertex_node, const std::vector<int>& face_patch,
+            const std::vector<std::uint8_t>& is_feature, const std::vector<std::uint8_t>& is_frozen)
+      : surface_(surface), options_(options), mesh_(assembled), vertex_node_(vertex_node), face_patch_(face_patch),
+        is_feature_(is_feature), is_frozen_(is_frozen) {
+    const double diagonal = bounding_box(mesh_).diagonal();
+    min_double_area_ = 2.0 * tolerance::kDegenerateAreaRelative * diagonal * diagonal;
+    // Position of every border node along its curve (curve, index), for the adjacency test.
+    curve_of_.assign(surface.nodes.size(), -1);
+    index_on_curve_.assign(surface.nodes.size(), -1);
+    for (std::size_t c = 0; c < surface.curve_nodes.size(); ++c) {
+      const auto& nodes = surface.curve_nodes[c];
+      for (std::size_t i = 0; i < nodes.size(); ++i) {
+        const auto g = static_cast<std::size_t>(nodes[i]);
+        if (surface.node_kind[g] != NodeKind::Border) continue;
+        curve_of_[g] = static_cast<int>(c);
+        index_on_curve_[g] = static_cast<int>(i);
+      }
+    }
+  }
+
+  NodeMerges run() {
+    NodeMerges out;
+    out.target.resize(surface_.nodes.size());
+    std::iota(out.target.begin(), out.target.end(), 0);
+    // The triangles below the angle, worst first.
+    std::vector<std::pair<double, int>> bad;
+    for (auto f : mesh_.faces()) {
+      std::array<Vec, 3> p;
+      int k = 0;
+      for (auto v : mesh_.fv_range(f)) p[static_cast<std::size_t>(k++)] = point(mesh_, v);
+      const double angle = min_angle_deg(p[0], p[1], p[2]);
+      if (angle < options_.collapse_below_angle_deg) bad.emplace_back(angle, f.idx());
+    }
+    std::sort(bad.begin(), bad.end());
+    for (const auto& [angle, index] : bad) {
+      const TriMesh::FaceHandle f(index);
+      if (mesh_.status(f).deleted()) continue;
+      // Its shortest edge.
+      TriMesh::HalfedgeHandle shortest;
+      double length = std::numeric_limits<double>::infinity();
+      for (auto h : mesh_.fh_range(f)) {
+        const double l = mesh_.calc_edge_length(h);
+        if (l < length) {
+          length = l;
+          shortest = h;
+        }
+      }
+      if (try_collapse(shortest, out) || try_collapse(mesh_.opposite_halfedge_handle(shortest), out)) ++out.n_merges;
+    }
+    // Chains (b into a, later a into c) resolve to their last survivor.
+    for (std::size_t g = 0; g < out.target.size(); ++g) {
+      int t = out.target[g];
+      while (out.target[static_cast<std::size_t>(t)] != t) t = out.target[static_cast<std::size_t>(t)];
+      out.target[g] = t;
+    }
+    return out;
+  }
+
+ private:
+  int node(TriMesh::VertexHandle v) const { return vertex_node_[static_cast<std::size_t>(v.idx())]; }
+
+  // Where the survivor a may go when b (the removed node) merges into it: up to 3
+  // candidates, 0 when the merge is not allowed. b has the lower rank (inner < border <
+  // corner) and is no feature node; a feature survivor never moves.
+  int candidates(TriMesh::HalfedgeHandle h, std::array<Vec, 3>& q) const {
+    const auto vb = mesh_.from_vertex_handle(h);
+    const auto va = mesh_.to_vertex_handle(h);
+    const auto b = static_cast<std::size_t>(node(vb));
+    const auto a = static_cast<std::size_t>(node(va));
+    if (is_feature_[b] != 0 || is_frozen_[b] != 0 || mesh_.is_boundary(vb) || mesh_.is_boundary(va)) return 0;
+    const NodeKind kb = surface_.node_kind[b];
+    const NodeKind ka = surface_.node_kind[a];
+    if (rank(kb) > rank(ka)) return 0;
+    const Vec pa = point(mesh_, va), pb = point(mesh_, vb);
+    const Vec middle = 0.5 * (pa + pb);
+    q[0] = pa;
+    if (is_feature_[a] != 0) return 1;
+    if (kb == NodeKind::Inner) {
+      if (ka != NodeKind::Inner) return 1;  // into the border (or corner) node, which stays
+      if (surface_.node_owner[a] != surface_.node_owner[b]) return 0;
+      q[1] = surface_.surfaces[static_cast<std::size_t>(surface_.node_owner[a])].project(middle);
+      return q[1].allFinite() ? 2 : 1;
+    }
+    // b on a border: only along its own curve, so the curve keeps its course.
+    const TriMesh::FaceHandle f0 = mesh_.face_handle(h), f1 = mesh_.opposite_face_handle(h);
+    const int p0 = face_patch_[static_cast<std::size_t>(f0.idx())];
+    const int p1 = face_patch_[static_cast<std::size_t>(f1.idx())];
+    if (p0 == p1) return 0;
+    if (kb == NodeKind::Border) {
+      const int c = curve_of_[b];
+      if (c < 0 || c != surface_.node_owner[b]) return 0;
+      const auto& nodes = surface_.curve_nodes[static_cast<std::size_t>(c)];
+      const int i = index_on_curve_[b];
+      const int n = static_cast<int>(nodes.size());
+      const bool is_closed = surface_.node_kind[static_cast<std::size_t>(nodes.front())] == NodeKind::Border;
+      auto at = [&](int k) { return nodes[static_cast<std::size_t>(is_closed ? (k + n) % n : k)]; };
+      const bool adjacent = ((is_closed || i > 0) && at(i - 1) == static_cast<int>(a)) ||
+                            ((is_closed || i + 1 < n) && at(i + 1) == static_cast<int>(a));
+      if (!adjacent) return 0;
+      if (ka == NodeKind::Corner) return 1;
+      q[1] = 0.5 * (surface_.surfaces[static_cast<std::size_t>(p0)].project(middle) +
+                    surface_.surfaces[static_cast<std::size_t>(p1)].project(middle));
+      return q[1].allFinite() ? 2 : 1;
+    }
+    // Two corners: only when the edge is a whole curve (one piece).
+    for (const auto& nodes : surface_.curve_nodes) {
+      if (nodes.size() == 2 && ((nodes[0] == static_cast<int>(a) && nodes[1] == static_cast<int>(b)) ||
+                                (nodes[0] == static_cast<int>(b) && nodes[1] == static_cast<int>(a)))) {
+        q[1] = middle;
+        q[2] = pb;
+        return 3;
+      }
+    }
+    return 0;
+  }
+
+  // Smallest angle (deg) of the triangles around va and vb after collapsing h (b = from(h)
+  // into a = to(h)) with a at q; -1 when a triangle degenerates or its normal turns too far.
+  double min_angle_after(TriMesh::HalfedgeHandle h, const Vec& q) const {
+    const auto vb = mesh_.from_vertex_handle(h);
+    const auto va = mesh_.to_vertex_handle(h);
+    const TriMesh::FaceHandle f0 = mesh_.face_handle(h), f1 = mesh_.opposite_face_handle(h);
+    double smallest = 180.0;
+    for (const auto v : {va, vb}) {
+      for (auto g : mesh_.vf_range(v)) {
+        if (g == f0 || g == f1) continue;
+        std::array<TriMesh::VertexHandle, 3> w;
+        int k = 0;
+        for (auto u : mesh_.fv_range(g)) w[static_cast<std::size_t>(k++)] = u;
+        if (v == va && (w[0] == vb || w[1] == vb || w[2] == vb)) continue;  // seen from vb
+        std::array<Vec, 3> x, y;
+        for (std::size_t i = 0; i < 3; ++i) {
+          x[i] = point(mesh_, w[i]);
+          y[i] = w[i] == va || w[i] == vb ? q : x[i];
+        }
+        const Vec n_old = (x[1] - x[0]).cross(x[2] - x[0]), n_new = (y[1] - y[0]).cross(y[2] - y[0]);
+        const double l_old = n_old.norm(), l_new = n_new.norm();
+        if (l_new <= min_double_area_ || (l_old > 0.0 && n_new.dot(n_old) <= options_.min_normal_dot * l_old * l_new)) return -1.0;
+        smallest = std::min(smallest, min_angle_deg(y[0], y[1], y[2]));
+      }
+    }
+    return smallest;
+  }
+
+  // Collapses b = from(h) into a = to(h) at the best candidate position when the smallest
+  // angle around them grows; records the merge.
+  bool try_collapse(TriMesh::HalfedgeHandle h, NodeMerges& merges) {
+    std::array<Vec, 3> q;
+    const int n = candidates(h, q);
+    if (n == 0 || !mesh_.is_collapse_ok(h)) return false;
+    const auto vb = mesh_.from_vertex_handle(h);
+    const auto va = mesh_.to_vertex_handle(h);
+    double old_min = 180.0;
+    for (const auto v : {va, vb}) {
+      for (auto g : mesh_.vf_range(v)) {
+        std::array<Vec, 3> x;
+        int k = 0;
+        for (auto u : mesh_.fv_range(g)) x[static_cast<std::size_t>(k++)] = point(mesh_, u);
+        old_min = std::min(old_min, min_angle_deg(x[0], x[1], x[2]));
+      }
+    }
+    int best = -1;
+    double best_min = old_min;
+    for (int i = 0; i < n; ++i) {
+      const double m = min_angle_after(h, q[static_cast<std::size_t>(i)]);
+      if (m > best_min) {
+        best_min = m;
+        best = i;
+      }
+    }
+    if (best < 0) return false;
+    mesh_.collapse(h);
+    mesh_.set_point(va, to_openmesh(q[static_cast<std::size_t>(best)]));
+    merges.target[static_cast<std::size_t>(node(vb))] = node(va);
+    merges.moved.emplace_back(node(va), q[static_cast<std::size_t>(best)]);
+    return true;
+  }
+
+  const SurfaceMesh& surface_;
+  const StitchOptions& options_;
+  TriMesh mesh_;
+  const std::vector<int>& vertex_node_;
+  const std::vector<int>& face_patch_;
+  const std::vector<std::uint8_t>& is_feature_;
+  const std::vector<std::uint8_t>& is_frozen_;
+  std::vector<int> curve_of_;
+  std::vector<int> index_on_curve_;
+  double min_double_area_ = 0.0;
+};
+
+}  // namespace
+
+NodeMerges collapse_short_edges(const SurfaceMesh& surface, const StitchOptions& options, const StitchResult& assembled,
+                                const std::vector<std::uint8_t>& is_feature, const std::vector<std::uint8_t>& is_frozen) {
+  if (!(options.collapse_below_angle_deg > 0.0)) {
+    NodeMerges none;
+    none.target.resize(surface.nodes.size());
+    std::iota(none.target.begin(), none.target.end(), 0);
+    return none;
+  }
+  Collapser collapser(surface, options, assembled.mesh, assembled.vertex_node, assembled.face_patch, is_feature, is_frozen);
+  return collapser.run();
+}
+
+}  // namespace nurbsfront::stitch_detail
