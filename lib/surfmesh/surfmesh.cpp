@@ -251,6 +251,9 @@ SurfaceMesh mesh_surface(const TriMesh& input, const Segmentation& segmentation,
   run_parallel(n_patches, threads, options.progress, 0.5, 1.0, [&](std::size_t p) {
     mesh_patch(segmentation, static_cast<int>(p), borders, options, h, results[p]);
   });
+  // Patches meshed independently can join the same two border nodes (a thin fin, a tiny
+  // closed component): split such shared chords before the numbering.
+  out.n_shared_chords_resolved = resolve_shared_chords(segmentation, borders, results);
 
   // Global numbering: border nodes, then the inner nodes patch by patch.
   out.n_border_nodes = borders.positions.size();

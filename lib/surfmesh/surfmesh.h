@@ -169,6 +169,10 @@ struct SurfaceMesh {
   std::vector<PatchMeshReport> patches; //!< one per patch
   double target_size = 0.0;             //!< the resolved uniform target edge length
   double input_mean_edge = 0.0;         //!< mean edge length of the input
+  //! Chords (edges between two border nodes that are not a border segment) that two patches
+  //! (or a patch and a border curve) both had, split in the later patch, plus triangles of
+  //! three border nodes that two patches both had, given a centre node.
+  std::size_t n_shared_chords_resolved = 0;
 };
 
 //! Discretises the border curves, fits and meshes every patch.

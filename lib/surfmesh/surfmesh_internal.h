@@ -108,6 +108,19 @@ void fit_patch(const TriMesh& mesh, const Segmentation& segmentation, int p, con
 void mesh_patch(const Segmentation& segmentation, int p, const BorderNodes& borders, const SurfMeshOptions& options,
                 double uniform_size, PatchResult& result);
 
+//! Independently meshed patches can join the same two border nodes by an edge that is not
+//! their border segment (a chord): two patches on either side of a thin fin or of a tiny
+//! closed component cut the same ear off their common border (the 3D edge then has four
+//! triangles, a duplicated triangle when the third node agrees too), or a chord of one
+//! patch is a border segment of another curve. In patch order, every chord that is a
+//! border segment or a chord of an earlier patch is split at its midpoint in the patch
+//! plane (a new inner node lifted onto the patch's surface), and a triangle of three border
+//! segments that an earlier patch already has (a closed curve of three nodes) gets a node
+//! at its centroid. Deterministic. Returns the number of chords split plus triangles
+//! filled.
+std::size_t resolve_shared_chords(const Segmentation& segmentation, const BorderNodes& borders,
+                                  std::vector<PatchResult>& results);
+
 //! A point strictly inside a simple polygon (either orientation), near its leftmost vertex.
 //! Returns false when no such point was found (a degenerate polygon).
 [[nodiscard]] bool point_inside_polygon(const std::vector<Eigen::Vector2d>& polygon, Eigen::Vector2d& inside);
