@@ -21,43 +21,6 @@ namespace nurbsfront::surfmesh_detail {
 
 namespace {
 
-// Traces the directed edges into loops. Where loops touch (a node with several outgoing
-// edges), the next edge is the first outgoing one clockwise from the incoming edge's
-// reverse: it bounds the domain sector on the left of the incoming edge.
-std::vector<std::vector<int>> trace_loops(const std::vector<Eigen::Vector2d>& xy, const std::vector<std::array<int, 2>>& edges) {
-  std::vector<std::vector<int>> outgoing(xy.size());
-  for (std::size_t e = 0; e < edges.size(); ++e) outgoing[static_cast<std::size_t>(edges[e][0])].push_back(static_cast<int>(e));
-  std::vector<bool> used(edges.size(), false);
-  std::vector<std::vector<int>> loops;
-  for (std::size_t start = 0; start < edges.size(); ++start) {
-    if (used[start]) continue;
-    std::vector<int> loop;
-    int e = static_cast<int>(start);
-    while (e >= 0 && !used[static_cast<std::size_t>(e)]) {
-      used[static_cast<std::size_t>(e)] = true;
-      const auto [u, v] = edges[static_cast<std::size_t>(e)];
-      loop.push_back(u);
-      const Eigen::Vector2d back = xy[static_cast<std::size_t>(u)] - xy[static_cast<std::size_t>(v)];
-      const double a0 = std::atan2(back.y(), back.x());
-      int best = -1;
-      double best_sweep = 0.0;
-      for (const int cand : outgoing[static_cast<std::size_t>(v)]) {
-        if (used[static_cast<std::size_t>(cand)]) continue;
-        const Eigen::Vector2d d = xy[static_cast<std::size_t>(edges[static_cast<std::size_t>(cand)][1])] - xy[static_cast<std::size_t>(v)];
-        double sweep = a0 - std::atan2(d.y(), d.x());
-        while (sweep <= 0.0) sweep += 2.0 * std::numbers::pi;
-        if (best < 0 || sweep < best_sweep) {
-          best = cand;
-          best_sweep = sweep;
-        }
-      }
-      e = best;
-    }
-    loops.push_back(std::move(loop));
-  }
-  return loops;
-}
-
 // A traced loop that passes a corner twice (a neighbouring patch inside this one touching
 // its outer loop there, two lobes joined at a corner) is split into simple cycles
 // (split_at_repeated_vertices): a touching hole becomes its own clockwise cycle and gets
@@ -129,6 +92,43 @@ std::string what_of(const std::exception_ptr& error) {
 }
 
 }  // namespace
+
+// Traces the directed edges into loops. Where loops touch (a node with several outgoing
+// edges), the next edge is the first outgoing one clockwise from the incoming edge's
+// reverse: it bounds the domain sector on the left of the incoming edge.
+std::vector<std::vector<int>> trace_loops(const std::vector<Eigen::Vector2d>& xy, const std::vector<std::array<int, 2>>& edges) {
+  std::vector<std::vector<int>> outgoing(xy.size());
+  for (std::size_t e = 0; e < edges.size(); ++e) outgoing[static_cast<std::size_t>(edges[e][0])].push_back(static_cast<int>(e));
+  std::vector<bool> used(edges.size(), false);
+  std::vector<std::vector<int>> loops;
+  for (std::size_t start = 0; start < edges.size(); ++start) {
+    if (used[start]) continue;
+    std::vector<int> loop;
+    int e = static_cast<int>(start);
+    while (e >= 0 && !used[static_cast<std::size_t>(e)]) {
+      used[static_cast<std::size_t>(e)] = true;
+      const auto [u, v] = edges[static_cast<std::size_t>(e)];
+      loop.push_back(u);
+      const Eigen::Vector2d back = xy[static_cast<std::size_t>(u)] - xy[static_cast<std::size_t>(v)];
+      const double a0 = std::atan2(back.y(), back.x());
+      int best = -1;
+      double best_sweep = 0.0;
+      for (const int cand : outgoing[static_cast<std::size_t>(v)]) {
+        if (used[static_cast<std::size_t>(cand)]) continue;
+        const Eigen::Vector2d d = xy[static_cast<std::size_t>(edges[static_cast<std::size_t>(cand)][1])] - xy[static_cast<std::size_t>(v)];
+        double sweep = a0 - std::atan2(d.y(), d.x());
+        while (sweep <= 0.0) sweep += 2.0 * std::numbers::pi;
+        if (best < 0 || sweep < best_sweep) {
+          best = cand;
+          best_sweep = sweep;
+        }
+      }
+      e = best;
+    }
+    loops.push_back(std::move(loop));
+  }
+  return loops;
+}
 
 bool polygon_contains(const std::vector<Eigen::Vector2d>& polygon, const Eigen::Vector2d& q) {
   bool inside = false;

@@ -199,14 +199,22 @@ SurfaceMesh mesh_surface(const TriMesh& input, const Segmentation& segmentation,
       return s;
     };
   }
-  // Chords of the smoothed curves may cross in a small patch's plane: such curves are
-  // resampled from their input positions, and if that still crosses, take their input
-  // vertices (which the segmentation guarantees not to cross).
+  // Chords of the smoothed curves may cross in a small patch's plane, and a small loop
+  // resampled into a few nodes may turn the other way round: such curves are resampled from
+  // their input positions, and if that is still wrong, take their input vertices (which the
+  // segmentation guarantees not to cross).
   std::vector<CurveSource> source(segmentation.curves.size(), CurveSource::Smoothed);
   BorderNodes borders = discretise_borders(input, segmentation, size_at, source);
   for (bool changed = true; changed;) {
     changed = false;
-    for (const int c : crossing_curves(segmentation, borders)) {
+    std::vector<int> bad = crossing_curves(segmentation, borders);
+    const std::vector<int> flipped = flipped_loops(input, segmentation, borders);
+    bad.insert(bad.end(), flipped.begin(), flipped.end());
+    const std::vector<int> extra = extra_outer_loop_curves(segmentation, borders);
+    bad.insert(bad.end(), extra.begin(), extra.end());
+    std::sort(bad.begin(), bad.end());
+    bad.erase(std::unique(bad.begin(), bad.end()), bad.end());
+    for (const int c : bad) {
       CurveSource& s = source[static_cast<std::size_t>(c)];
       if (s == CurveSource::InputVertices) continue;  // crossing anyway: the patch will fail
       s = s == CurveSource::Smoothed ? CurveSource::Input : CurveSource::InputVertices;

@@ -64,6 +64,11 @@ struct PatchBorder {
 //! axis; exact predicates).
 [[nodiscard]] std::vector<int> crossing_curves(const Segmentation& segmentation, const BorderNodes& borders);
 
+//! Closed curves (ascending ids) whose discretised loop turns the other way round (or has no
+//! area) in the plane of one of their patches than their input vertices: a small hole loop
+//! resampled into three or four nodes can flip, and the patch then has a second outer loop.
+[[nodiscard]] std::vector<int> flipped_loops(const TriMesh& mesh, const Segmentation& segmentation, const BorderNodes& borders);
+
 //! Per curve (deg): the median over its vertices (the interior ones of an open curve) of
 //! the angle between the area-weighted mean normals of the faces within `rings`
 //! edge-adjacent rings around the vertex on each side (starting in one patch, never entering
@@ -120,6 +125,18 @@ void mesh_patch(const Segmentation& segmentation, int p, const BorderNodes& bord
 //! filled.
 std::size_t resolve_shared_chords(const Segmentation& segmentation, const BorderNodes& borders,
                                   std::vector<PatchResult>& results);
+
+//! Traces directed edges (xy: node positions) into loops of node indices. Where loops
+//! touch (a node with several outgoing edges), the next edge is the first outgoing one
+//! clockwise from the incoming edge's reverse.
+[[nodiscard]] std::vector<std::vector<int>> trace_loops(const std::vector<Eigen::Vector2d>& xy,
+                                                      const std::vector<std::array<int, 2>>& edges);
+
+//! Curves (ascending ids) of the simple cycles of a patch's traced border loops (split at
+//! repeated nodes) that turn counter-clockwise in its plane besides its largest one: a
+//! small hole bounded by a few nodes can flip (the segmentation guarantees one
+//! counter-clockwise loop for the input vertices).
+[[nodiscard]] std::vector<int> extra_outer_loop_curves(const Segmentation& segmentation, const BorderNodes& borders);
 
 //! A point strictly inside a simple polygon (either orientation), near its leftmost vertex.
 //! Returns false when no such point was found (a degenerate polygon).

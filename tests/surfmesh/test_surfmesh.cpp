@@ -406,6 +406,32 @@ TEST(Surfmesh, CrossingCurvesFoundInThePatchPlane) {
   EXPECT_EQ(surfmesh_detail::crossing_curves(seg, folded), std::vector<int>{middle});
 }
 
+TEST(Surfmesh, FlippedHoleLoopFound) {
+  // A one-face patch inside a flat grid: a closed 3-vertex hole loop of patch 0. Resampled
+  // into a few nodes, such a loop (a steep sliver in the patch plane) turned the other way
+  // round on the CGAL liver (3 patches MeshFailed: "2 counter-clockwise loops"); reversing
+  // its nodes here must be found both as a flipped loop and as an extra outer loop.
+  constexpr int kN = 8;
+  const TriMesh mesh = to_trimesh(test::grid_patch(kN, kN));
+  std::vector<int> face_patch(mesh.n_faces(), 0);
+  face_patch[static_cast<std::size_t>(2 * (3 * kN + 3))] = 1;
+  const Segmentation seg = labelled_segmentation(mesh, face_patch, 2);
+  const std::vector<surfmesh_detail::CurveSource> source(seg.curves.size(), surfmesh_detail::CurveSource::InputVertices);
+  surfmesh_detail::BorderNodes borders =
+      surfmesh_detail::discretise_borders(mesh, seg, [](const Eigen::Vector3d&) { return 1.0 / kN; }, source);
+  EXPECT_TRUE(surfmesh_detail::flipped_loops(mesh, seg, borders).empty());
+  EXPECT_TRUE(surfmesh_detail::extra_outer_loop_curves(seg, borders).empty());
+  int hole = -1;
+  for (std::size_t c = 0; c < seg.curves.size(); ++c)
+    if (seg.curves[c].is_closed && seg.curves[c].patch_right >= 0) hole = static_cast<int>(c);
+  ASSERT_GE(hole, 0);
+  const std::vector<int>& nodes = borders.curve_nodes[static_cast<std::size_t>(hole)];
+  ASSERT_EQ(nodes.size(), 3u);
+  std::swap(borders.positions[static_cast<std::size_t>(nodes[1])], borders.positions[static_cast<std::size_t>(nodes[2])]);
+  EXPECT_EQ(surfmesh_detail::flipped_loops(mesh, seg, borders), std::vector<int>{hole});
+  EXPECT_EQ(surfmesh_detail::extra_outer_loop_curves(seg, borders), std::vector<int>{hole});
+}
+
 // Most of the curve's input edges have a dihedral above the angle (a crease that is not
 // bevelled).
 bool sharp_edges(const TriMesh& mesh, const BorderCurve& curve, double angle_deg) {
