@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <exception>
+#include <limits>
 #include <memory>
 #include <numbers>
 #include <stdexcept>
@@ -223,6 +224,63 @@ void fit_patch(const TriMesh& mesh, const Segmentation& seg, int p, const Border
     result.report.message = "fit failed: " + what_of(std::current_exception());
   }
   result.report.seconds += clock.seconds();
+}
+
+std::size_t clamp_inner_nodes(const TriMesh& mesh, const Segmentation& seg, int p, double max_offset, PatchResult& result) {
+  if (result.inner_nodes.empty() || !result.has_surface) return 0;
+  const PatchFrame& frame = result.surface.frame;
+  const std::vector<int>& faces = seg.patches[static_cast<std::size_t>(p)].faces;
+  // The patch's input faces in its frame, in a uniform grid of about one face per cell.
+  std::vector<std::array<Eigen::Vector3d, 3>> local(faces.size());
+  Eigen::Vector2d lo = Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity());
+  Eigen::Vector2d hi = -lo;
+  for (std::size_t i = 0; i < faces.size(); ++i) {
+    int k = 0;
+    for (const auto v : mesh.fv_range(TriMesh::FaceHandle(faces[i]))) {
+      local[i][static_cast<std::size_t>(k++)] = frame.to_local(to_eigen(mesh.point(v)));
+      lo = lo.cwiseMin(local[i][static_cast<std::size_t>(k - 1)].head<2>());
+      hi = hi.cwiseMax(local[i][static_cast<std::size_t>(k - 1)].head<2>());
+    }
+  }
+  const Eigen::Vector2d extent = (hi - lo).cwiseMax(1e-300);
+  const double cell = std::sqrt(extent.x() * extent.y() / static_cast<double>(faces.size())) + 1e-300;
+  const int nx = std::clamp(static_cast<int>(extent.x() / cell) + 1, 1, 4096);
+  const int ny = std::clamp(static_cast<int>(extent.y() / cell) + 1, 1, 4096);
+  auto index = [&](double x, double y, int& i, int& j) {
+    i = std::clamp(static_cast<int>((x - lo.x()) / extent.x() * nx), 0, nx - 1);
+    j = std::clamp(static_cast<int>((y - lo.y()) / extent.y() * ny), 0, ny - 1);
+  };
+  std::vector<std::vector<int>> grid(static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny));
+  for (std::size_t f = 0; f < local.size(); ++f) {
+    int i0 = 0, j0 = 0, i1 = 0, j1 = 0;
+    const auto& t = local[f];
+    index(std::min({t[0].x(), t[1].x(), t[2].x()}), std::min({t[0].y(), t[1].y(), t[2].y()}), i0, j0);
+    index(std::max({t[0].x(), t[1].x(), t[2].x()}), std::max({t[0].y(), t[1].y(), t[2].y()}), i1, j1);
+    for (int j = j0; j <= j1; ++j)
+      for (int i = i0; i <= i1; ++i) grid[static_cast<std::size_t>(j) * static_cast<std::size_t>(nx) + static_cast<std::size_t>(i)].push_back(static_cast<int>(f));
+  }
+  std::size_t n_clamped = 0;
+  for (auto& node : result.inner_nodes) {
+    Eigen::Vector3d q = frame.to_local(node);
+    int i = 0, j = 0;
+    index(q.x(), q.y(), i, j);
+    for (const int f : grid[static_cast<std::size_t>(j) * static_cast<std::size_t>(nx) + static_cast<std::size_t>(i)]) {
+      const auto& t = local[static_cast<std::size_t>(f)];
+      const double area = (t[1].x() - t[0].x()) * (t[2].y() - t[0].y()) - (t[1].y() - t[0].y()) * (t[2].x() - t[0].x());
+      if (!(std::abs(area) > 0.0)) continue;
+      const double b1 = ((q.x() - t[0].x()) * (t[2].y() - t[0].y()) - (q.y() - t[0].y()) * (t[2].x() - t[0].x())) / area;
+      const double b2 = ((t[1].x() - t[0].x()) * (q.y() - t[0].y()) - (t[1].y() - t[0].y()) * (q.x() - t[0].x())) / area;
+      if (b1 < 0.0 || b2 < 0.0 || b1 + b2 > 1.0) continue;
+      const double z = (1.0 - b1 - b2) * t[0].z() + b1 * t[1].z() + b2 * t[2].z();
+      if (std::abs(q.z() - z) > max_offset) {
+        q.z() = z + std::clamp(q.z() - z, -max_offset, max_offset);
+        node = frame.to_world(q);
+        ++n_clamped;
+      }
+      break;
+    }
+  }
+  return n_clamped;
 }
 
 void mesh_patch(const Segmentation& seg, int p, const BorderNodes& borders, const SurfMeshOptions& options,

@@ -164,6 +164,8 @@ void SurfMeshOptions::validate() const {
   if (smoothing_passes < 0) bad_option("smoothing_passes must be >= 0, got " + std::to_string(smoothing_passes));
   if (!(crease_angle_deg > 0.0 && crease_angle_deg <= 180.0))
     bad_option("crease_angle_deg must be in (0, 180], got " + std::to_string(crease_angle_deg));
+  if (!(std::isfinite(max_node_offset_edges) && max_node_offset_edges >= 0.0))
+    bad_option("max_node_offset_edges must be finite and >= 0, got " + std::to_string(max_node_offset_edges));
   if (threads < 0) bad_option("threads must be >= 0, got " + std::to_string(threads));
 }
 
@@ -258,6 +260,9 @@ SurfaceMesh mesh_surface(const TriMesh& input, const Segmentation& segmentation,
 
   run_parallel(n_patches, threads, options.progress, 0.5, 1.0, [&](std::size_t p) {
     mesh_patch(segmentation, static_cast<int>(p), borders, options, h, results[p]);
+    if (options.max_node_offset_edges > 0.0)
+      results[p].report.n_clamped_nodes =
+          clamp_inner_nodes(input, segmentation, static_cast<int>(p), options.max_node_offset_edges * mean_edge, results[p]);
   });
   // Patches meshed independently can join the same two border nodes (a thin fin, a tiny
   // closed component): split such shared chords before the numbering.

@@ -105,6 +105,11 @@ struct SurfMeshOptions {
   //! patches' surfaces, except corners of a feature curve (crease or input boundary), which
   //! keep their input position. Default true.
   bool project_border_nodes = false;
+  //! Largest distance, in mean input edges, of a new inner node from the patch's own input
+  //! faces along the patch axis: a node the fit lifts further (the fit smooths thin fins,
+  //! tips and sharp bends by several edges, and such a node can pass through the
+  //! neighbouring sheet) is moved back to this distance. 0 disables. Default 1.
+  double max_node_offset_edges = 1.0;
   //! Worker threads for the patches; 0 = all hardware threads. The output is bit-identical
   //! for every thread count. Default 0.
   int threads = 0;
@@ -140,6 +145,7 @@ struct PatchMeshReport {
   std::size_t n_triangles = 0;
   double fit_max_residual = 0.0; //!< at the patch's input vertices
   int fit_levels = 0;
+  std::size_t n_clamped_nodes = 0; //!< inner nodes moved back (max_node_offset_edges)
   double seconds = 0.0;
 };
 

@@ -138,6 +138,16 @@ std::size_t resolve_shared_chords(const Segmentation& segmentation, const Border
 //! counter-clockwise loop for the input vertices).
 [[nodiscard]] std::vector<int> extra_outer_loop_curves(const Segmentation& segmentation, const BorderNodes& borders);
 
+//! Moves every inner node of patch p whose height in the patch frame is more than
+//! max_offset off the patch's own input faces straight above or below it back to
+//! max_offset from them (the patch's faces are a graph over its plane, so that face is
+//! unique). The fit smooths sharp detail (thin fins, creases below the crease angle, tips)
+//! by more than a mean edge, and a node lifted that far can pass through the neighbouring
+//! sheet. Nodes over no face (outside the input's projection) keep their place. Returns
+//! the number of nodes moved.
+std::size_t clamp_inner_nodes(const TriMesh& mesh, const Segmentation& segmentation, int p, double max_offset,
+                              PatchResult& result);
+
 //! A point strictly inside a simple polygon (either orientation), near its leftmost vertex.
 //! Returns false when no such point was found (a degenerate polygon).
 [[nodiscard]] bool point_inside_polygon(const std::vector<Eigen::Vector2d>& polygon, Eigen::Vector2d& inside);

@@ -432,6 +432,53 @@ TEST(Surfmesh, FlippedHoleLoopFound) {
   EXPECT_EQ(surfmesh_detail::extra_outer_loop_curves(seg, borders), std::vector<int>{hole});
 }
 
+// Largest |height of an inner node - height of the input face straight below it| (frame z
+// is the world z here: one flat patch with axis z).
+double max_inner_offset(const TriMesh& mesh, const SurfaceMesh& sm) {
+  double worst = 0.0;
+  for (std::size_t v = sm.n_border_nodes; v < sm.nodes.size(); ++v) {
+    const Eigen::Vector3d& q = sm.nodes[v];
+    for (const auto f : mesh.faces()) {
+      std::array<Eigen::Vector3d, 3> t;
+      int k = 0;
+      for (const auto w : mesh.fv_range(f)) t[static_cast<std::size_t>(k++)] = to_eigen(mesh.point(w));
+      const double area = (t[1] - t[0]).x() * (t[2] - t[0]).y() - (t[1] - t[0]).y() * (t[2] - t[0]).x();
+      const double b1 = ((q - t[0]).x() * (t[2] - t[0]).y() - (q - t[0]).y() * (t[2] - t[0]).x()) / area;
+      const double b2 = ((t[1] - t[0]).x() * (q - t[0]).y() - (t[1] - t[0]).y() * (q - t[0]).x()) / area;
+      if (b1 < 0.0 || b2 < 0.0 || b1 + b2 > 1.0) continue;
+      worst = std::max(worst, std::abs(q.z() - ((1.0 - b1 - b2) * t[0].z() + b1 * t[1].z() + b2 * t[2].z())));
+      break;
+    }
+  }
+  return worst;
+}
+
+TEST(Surfmesh, InnerNodesStayNearTheirPatchsFaces) {
+  // A flat grid with one vertex raised by 6 edges: a spike the fit (lattice spacing 2.5
+  // edges) smooths away, so nodes lifted onto it are edges off the input. On the Stanford
+  // bunny such nodes (5 mean edges off) passed through a neighbouring patch (12
+  // intersecting pairs); they are moved back to max_node_offset_edges from the input.
+  constexpr int kN = 20;
+  TriMesh mesh = to_trimesh(test::grid_patch(kN, kN));
+  const double edge = 1.0 / kN;
+  mesh.point(TriMesh::VertexHandle((kN / 2) * (kN + 1) + kN / 2))[2] = 6.0 * edge;
+  const Segmentation seg = labelled_segmentation(mesh, std::vector<int>(mesh.n_faces(), 0), 1);
+  SurfMeshOptions options;
+  options.sizing.size = 0.6 * edge;
+  options.max_node_offset_edges = 0.0;
+  const SurfaceMesh free = mesh_surface(mesh, seg, options);
+  const double mean_edge = free.input_mean_edge;
+  EXPECT_GT(max_inner_offset(mesh, free), 1.5 * mean_edge);  // the fit alone is far off
+  options.max_node_offset_edges = 1.0;
+  const SurfaceMesh clamped = mesh_surface(mesh, seg, options);
+  expect_consistent(seg, clamped);
+  EXPECT_LE(max_inner_offset(mesh, clamped), 1.0 * mean_edge * (1.0 + 1e-9));
+  EXPECT_GT(clamped.patches[0].n_clamped_nodes, 0u);
+  EXPECT_EQ(count_self_intersections(as_soup(clamped)), 0u);
+  options.max_node_offset_edges = -1.0;
+  EXPECT_THROW((void)mesh_surface(mesh, seg, options), InvalidInput);
+}
+
 // Most of the curve's input edges have a dihedral above the angle (a crease that is not
 // bevelled).
 bool sharp_edges(const TriMesh& mesh, const BorderCurve& curve, double angle_deg) {
