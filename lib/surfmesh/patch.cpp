@@ -226,59 +226,75 @@ void fit_patch(const TriMesh& mesh, const Segmentation& seg, int p, const Border
   result.report.seconds += clock.seconds();
 }
 
-std::size_t clamp_inner_nodes(const TriMesh& mesh, const Segmentation& seg, int p, double max_offset, PatchResult& result) {
-  if (result.inner_nodes.empty() || !result.has_surface) return 0;
-  const PatchFrame& frame = result.surface.frame;
-  const std::vector<int>& faces = seg.patches[static_cast<std::size_t>(p)].faces;
-  // The patch's input faces in its frame, in a uniform grid of about one face per cell.
-  std::vector<std::array<Eigen::Vector3d, 3>> local(faces.size());
-  Eigen::Vector2d lo = Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity());
-  Eigen::Vector2d hi = -lo;
+}  // namespace nurbsfront::surfmesh_detail
+
+namespace nurbsfront {
+
+PatchInputHeights::PatchInputHeights(const TriMesh& mesh, const std::vector<int>& faces, const PatchFrame& frame) {
+  // The faces in the frame, in a uniform grid of about one face per cell.
+  local_.resize(faces.size());
+  lo_ = Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity());
+  Eigen::Vector2d hi = -lo_;
   for (std::size_t i = 0; i < faces.size(); ++i) {
-    int k = 0;
+    std::size_t k = 0;
     for (const auto v : mesh.fv_range(TriMesh::FaceHandle(faces[i]))) {
-      local[i][static_cast<std::size_t>(k++)] = frame.to_local(to_eigen(mesh.point(v)));
-      lo = lo.cwiseMin(local[i][static_cast<std::size_t>(k - 1)].head<2>());
-      hi = hi.cwiseMax(local[i][static_cast<std::size_t>(k - 1)].head<2>());
+      local_[i][k] = frame.to_local(to_eigen(mesh.point(v)));
+      lo_ = lo_.cwiseMin(local_[i][k].head<2>());
+      hi = hi.cwiseMax(local_[i][k].head<2>());
+      ++k;
     }
   }
-  const Eigen::Vector2d extent = (hi - lo).cwiseMax(1e-300);
-  const double cell = std::sqrt(extent.x() * extent.y() / static_cast<double>(faces.size())) + 1e-300;
-  const int nx = std::clamp(static_cast<int>(extent.x() / cell) + 1, 1, 4096);
-  const int ny = std::clamp(static_cast<int>(extent.y() / cell) + 1, 1, 4096);
-  auto index = [&](double x, double y, int& i, int& j) {
-    i = std::clamp(static_cast<int>((x - lo.x()) / extent.x() * nx), 0, nx - 1);
-    j = std::clamp(static_cast<int>((y - lo.y()) / extent.y() * ny), 0, ny - 1);
-  };
-  std::vector<std::vector<int>> grid(static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny));
-  for (std::size_t f = 0; f < local.size(); ++f) {
-    int i0 = 0, j0 = 0, i1 = 0, j1 = 0;
-    const auto& t = local[f];
-    index(std::min({t[0].x(), t[1].x(), t[2].x()}), std::min({t[0].y(), t[1].y(), t[2].y()}), i0, j0);
-    index(std::max({t[0].x(), t[1].x(), t[2].x()}), std::max({t[0].y(), t[1].y(), t[2].y()}), i1, j1);
-    for (int j = j0; j <= j1; ++j)
-      for (int i = i0; i <= i1; ++i) grid[static_cast<std::size_t>(j) * static_cast<std::size_t>(nx) + static_cast<std::size_t>(i)].push_back(static_cast<int>(f));
+  if (faces.empty()) return;
+  extent_ = (hi - lo_).cwiseMax(std::numeric_limits<double>::min());
+  const double cell = std::sqrt(extent_.x() * extent_.y() / static_cast<double>(faces.size())) + std::numeric_limits<double>::min();
+  nx_ = std::clamp(static_cast<int>(extent_.x() / cell) + 1, 1, 4096);
+  ny_ = std::clamp(static_cast<int>(extent_.y() / cell) + 1, 1, 4096);
+  grid_.resize(static_cast<std::size_t>(nx_) * static_cast<std::size_t>(ny_));
+  for (std::size_t f = 0; f < local_.size(); ++f) {
+    const auto& t = local_[f];
+    const std::size_t c0 = cell_of(std::min({t[0].x(), t[1].x(), t[2].x()}), std::min({t[0].y(), t[1].y(), t[2].y()}));
+    const std::size_t c1 = cell_of(std::max({t[0].x(), t[1].x(), t[2].x()}), std::max({t[0].y(), t[1].y(), t[2].y()}));
+    const std::size_t nx = static_cast<std::size_t>(nx_);
+    for (std::size_t j = c0 / nx; j <= c1 / nx; ++j)
+      for (std::size_t i = c0 % nx; i <= c1 % nx; ++i) grid_[j * nx + i].push_back(static_cast<int>(f));
   }
+}
+
+std::size_t PatchInputHeights::cell_of(double x, double y) const {
+  const int i = std::clamp(static_cast<int>((x - lo_.x()) / extent_.x() * nx_), 0, nx_ - 1);
+  const int j = std::clamp(static_cast<int>((y - lo_.y()) / extent_.y() * ny_), 0, ny_ - 1);
+  return static_cast<std::size_t>(j) * static_cast<std::size_t>(nx_) + static_cast<std::size_t>(i);
+}
+
+bool PatchInputHeights::height(double x, double y, double& z) const {
+  if (grid_.empty() || !std::isfinite(x) || !std::isfinite(y)) return false;
+  for (const int f : grid_[cell_of(x, y)]) {
+    const auto& t = local_[static_cast<std::size_t>(f)];
+    const double area = (t[1].x() - t[0].x()) * (t[2].y() - t[0].y()) - (t[1].y() - t[0].y()) * (t[2].x() - t[0].x());
+    if (!(std::abs(area) > 0.0)) continue;
+    const double b1 = ((x - t[0].x()) * (t[2].y() - t[0].y()) - (y - t[0].y()) * (t[2].x() - t[0].x())) / area;
+    const double b2 = ((t[1].x() - t[0].x()) * (y - t[0].y()) - (t[1].y() - t[0].y()) * (x - t[0].x())) / area;
+    if (b1 < 0.0 || b2 < 0.0 || b1 + b2 > 1.0) continue;
+    z = (1.0 - b1 - b2) * t[0].z() + b1 * t[1].z() + b2 * t[2].z();
+    return true;
+  }
+  return false;
+}
+
+}  // namespace nurbsfront
+
+namespace nurbsfront::surfmesh_detail {
+
+std::size_t clamp_inner_nodes(const TriMesh& mesh, const Segmentation& seg, int p, double max_offset, PatchResult& result) {
+  if (!result.has_surface) return 0;
+  result.surface.input_heights =
+      std::make_shared<const PatchInputHeights>(mesh, seg.patches[static_cast<std::size_t>(p)].faces, result.surface.frame);
+  result.surface.max_offset = max_offset;
   std::size_t n_clamped = 0;
   for (auto& node : result.inner_nodes) {
-    Eigen::Vector3d q = frame.to_local(node);
-    int i = 0, j = 0;
-    index(q.x(), q.y(), i, j);
-    for (const int f : grid[static_cast<std::size_t>(j) * static_cast<std::size_t>(nx) + static_cast<std::size_t>(i)]) {
-      const auto& t = local[static_cast<std::size_t>(f)];
-      const double area = (t[1].x() - t[0].x()) * (t[2].y() - t[0].y()) - (t[1].y() - t[0].y()) * (t[2].x() - t[0].x());
-      if (!(std::abs(area) > 0.0)) continue;
-      const double b1 = ((q.x() - t[0].x()) * (t[2].y() - t[0].y()) - (q.y() - t[0].y()) * (t[2].x() - t[0].x())) / area;
-      const double b2 = ((t[1].x() - t[0].x()) * (q.y() - t[0].y()) - (t[1].y() - t[0].y()) * (q.x() - t[0].x())) / area;
-      if (b1 < 0.0 || b2 < 0.0 || b1 + b2 > 1.0) continue;
-      const double z = (1.0 - b1 - b2) * t[0].z() + b1 * t[1].z() + b2 * t[2].z();
-      if (std::abs(q.z() - z) > max_offset) {
-        q.z() = z + std::clamp(q.z() - z, -max_offset, max_offset);
-        node = frame.to_world(q);
-        ++n_clamped;
-      }
-      break;
-    }
+    const Eigen::Vector3d q = result.surface.project(node);
+    if (q != node) ++n_clamped;
+    node = q;
   }
   return n_clamped;
 }

@@ -26,9 +26,10 @@ Eigen::Vector2d plane_point(const PatchResult& r, const BorderNodes& borders, in
   return r.surface.frame.to_local(world).head<2>();
 }
 
-// A new inner node of patch r on its surface above the plane point xy; returns its id.
+// A new inner node of patch r on its surface (clamped, PatchSurface::project) above the
+// plane point xy; returns its id.
 int add_inner_node(PatchResult& r, const Eigen::Vector2d& xy) {
-  r.inner_nodes.push_back(r.surface.frame.to_world(r.surface.field.lift(xy.x(), xy.y())));
+  r.inner_nodes.push_back(r.surface.project(r.surface.frame.to_world(Eigen::Vector3d(xy.x(), xy.y(), 0.0))));
   return -static_cast<int>(r.inner_nodes.size());
 }
 

@@ -171,7 +171,10 @@ void SurfMeshOptions::validate() const {
 
 Eigen::Vector3d PatchSurface::project(const Eigen::Vector3d& world) const {
   const Eigen::Vector3d local = frame.to_local(world);
-  return frame.to_world(field.lift(local.x(), local.y()));
+  Eigen::Vector3d q = field.lift(local.x(), local.y());
+  double z = 0.0;
+  if (input_heights && input_heights->height(q.x(), q.y(), z)) q.z() = z + std::clamp(q.z() - z, -max_offset, max_offset);
+  return frame.to_world(q);
 }
 
 Eigen::Vector3d PatchSurface::normal(const Eigen::Vector3d& world) const {

@@ -16,6 +16,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -119,11 +120,19 @@ struct SurfMeshOptions {
   void validate() const;
 };
 
+//! A patch's input faces as heights over its plane (surfmesh internal).
+struct PatchInputHeights;
+
 //! A patch's smooth surface: a height field z = f(x, y) in the patch's frame.
 struct PatchSurface {
   PatchFrame frame;           //!< local z = patch axis
   BicubicHeightField field;   //!< z = f(x, y) in frame coordinates
-  //! Vertical projection of a world point onto the surface (along the frame's z axis).
+  //! When set (SurfMeshOptions::max_node_offset_edges > 0): the patch's input faces, and
+  //! project() keeps its result within max_offset of them along the axis.
+  std::shared_ptr<const PatchInputHeights> input_heights;
+  double max_offset = 0.0;
+  //! Vertical projection of a world point onto the surface (along the frame's z axis),
+  //! clamped to max_offset from the input faces above or below it (if any, and if set).
   [[nodiscard]] Eigen::Vector3d project(const Eigen::Vector3d& world) const;
   //! Unit surface normal (world coordinates) at the vertical projection of a world point.
   [[nodiscard]] Eigen::Vector3d normal(const Eigen::Vector3d& world) const;

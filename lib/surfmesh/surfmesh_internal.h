@@ -13,6 +13,27 @@
 #include "nurbsfront/nurbs/band_fit.h"
 #include "nurbsfront/surfmesh/surfmesh.h"
 
+namespace nurbsfront {
+
+//! A patch's input faces in its frame, bucketed in a uniform grid over the plane.
+struct PatchInputHeights {
+  PatchInputHeights(const TriMesh& mesh, const std::vector<int>& faces, const PatchFrame& frame);
+  //! Height z (frame coordinates) of the face straight above or below (x, y); false when
+  //! no face is there.
+  [[nodiscard]] bool height(double x, double y, double& z) const;
+
+ private:
+  [[nodiscard]] std::size_t cell_of(double x, double y) const;
+  std::vector<std::array<Eigen::Vector3d, 3>> local_;
+  std::vector<std::vector<int>> grid_;
+  Eigen::Vector2d lo_ = Eigen::Vector2d::Zero();
+  Eigen::Vector2d extent_ = Eigen::Vector2d::Ones();
+  int nx_ = 1;
+  int ny_ = 1;
+};
+
+}  // namespace nurbsfront
+
 namespace nurbsfront::surfmesh_detail {
 
 //! Target 3D edge length at a world point.
@@ -138,13 +159,13 @@ std::size_t resolve_shared_chords(const Segmentation& segmentation, const Border
 //! counter-clockwise loop for the input vertices).
 [[nodiscard]] std::vector<int> extra_outer_loop_curves(const Segmentation& segmentation, const BorderNodes& borders);
 
-//! Moves every inner node of patch p whose height in the patch frame is more than
-//! max_offset off the patch's own input faces straight above or below it back to
-//! max_offset from them (the patch's faces are a graph over its plane, so that face is
-//! unique). The fit smooths sharp detail (thin fins, creases below the crease angle, tips)
-//! by more than a mean edge, and a node lifted that far can pass through the neighbouring
-//! sheet. Nodes over no face (outside the input's projection) keep their place. Returns
-//! the number of nodes moved.
+//! Sets patch p's surface to keep projections within max_offset of the patch's own input
+//! faces along its axis (PatchSurface::input_heights; the patch's faces are a graph over
+//! its plane, so the face straight above or below a point is unique) and moves the inner
+//! nodes accordingly. The fit smooths spikes, thin fins and sharp bends by more than a mean
+//! edge, and a node lifted that far can pass through the neighbouring sheet. Points over
+//! no face (outside the input's projection) are not clamped. Returns the number of nodes
+//! moved.
 std::size_t clamp_inner_nodes(const TriMesh& mesh, const Segmentation& segmentation, int p, double max_offset,
                               PatchResult& result);
 

@@ -474,6 +474,11 @@ TEST(Surfmesh, InnerNodesStayNearTheirPatchsFaces) {
   expect_consistent(seg, clamped);
   EXPECT_LE(max_inner_offset(mesh, clamped), 1.0 * mean_edge * (1.0 + 1e-9));
   EXPECT_GT(clamped.patches[0].n_clamped_nodes, 0u);
+  // The surface itself is clamped (stitch smooths by PatchSurface::project): the spike's
+  // tip projects within one mean edge of it, and far below it without the clamp.
+  const Eigen::Vector3d tip(0.5, 0.5, 6.0 * edge);
+  EXPECT_GE(clamped.surfaces[0].project(tip).z(), tip.z() - mean_edge * (1.0 + 1e-9));
+  EXPECT_LT(free.surfaces[0].project(tip).z(), tip.z() - 1.5 * mean_edge);
   EXPECT_EQ(count_self_intersections(as_soup(clamped)), 0u);
   options.max_node_offset_edges = -1.0;
   EXPECT_THROW((void)mesh_surface(mesh, seg, options), InvalidInput);
