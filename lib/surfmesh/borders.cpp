@@ -263,19 +263,28 @@ PatchBorder patch_border(const Segmentation& seg, int p, const BorderNodes& bord
   return out;
 }
 
+namespace {
+
+// A patch border's nodes in the plane orthogonal to the axis.
+std::vector<Eigen::Vector2d> plane_points(const Eigen::Vector3d& axis, const PatchBorder& border, const BorderNodes& borders) {
+  const Eigen::Vector3d e1 = axis.unitOrthogonal();
+  const Eigen::Vector3d e2 = axis.cross(e1);
+  std::vector<Eigen::Vector2d> xy;
+  xy.reserve(border.nodes.size());
+  for (const int g : border.nodes) {
+    const Eigen::Vector3d& x = borders.positions[static_cast<std::size_t>(g)];
+    xy.emplace_back(x.dot(e1), x.dot(e2));
+  }
+  return xy;
+}
+
+}  // namespace
+
 std::vector<int> crossing_curves(const Segmentation& seg, const BorderNodes& borders) {
   std::vector<int> out;
   for (std::size_t p = 0; p < seg.patches.size(); ++p) {
     const PatchBorder border = patch_border(seg, static_cast<int>(p), borders);
-    const Eigen::Vector3d& axis = seg.patches[p].axis;
-    const Eigen::Vector3d e1 = axis.unitOrthogonal();
-    const Eigen::Vector3d e2 = axis.cross(e1);
-    std::vector<Eigen::Vector2d> xy;
-    xy.reserve(border.nodes.size());
-    for (const int g : border.nodes) {
-      const Eigen::Vector3d& x = borders.positions[static_cast<std::size_t>(g)];
-      xy.emplace_back(x.dot(e1), x.dot(e2));
-    }
+    const std::vector<Eigen::Vector2d> xy = plane_points(seg.patches[p].axis, border, borders);
     // Sweep along x: segments sorted by their smallest x, each compared with those that
     // start before it ends.
     const std::size_t n = border.edges.size();
@@ -355,15 +364,7 @@ std::vector<int> extra_outer_loop_curves(const Segmentation& seg, const BorderNo
   std::vector<int> out;
   for (std::size_t p = 0; p < seg.patches.size(); ++p) {
     const PatchBorder border = patch_border(seg, static_cast<int>(p), borders);
-    const Eigen::Vector3d& axis = seg.patches[p].axis;
-    const Eigen::Vector3d e1 = axis.unitOrthogonal();
-    const Eigen::Vector3d e2 = axis.cross(e1);
-    std::vector<Eigen::Vector2d> xy;
-    xy.reserve(border.nodes.size());
-    for (const int g : border.nodes) {
-      const Eigen::Vector3d& x = borders.positions[static_cast<std::size_t>(g)];
-      xy.emplace_back(x.dot(e1), x.dot(e2));
-    }
+    const std::vector<Eigen::Vector2d> xy = plane_points(seg.patches[p].axis, border, borders);
     std::map<std::pair<int, int>, int> edge_curve;
     for (std::size_t e = 0; e < border.edges.size(); ++e)
       edge_curve[{border.edges[e][0], border.edges[e][1]}] = border.edge_curve[e];
