@@ -15,7 +15,7 @@ std::string patch_json(std::size_t index, const PatchMeshReport& p) {
   json::Object o;
   o.count("patch", index).text("status", to_string(p.status)).text("message", p.message);
   o.count("input_faces", p.n_input_faces).count("border_nodes", p.n_border_nodes);
-  o.count("inner_nodes", p.n_inner_nodes).count("triangles", p.n_triangles);
+  o.count("inner_nodes", p.n_inner_nodes).count("triangles", p.n_triangles).count("clamped_nodes", p.n_clamped_nodes);
   o.num("fit_max_residual", p.fit_max_residual).integer("fit_levels", p.fit_levels).num("seconds", p.seconds);
   return o.str();
 }

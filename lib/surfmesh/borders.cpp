@@ -2,6 +2,7 @@
 // Border curves: validation against the mesh, one discretisation per curve, feature flags.
 
 #include <algorithm>
+#include <map>
 #include <array>
 #include <cmath>
 #include <numbers>
@@ -262,19 +263,28 @@ PatchBorder patch_border(const Segmentation& seg, int p, const BorderNodes& bord
   return out;
 }
 
+namespace {
+
+// A patch border's nodes in the plane orthogonal to the axis.
+std::vector<Eigen::Vector2d> plane_points(const Eigen::Vector3d& axis, const PatchBorder& border, const BorderNodes& borders) {
+  const Eigen::Vector3d e1 = axis.unitOrthogonal();
+  const Eigen::Vector3d e2 = axis.cross(e1);
+  std::vector<Eigen::Vector2d> xy;
+  xy.reserve(border.nodes.size());
+  for (const int g : border.nodes) {
+    const Eigen::Vector3d& x = borders.positions[static_cast<std::size_t>(g)];
+    xy.emplace_back(x.dot(e1), x.dot(e2));
+  }
+  return xy;
+}
+
+}  // namespace
+
 std::vector<int> crossing_curves(const Segmentation& seg, const BorderNodes& borders) {
   std::vector<int> out;
   for (std::size_t p = 0; p < seg.patches.size(); ++p) {
     const PatchBorder border = patch_border(seg, static_cast<int>(p), borders);
-    const Eigen::Vector3d& axis = seg.patches[p].axis;
-    const Eigen::Vector3d e1 = axis.unitOrthogonal();
-    const Eigen::Vector3d e2 = axis.cross(e1);
-    std::vector<Eigen::Vector2d> xy;
-    xy.reserve(border.nodes.size());
-    for (const int g : border.nodes) {
-      const Eigen::Vector3d& x = borders.positions[static_cast<std::size_t>(g)];
-      xy.emplace_back(x.dot(e1), x.dot(e2));
-    }
+    const std::vector<Eigen::Vector2d> xy = plane_points(seg.patches[p].axis, border, borders);
     // Sweep along x: segments sorted by their smallest x, each compared with those that
     // start before it ends.
     const std::size_t n = border.edges.size();
@@ -308,6 +318,81 @@ std::vector<int> crossing_curves(const Segmentation& seg, const BorderNodes& bor
           out.push_back(border.edge_curve[i]);
           out.push_back(border.edge_curve[j]);
         }
+      }
+    }
+  }
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
+  return out;
+}
+
+std::vector<int> flipped_loops(const TriMesh& mesh, const Segmentation& seg, const BorderNodes& borders) {
+  std::vector<int> out;
+  for (std::size_t c = 0; c < seg.curves.size(); ++c) {
+    const BorderCurve& curve = seg.curves[c];
+    if (!curve.is_closed) continue;
+    for (const int p : {curve.patch_left, curve.patch_right}) {
+      if (p < 0) continue;
+      const Eigen::Vector3d& axis = seg.patches[static_cast<std::size_t>(p)].axis;
+      const Eigen::Vector3d e1 = axis.unitOrthogonal();
+      const Eigen::Vector3d e2 = axis.cross(e1);
+      // Twice the signed area of a closed polyline in the plane (e1, e2).
+      auto twice_area = [&](const auto& n, const auto& at) {
+        double sum = 0.0;
+        for (std::size_t i = 0; i < n; ++i) {
+          const Eigen::Vector3d& a = at(i);
+          const Eigen::Vector3d& b = at((i + 1) % n);
+          sum += a.dot(e1) * b.dot(e2) - a.dot(e2) * b.dot(e1);
+        }
+        return sum;
+      };
+      const std::vector<int>& nodes = borders.curve_nodes[c];
+      const double input = twice_area(curve.vertices.size(), [&](std::size_t i) { return point(mesh, curve.vertices[i]); });
+      const double nodes_area = twice_area(nodes.size(), [&](std::size_t i) -> const Eigen::Vector3d& {
+        return borders.positions[static_cast<std::size_t>(nodes[i])];
+      });
+      if (!(input * nodes_area > 0.0)) {
+        out.push_back(static_cast<int>(c));
+        break;
+      }
+    }
+  }
+  return out;
+}
+
+std::vector<int> extra_outer_loop_curves(const Segmentation& seg, const BorderNodes& borders) {
+  std::vector<int> out;
+  for (std::size_t p = 0; p < seg.patches.size(); ++p) {
+    const PatchBorder border = patch_border(seg, static_cast<int>(p), borders);
+    const std::vector<Eigen::Vector2d> xy = plane_points(seg.patches[p].axis, border, borders);
+    std::map<std::pair<int, int>, int> edge_curve;
+    for (std::size_t e = 0; e < border.edges.size(); ++e)
+      edge_curve[{border.edges[e][0], border.edges[e][1]}] = border.edge_curve[e];
+    std::vector<std::vector<int>> ccw;
+    std::size_t largest = 0;
+    double largest_area = 0.0;
+    std::vector<std::vector<int>> cycles;
+    for (const auto& loop : trace_loops(xy, border.edges))
+      for (auto& cycle : split_at_repeated_vertices(loop)) cycles.push_back(std::move(cycle));
+    for (const auto& loop : cycles) {
+      double twice = 0.0;
+      for (std::size_t i = 0; i < loop.size(); ++i) {
+        const Eigen::Vector2d& a = xy[static_cast<std::size_t>(loop[i])];
+        const Eigen::Vector2d& b = xy[static_cast<std::size_t>(loop[(i + 1) % loop.size()])];
+        twice += a.x() * b.y() - a.y() * b.x();
+      }
+      if (!(twice >= 0.0)) continue;
+      if (ccw.empty() || twice > largest_area) {
+        largest = ccw.size();
+        largest_area = twice;
+      }
+      ccw.push_back(loop);
+    }
+    for (std::size_t k = 0; k < ccw.size(); ++k) {
+      if (k == largest) continue;
+      for (std::size_t i = 0; i < ccw[k].size(); ++i) {
+        const auto it = edge_curve.find({ccw[k][i], ccw[k][(i + 1) % ccw[k].size()]});
+        if (it != edge_curve.end()) out.push_back(it->second);
       }
     }
   }

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <exception>
+#include <limits>
 #include <memory>
 #include <numbers>
 #include <stdexcept>
@@ -20,43 +21,6 @@
 namespace nurbsfront::surfmesh_detail {
 
 namespace {
-
-// Traces the directed edges into loops. Where loops touch (a node with several outgoing
-// edges), the next edge is the first outgoing one clockwise from the incoming edge's
-// reverse: it bounds the domain sector on the left of the incoming edge.
-std::vector<std::vector<int>> trace_loops(const std::vector<Eigen::Vector2d>& xy, const std::vector<std::array<int, 2>>& edges) {
-  std::vector<std::vector<int>> outgoing(xy.size());
-  for (std::size_t e = 0; e < edges.size(); ++e) outgoing[static_cast<std::size_t>(edges[e][0])].push_back(static_cast<int>(e));
-  std::vector<bool> used(edges.size(), false);
-  std::vector<std::vector<int>> loops;
-  for (std::size_t start = 0; start < edges.size(); ++start) {
-    if (used[start]) continue;
-    std::vector<int> loop;
-    int e = static_cast<int>(start);
-    while (e >= 0 && !used[static_cast<std::size_t>(e)]) {
-      used[static_cast<std::size_t>(e)] = true;
-      const auto [u, v] = edges[static_cast<std::size_t>(e)];
-      loop.push_back(u);
-      const Eigen::Vector2d back = xy[static_cast<std::size_t>(u)] - xy[static_cast<std::size_t>(v)];
-      const double a0 = std::atan2(back.y(), back.x());
-      int best = -1;
-      double best_sweep = 0.0;
-      for (const int cand : outgoing[static_cast<std::size_t>(v)]) {
-        if (used[static_cast<std::size_t>(cand)]) continue;
-        const Eigen::Vector2d d = xy[static_cast<std::size_t>(edges[static_cast<std::size_t>(cand)][1])] - xy[static_cast<std::size_t>(v)];
-        double sweep = a0 - std::atan2(d.y(), d.x());
-        while (sweep <= 0.0) sweep += 2.0 * std::numbers::pi;
-        if (best < 0 || sweep < best_sweep) {
-          best = cand;
-          best_sweep = sweep;
-        }
-      }
-      e = best;
-    }
-    loops.push_back(std::move(loop));
-  }
-  return loops;
-}
 
 // A traced loop that passes a corner twice (a neighbouring patch inside this one touching
 // its outer loop there, two lobes joined at a corner) is split into simple cycles
@@ -129,6 +93,43 @@ std::string what_of(const std::exception_ptr& error) {
 }
 
 }  // namespace
+
+// Traces the directed edges into loops. Where loops touch (a node with several outgoing
+// edges), the next edge is the first outgoing one clockwise from the incoming edge's
+// reverse: it bounds the domain sector on the left of the incoming edge.
+std::vector<std::vector<int>> trace_loops(const std::vector<Eigen::Vector2d>& xy, const std::vector<std::array<int, 2>>& edges) {
+  std::vector<std::vector<int>> outgoing(xy.size());
+  for (std::size_t e = 0; e < edges.size(); ++e) outgoing[static_cast<std::size_t>(edges[e][0])].push_back(static_cast<int>(e));
+  std::vector<bool> used(edges.size(), false);
+  std::vector<std::vector<int>> loops;
+  for (std::size_t start = 0; start < edges.size(); ++start) {
+    if (used[start]) continue;
+    std::vector<int> loop;
+    int e = static_cast<int>(start);
+    while (e >= 0 && !used[static_cast<std::size_t>(e)]) {
+      used[static_cast<std::size_t>(e)] = true;
+      const auto [u, v] = edges[static_cast<std::size_t>(e)];
+      loop.push_back(u);
+      const Eigen::Vector2d back = xy[static_cast<std::size_t>(u)] - xy[static_cast<std::size_t>(v)];
+      const double a0 = std::atan2(back.y(), back.x());
+      int best = -1;
+      double best_sweep = 0.0;
+      for (const int cand : outgoing[static_cast<std::size_t>(v)]) {
+        if (used[static_cast<std::size_t>(cand)]) continue;
+        const Eigen::Vector2d d = xy[static_cast<std::size_t>(edges[static_cast<std::size_t>(cand)][1])] - xy[static_cast<std::size_t>(v)];
+        double sweep = a0 - std::atan2(d.y(), d.x());
+        while (sweep <= 0.0) sweep += 2.0 * std::numbers::pi;
+        if (best < 0 || sweep < best_sweep) {
+          best = cand;
+          best_sweep = sweep;
+        }
+      }
+      e = best;
+    }
+    loops.push_back(std::move(loop));
+  }
+  return loops;
+}
 
 bool polygon_contains(const std::vector<Eigen::Vector2d>& polygon, const Eigen::Vector2d& q) {
   bool inside = false;
@@ -223,6 +224,79 @@ void fit_patch(const TriMesh& mesh, const Segmentation& seg, int p, const Border
     result.report.message = "fit failed: " + what_of(std::current_exception());
   }
   result.report.seconds += clock.seconds();
+}
+
+}  // namespace nurbsfront::surfmesh_detail
+
+namespace nurbsfront {
+
+PatchInputHeights::PatchInputHeights(const TriMesh& mesh, const std::vector<int>& faces, const PatchFrame& frame) {
+  // The faces in the frame, in a uniform grid of about one face per cell.
+  local_.resize(faces.size());
+  lo_ = Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity());
+  Eigen::Vector2d hi = -lo_;
+  for (std::size_t i = 0; i < faces.size(); ++i) {
+    std::size_t k = 0;
+    for (const auto v : mesh.fv_range(TriMesh::FaceHandle(faces[i]))) {
+      local_[i][k] = frame.to_local(to_eigen(mesh.point(v)));
+      lo_ = lo_.cwiseMin(local_[i][k].head<2>());
+      hi = hi.cwiseMax(local_[i][k].head<2>());
+      ++k;
+    }
+  }
+  if (faces.empty()) return;
+  extent_ = (hi - lo_).cwiseMax(std::numeric_limits<double>::min());
+  const double cell = std::sqrt(extent_.x() * extent_.y() / static_cast<double>(faces.size())) + std::numeric_limits<double>::min();
+  nx_ = std::clamp(static_cast<int>(extent_.x() / cell) + 1, 1, 4096);
+  ny_ = std::clamp(static_cast<int>(extent_.y() / cell) + 1, 1, 4096);
+  grid_.resize(static_cast<std::size_t>(nx_) * static_cast<std::size_t>(ny_));
+  for (std::size_t f = 0; f < local_.size(); ++f) {
+    const auto& t = local_[f];
+    const std::size_t c0 = cell_of(std::min({t[0].x(), t[1].x(), t[2].x()}), std::min({t[0].y(), t[1].y(), t[2].y()}));
+    const std::size_t c1 = cell_of(std::max({t[0].x(), t[1].x(), t[2].x()}), std::max({t[0].y(), t[1].y(), t[2].y()}));
+    const std::size_t nx = static_cast<std::size_t>(nx_);
+    for (std::size_t j = c0 / nx; j <= c1 / nx; ++j)
+      for (std::size_t i = c0 % nx; i <= c1 % nx; ++i) grid_[j * nx + i].push_back(static_cast<int>(f));
+  }
+}
+
+std::size_t PatchInputHeights::cell_of(double x, double y) const {
+  const int i = std::clamp(static_cast<int>((x - lo_.x()) / extent_.x() * nx_), 0, nx_ - 1);
+  const int j = std::clamp(static_cast<int>((y - lo_.y()) / extent_.y() * ny_), 0, ny_ - 1);
+  return static_cast<std::size_t>(j) * static_cast<std::size_t>(nx_) + static_cast<std::size_t>(i);
+}
+
+bool PatchInputHeights::height(double x, double y, double& z) const {
+  if (grid_.empty() || !std::isfinite(x) || !std::isfinite(y)) return false;
+  for (const int f : grid_[cell_of(x, y)]) {
+    const auto& t = local_[static_cast<std::size_t>(f)];
+    const double area = (t[1].x() - t[0].x()) * (t[2].y() - t[0].y()) - (t[1].y() - t[0].y()) * (t[2].x() - t[0].x());
+    if (!(std::abs(area) > 0.0)) continue;
+    const double b1 = ((x - t[0].x()) * (t[2].y() - t[0].y()) - (y - t[0].y()) * (t[2].x() - t[0].x())) / area;
+    const double b2 = ((t[1].x() - t[0].x()) * (y - t[0].y()) - (t[1].y() - t[0].y()) * (x - t[0].x())) / area;
+    if (b1 < 0.0 || b2 < 0.0 || b1 + b2 > 1.0) continue;
+    z = (1.0 - b1 - b2) * t[0].z() + b1 * t[1].z() + b2 * t[2].z();
+    return true;
+  }
+  return false;
+}
+
+}  // namespace nurbsfront
+
+namespace nurbsfront::surfmesh_detail {
+
+std::size_t clamp_inner_nodes(const TriMesh& mesh, const Segmentation& seg, int p, double max_offset, PatchResult& result) {
+  if (!result.has_surface) return 0;
+  result.surface.input_heights =
+      std::make_shared<const PatchInputHeights>(mesh, seg.patches[static_cast<std::size_t>(p)].faces, result.surface.frame);
+  result.surface.max_offset = max_offset;
+  std::size_t n_clamped = 0;
+  for (auto& node : result.inner_nodes) {
+    const Eigen::Vector3d q = result.surface.project(node);
+    if (q != node) ++n_clamped;
+    node = q;
+  }
+  return n_clamped;
 }
 
 void mesh_patch(const Segmentation& seg, int p, const BorderNodes& borders, const SurfMeshOptions& options,

@@ -164,12 +164,17 @@ void SurfMeshOptions::validate() const {
   if (smoothing_passes < 0) bad_option("smoothing_passes must be >= 0, got " + std::to_string(smoothing_passes));
   if (!(crease_angle_deg > 0.0 && crease_angle_deg <= 180.0))
     bad_option("crease_angle_deg must be in (0, 180], got " + std::to_string(crease_angle_deg));
+  if (!(std::isfinite(max_node_offset_edges) && max_node_offset_edges >= 0.0))
+    bad_option("max_node_offset_edges must be finite and >= 0, got " + std::to_string(max_node_offset_edges));
   if (threads < 0) bad_option("threads must be >= 0, got " + std::to_string(threads));
 }
 
 Eigen::Vector3d PatchSurface::project(const Eigen::Vector3d& world) const {
   const Eigen::Vector3d local = frame.to_local(world);
-  return frame.to_world(field.lift(local.x(), local.y()));
+  Eigen::Vector3d q = field.lift(local.x(), local.y());
+  double z = 0.0;
+  if (input_heights && input_heights->height(q.x(), q.y(), z)) q.z() = z + std::clamp(q.z() - z, -max_offset, max_offset);
+  return frame.to_world(q);
 }
 
 Eigen::Vector3d PatchSurface::normal(const Eigen::Vector3d& world) const {
@@ -199,14 +204,22 @@ SurfaceMesh mesh_surface(const TriMesh& input, const Segmentation& segmentation,
       return s;
     };
   }
-  // Chords of the smoothed curves may cross in a small patch's plane: such curves are
-  // resampled from their input positions, and if that still crosses, take their input
-  // vertices (which the segmentation guarantees not to cross).
+  // Chords of the smoothed curves may cross in a small patch's plane, and a small loop
+  // resampled into a few nodes may turn the other way round: such curves are resampled from
+  // their input positions, and if that is still wrong, take their input vertices (which the
+  // segmentation guarantees not to cross).
   std::vector<CurveSource> source(segmentation.curves.size(), CurveSource::Smoothed);
   BorderNodes borders = discretise_borders(input, segmentation, size_at, source);
   for (bool changed = true; changed;) {
     changed = false;
-    for (const int c : crossing_curves(segmentation, borders)) {
+    std::vector<int> bad = crossing_curves(segmentation, borders);
+    const std::vector<int> flipped = flipped_loops(input, segmentation, borders);
+    bad.insert(bad.end(), flipped.begin(), flipped.end());
+    const std::vector<int> extra = extra_outer_loop_curves(segmentation, borders);
+    bad.insert(bad.end(), extra.begin(), extra.end());
+    std::sort(bad.begin(), bad.end());
+    bad.erase(std::unique(bad.begin(), bad.end()), bad.end());
+    for (const int c : bad) {
       CurveSource& s = source[static_cast<std::size_t>(c)];
       if (s == CurveSource::InputVertices) continue;  // crossing anyway: the patch will fail
       s = s == CurveSource::Smoothed ? CurveSource::Input : CurveSource::InputVertices;
@@ -250,7 +263,13 @@ SurfaceMesh mesh_surface(const TriMesh& input, const Segmentation& segmentation,
 
   run_parallel(n_patches, threads, options.progress, 0.5, 1.0, [&](std::size_t p) {
     mesh_patch(segmentation, static_cast<int>(p), borders, options, h, results[p]);
+    if (options.max_node_offset_edges > 0.0)
+      results[p].report.n_clamped_nodes =
+          clamp_inner_nodes(input, segmentation, static_cast<int>(p), options.max_node_offset_edges * mean_edge, results[p]);
   });
+  // Patches meshed independently can join the same two border nodes (a thin fin, a tiny
+  // closed component): split such shared chords before the numbering.
+  out.n_shared_chords_resolved = resolve_shared_chords(segmentation, borders, results);
 
   // Global numbering: border nodes, then the inner nodes patch by patch.
   out.n_border_nodes = borders.positions.size();

@@ -16,6 +16,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -105,6 +106,11 @@ struct SurfMeshOptions {
   //! patches' surfaces, except corners of a feature curve (crease or input boundary), which
   //! keep their input position. Default true.
   bool project_border_nodes = false;
+  //! Largest distance, in mean input edges, of a new inner node from the patch's own input
+  //! faces along the patch axis: a node the fit lifts further (the fit smooths thin fins,
+  //! tips and sharp bends by several edges, and such a node can pass through the
+  //! neighbouring sheet) is moved back to this distance. 0 disables. Default 1.
+  double max_node_offset_edges = 1.0;
   //! Worker threads for the patches; 0 = all hardware threads. The output is bit-identical
   //! for every thread count. Default 0.
   int threads = 0;
@@ -114,11 +120,19 @@ struct SurfMeshOptions {
   void validate() const;
 };
 
+//! A patch's input faces as heights over its plane (surfmesh internal).
+struct PatchInputHeights;
+
 //! A patch's smooth surface: a height field z = f(x, y) in the patch's frame.
 struct PatchSurface {
   PatchFrame frame;           //!< local z = patch axis
   BicubicHeightField field;   //!< z = f(x, y) in frame coordinates
-  //! Vertical projection of a world point onto the surface (along the frame's z axis).
+  //! When set (SurfMeshOptions::max_node_offset_edges > 0): the patch's input faces, and
+  //! project() keeps its result within max_offset of them along the axis.
+  std::shared_ptr<const PatchInputHeights> input_heights;
+  double max_offset = 0.0;
+  //! Vertical projection of a world point onto the surface (along the frame's z axis),
+  //! clamped to max_offset from the input faces above or below it (if any, and if set).
   [[nodiscard]] Eigen::Vector3d project(const Eigen::Vector3d& world) const;
   //! Unit surface normal (world coordinates) at the vertical projection of a world point.
   [[nodiscard]] Eigen::Vector3d normal(const Eigen::Vector3d& world) const;
@@ -140,6 +154,7 @@ struct PatchMeshReport {
   std::size_t n_triangles = 0;
   double fit_max_residual = 0.0; //!< at the patch's input vertices
   int fit_levels = 0;
+  std::size_t n_clamped_nodes = 0; //!< inner nodes moved back (max_node_offset_edges)
   double seconds = 0.0;
 };
 
@@ -173,6 +188,10 @@ struct SurfaceMesh {
   std::vector<PatchMeshReport> patches; //!< one per patch
   double target_size = 0.0;             //!< the resolved uniform target edge length
   double input_mean_edge = 0.0;         //!< mean edge length of the input
+  //! Chords (edges between two border nodes that are not a border segment) that two patches
+  //! (or a patch and a border curve) both had, split in the later patch, plus triangles of
+  //! three border nodes that two patches both had, given a centre node.
+  std::size_t n_shared_chords_resolved = 0;
 };
 
 //! Discretises the border curves, fits and meshes every patch.

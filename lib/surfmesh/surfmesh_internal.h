@@ -13,6 +13,27 @@
 #include "nurbsfront/nurbs/band_fit.h"
 #include "nurbsfront/surfmesh/surfmesh.h"
 
+namespace nurbsfront {
+
+//! A patch's input faces in its frame, bucketed in a uniform grid over the plane.
+struct PatchInputHeights {
+  PatchInputHeights(const TriMesh& mesh, const std::vector<int>& faces, const PatchFrame& frame);
+  //! Height z (frame coordinates) of the face straight above or below (x, y); false when
+  //! no face is there.
+  [[nodiscard]] bool height(double x, double y, double& z) const;
+
+ private:
+  [[nodiscard]] std::size_t cell_of(double x, double y) const;
+  std::vector<std::array<Eigen::Vector3d, 3>> local_;
+  std::vector<std::vector<int>> grid_;
+  Eigen::Vector2d lo_ = Eigen::Vector2d::Zero();
+  Eigen::Vector2d extent_ = Eigen::Vector2d::Ones();
+  int nx_ = 1;
+  int ny_ = 1;
+};
+
+}  // namespace nurbsfront
+
 namespace nurbsfront::surfmesh_detail {
 
 //! Target 3D edge length at a world point.
@@ -64,6 +85,11 @@ struct PatchBorder {
 //! axis; exact predicates).
 [[nodiscard]] std::vector<int> crossing_curves(const Segmentation& segmentation, const BorderNodes& borders);
 
+//! Closed curves (ascending ids) whose discretised loop turns the other way round (or has no
+//! area) in the plane of one of their patches than their input vertices: a small hole loop
+//! resampled into three or four nodes can flip, and the patch then has a second outer loop.
+[[nodiscard]] std::vector<int> flipped_loops(const TriMesh& mesh, const Segmentation& segmentation, const BorderNodes& borders);
+
 //! Per curve (deg): the median over its vertices (the interior ones of an open curve) of
 //! the angle between the area-weighted mean normals of the faces within `rings`
 //! edge-adjacent rings around the vertex on each side (starting in one patch, never entering
@@ -107,6 +133,41 @@ void fit_patch(const TriMesh& mesh, const Segmentation& segmentation, int p, con
 //! inner_nodes, report mesh fields or MeshFailed).
 void mesh_patch(const Segmentation& segmentation, int p, const BorderNodes& borders, const SurfMeshOptions& options,
                 double uniform_size, PatchResult& result);
+
+//! Independently meshed patches can join the same two border nodes by an edge that is not
+//! their border segment (a chord): two patches on either side of a thin fin or of a tiny
+//! closed component cut the same ear off their common border (the 3D edge then has four
+//! triangles, a duplicated triangle when the third node agrees too), or a chord of one
+//! patch is a border segment of another curve. In patch order, every chord that is a
+//! border segment or a chord of an earlier patch is split at its midpoint in the patch
+//! plane (a new inner node lifted onto the patch's surface), and a triangle of three border
+//! segments that an earlier patch already has (a closed curve of three nodes) gets a node
+//! at its centroid. Deterministic. Returns the number of chords split plus triangles
+//! filled.
+std::size_t resolve_shared_chords(const Segmentation& segmentation, const BorderNodes& borders,
+                                  std::vector<PatchResult>& results);
+
+//! Traces directed edges (xy: node positions) into loops of node indices. Where loops
+//! touch (a node with several outgoing edges), the next edge is the first outgoing one
+//! clockwise from the incoming edge's reverse.
+[[nodiscard]] std::vector<std::vector<int>> trace_loops(const std::vector<Eigen::Vector2d>& xy,
+                                                      const std::vector<std::array<int, 2>>& edges);
+
+//! Curves (ascending ids) of the simple cycles of a patch's traced border loops (split at
+//! repeated nodes) that turn counter-clockwise in its plane besides its largest one: a
+//! small hole bounded by a few nodes can flip (the segmentation guarantees one
+//! counter-clockwise loop for the input vertices).
+[[nodiscard]] std::vector<int> extra_outer_loop_curves(const Segmentation& segmentation, const BorderNodes& borders);
+
+//! Sets patch p's surface to keep projections within max_offset of the patch's own input
+//! faces along its axis (PatchSurface::input_heights; the patch's faces are a graph over
+//! its plane, so the face straight above or below a point is unique) and moves the inner
+//! nodes accordingly. The fit smooths spikes, thin fins and sharp bends by more than a mean
+//! edge, and a node lifted that far can pass through the neighbouring sheet. Points over
+//! no face (outside the input's projection) are not clamped. Returns the number of nodes
+//! moved.
+std::size_t clamp_inner_nodes(const TriMesh& mesh, const Segmentation& segmentation, int p, double max_offset,
+                              PatchResult& result);
 
 //! A point strictly inside a simple polygon (either orientation), near its leftmost vertex.
 //! Returns false when no such point was found (a degenerate polygon).

@@ -1,0 +1,108 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Edges that two patches may both create between their common border nodes (see
+// resolve_shared_chords in surfmesh_internal.h).
+
+#include <algorithm>
+#include <array>
+#include <cstdint>
+#include <set>
+#include <utility>
+
+#include "nurbsfront/surfmesh/surfmesh_internal.h"
+
+namespace nurbsfront::surfmesh_detail {
+
+namespace {
+
+using Edge = std::pair<int, int>;
+
+Edge key(int a, int b) { return std::minmax(a, b); }
+
+// A point of patch `r`'s plane (frame x, y) of a node id of its triangles (>= 0: global
+// border node, < 0: inner node -(id + 1) of the patch).
+Eigen::Vector2d plane_point(const PatchResult& r, const BorderNodes& borders, int id) {
+  const Eigen::Vector3d& world = id >= 0 ? borders.positions[static_cast<std::size_t>(id)]
+                                         : r.inner_nodes[static_cast<std::size_t>(-id - 1)];
+  return r.surface.frame.to_local(world).head<2>();
+}
+
+// A new inner node of patch r on its surface (clamped, PatchSurface::project) above the
+// plane point xy; returns its id.
+int add_inner_node(PatchResult& r, const Eigen::Vector2d& xy) {
+  r.inner_nodes.push_back(r.surface.project(r.surface.frame.to_world(Eigen::Vector3d(xy.x(), xy.y(), 0.0))));
+  return -static_cast<int>(r.inner_nodes.size());
+}
+
+// Splits the edge {a, b} of patch r at its midpoint in the plane: each triangle (a, b, w)
+// (either direction) becomes (a, m, w) and (m, b, w), which keeps the orientation.
+void split_edge(PatchResult& r, const BorderNodes& borders, int a, int b) {
+  const int m = add_inner_node(r, 0.5 * (plane_point(r, borders, a) + plane_point(r, borders, b)));
+  const std::size_t n = r.triangles.size();
+  for (std::size_t t = 0; t < n; ++t) {
+    for (int k = 0; k < 3; ++k) {
+      std::array<int, 3>& tri = r.triangles[t];
+      const int u = tri[static_cast<std::size_t>(k)];
+      const int v = tri[static_cast<std::size_t>((k + 1) % 3)];
+      if (key(u, v) != key(a, b)) continue;
+      const int w = tri[static_cast<std::size_t>((k + 2) % 3)];
+      tri = {u, m, w};
+      r.triangles.push_back({m, v, w});
+      break;
+    }
+  }
+}
+
+}  // namespace
+
+std::size_t resolve_shared_chords(const Segmentation& seg, const BorderNodes& borders, std::vector<PatchResult>& results) {
+  std::set<Edge> taken;  // every border segment, then the chords of the patches done so far
+  for (std::size_t c = 0; c < borders.curve_nodes.size(); ++c) {
+    const std::vector<int>& nodes = borders.curve_nodes[c];
+    for (std::size_t i = 0; i + 1 < nodes.size(); ++i) taken.insert(key(nodes[i], nodes[i + 1]));
+    if (seg.curves[c].is_closed && nodes.size() > 1) taken.insert(key(nodes.back(), nodes.front()));
+  }
+  std::set<std::array<int, 3>> border_triangles;  // node-sorted triangles of border segments only
+  std::size_t n_changes = 0;
+  for (std::size_t p = 0; p < results.size(); ++p) {
+    PatchResult& r = results[p];
+    if (r.report.status != PatchStatus::Ok || r.triangles.empty()) continue;
+    const PatchBorder border = patch_border(seg, static_cast<int>(p), borders);
+    std::set<Edge> own;
+    for (const auto& e : border.edges)
+      own.insert(key(border.nodes[static_cast<std::size_t>(e[0])], border.nodes[static_cast<std::size_t>(e[1])]));
+    std::set<Edge> chords, to_split;
+    std::vector<std::size_t> to_fill;
+    for (std::size_t t = 0; t < r.triangles.size(); ++t) {
+      const std::array<int, 3>& tri = r.triangles[t];
+      if (tri[0] < 0 || tri[1] < 0 || tri[2] < 0) continue;
+      bool all_border = true;
+      for (int k = 0; k < 3; ++k) {
+        const Edge e = key(tri[static_cast<std::size_t>(k)], tri[static_cast<std::size_t>((k + 1) % 3)]);
+        if (own.count(e) != 0) continue;
+        all_border = false;
+        chords.insert(e);
+        if (taken.count(e) != 0) to_split.insert(e);
+      }
+      std::array<int, 3> sorted = tri;
+      std::sort(sorted.begin(), sorted.end());
+      if (all_border && !border_triangles.insert(sorted).second) to_fill.push_back(t);
+    }
+    for (const Edge& e : to_split) split_edge(r, borders, e.first, e.second);
+    for (const std::size_t t : to_fill) {
+      const std::array<int, 3> tri = r.triangles[t];
+      const int m = add_inner_node(r, (plane_point(r, borders, tri[0]) + plane_point(r, borders, tri[1]) +
+                                       plane_point(r, borders, tri[2])) / 3.0);
+      r.triangles[t] = {tri[0], tri[1], m};
+      r.triangles.push_back({tri[1], tri[2], m});
+      r.triangles.push_back({tri[2], tri[0], m});
+    }
+    for (const Edge& e : chords)
+      if (to_split.count(e) == 0) taken.insert(e);
+    n_changes += to_split.size() + to_fill.size();
+    r.report.n_inner_nodes = r.inner_nodes.size();
+    r.report.n_triangles = r.triangles.size();
+  }
+  return n_changes;
+}
+
+}  // namespace nurbsfront::surfmesh_detail
