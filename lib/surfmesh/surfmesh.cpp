@@ -146,6 +146,8 @@ void PatchFitOptions::validate() const {
   if (!(std::isfinite(min_spacing_edges) && min_spacing_edges >= 0.0))
     bad_option("fit.min_spacing_edges must be finite and >= 0, got " + std::to_string(min_spacing_edges));
   if (max_levels < 1 || max_levels > 20) bad_option("fit.max_levels must be in [1, 20], got " + std::to_string(max_levels));
+  if (least_squares_iterations < 0 || least_squares_iterations > 100000)
+    bad_option("fit.least_squares_iterations must be in [0, 100000], got " + std::to_string(least_squares_iterations));
 }
 
 void CellGrid::validate() const {
