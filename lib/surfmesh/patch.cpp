@@ -252,7 +252,7 @@ void fit_patch(const TriMesh& mesh, const Segmentation& seg, int p, const Border
 }
 
 void mesh_patch(const Segmentation& seg, int p, const BorderNodes& borders, const SurfMeshOptions& options,
-                double uniform_size, PatchResult& result) {
+                double uniform_size, const SizeAt& size_at, double sizing_grid, PatchResult& result) {
   if (!result.has_surface) return;
   const Stopwatch clock;
   try {
@@ -304,10 +304,37 @@ void mesh_patch(const Segmentation& seg, int p, const BorderNodes& borders, cons
     FrontOptions front;
     const BicubicHeightField& field = surface.field;
     const PatchFrame& frame = surface.frame;
-    if (options.sizing.callback) {
-      const auto& callback = options.sizing.callback;
-      front.sizing = SizingField::from_callback(
-          [&callback, &field, &frame](const Eigen::Vector2d& xy) { return callback(frame.to_world(field.lift(xy.x(), xy.y()))); });
+    // Adaptive sizes sampled once on a grid over the fit's rectangle (bilinear in between):
+    // the front asks for sizes far more often than there are grid points.
+    const auto lifted_size = [&size_at, &field, &frame](double x, double y) { return size_at(frame.to_world(field.lift(x, y))); };
+    std::vector<double> grid;
+    int n_x = 0, n_y = 0;
+    double step_x = 0.0, step_y = 0.0;
+    const Rectangle& box = field.domain();
+    if (size_at && sizing_grid > 0.0) {
+      n_x = std::max(1, static_cast<int>(std::ceil(box.width() / sizing_grid)));
+      n_y = std::max(1, static_cast<int>(std::ceil(box.height() / sizing_grid)));
+      step_x = box.width() / n_x;
+      step_y = box.height() / n_y;
+      grid.resize(static_cast<std::size_t>(n_x + 1) * static_cast<std::size_t>(n_y + 1));
+      for (int j = 0; j <= n_y; ++j)
+        for (int i = 0; i <= n_x; ++i)
+          grid[static_cast<std::size_t>(j) * static_cast<std::size_t>(n_x + 1) + static_cast<std::size_t>(i)] =
+              lifted_size(box.min.x() + i * step_x, box.min.y() + j * step_y);
+    }
+    if (!grid.empty()) {
+      front.sizing = SizingField::from_callback([&grid, n_x, n_y, step_x, step_y, &box](const Eigen::Vector2d& xy) {
+        const double u = std::clamp((xy.x() - box.min.x()) / step_x, 0.0, static_cast<double>(n_x));
+        const double v = std::clamp((xy.y() - box.min.y()) / step_y, 0.0, static_cast<double>(n_y));
+        const int i = std::min(static_cast<int>(u), n_x - 1), j = std::min(static_cast<int>(v), n_y - 1);
+        const double s = u - i, t = v - j;
+        const auto at = [&](int a, int b) {
+          return grid[static_cast<std::size_t>(b) * static_cast<std::size_t>(n_x + 1) + static_cast<std::size_t>(a)];
+        };
+        return (1.0 - t) * ((1.0 - s) * at(i, j) + s * at(i + 1, j)) + t * ((1.0 - s) * at(i, j + 1) + s * at(i + 1, j + 1));
+      });
+    } else if (size_at) {
+      front.sizing = SizingField::from_callback([&lifted_size](const Eigen::Vector2d& xy) { return lifted_size(xy.x(), xy.y()); });
     } else {
       front.sizing = SizingField::uniform(uniform_size);
     }

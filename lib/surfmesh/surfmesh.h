@@ -37,7 +37,10 @@ struct SizingOptions {
   //! 0. Default 1.5 (about the level of detail of a marching-cubes input).
   double relative_size = 1.5;
   //! Curvature-adaptive sizing: h = min(uniform h, sqrt(8 e / kappa_max)) with the chord
-  //! error e below, from the fitted surfaces' principal curvatures. Default false.
+  //! error e below, from the fitted surfaces' principal curvatures at the input's vertices,
+  //! at least min_size_fraction x h, limited by `gradation` along the input's edges and
+  //! interpolated on its triangles; used for the borders and the 2D fronts. The patches are
+  //! then fitted before the borders are discretised. Default false.
   bool adaptive = false;
   //! Chord error e for adaptive sizing (length units); 0 = 0.05 * uniform h. Default 0.
   double chord_error = 0.0;
