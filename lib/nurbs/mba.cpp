@@ -72,6 +72,16 @@ inline void block_weights(const LatticePoint* p, std::size_t n, double scale, co
   }
 }
 
+// The lattice's function at point q of a weight block.
+inline double block_value(const Lattice& lattice, const WeightBlock& w, std::size_t q) {
+  // Rows weighted by by_l summed first (vectorised), then one dot product with bx.
+  const std::size_t stride = lattice.stride();
+  const double* c = lattice.phi.data() + w.offset[q];
+  Eigen::Array4d column = w.by[0][q] * Eigen::Map<const Eigen::Array4d>(c);
+  for (std::size_t l = 1; l < 4; ++l) column += w.by[l][q] * Eigen::Map<const Eigen::Array4d>(c + l * stride);
+  return w.bx[0][q] * column[0] + w.bx[1][q] * column[1] + w.bx[2][q] * column[2] + w.bx[3][q] * column[3];
+}
+
 // One level of B-spline approximation (BA) of the residuals r: every point proposes
 // phi_c = w_c r / sum w^2 for its 16 coefficients, each coefficient takes the
 // w^2-weighted mean of its proposals.
@@ -120,7 +130,6 @@ Lattice approximate_level(const std::vector<LatticePoint>& pts, const std::vecto
 // Subtracts the lattice's function from the residuals r; returns (max |r|, sum r^2).
 std::pair<double, double> subtract_level(const Lattice& lattice, const std::vector<LatticePoint>& pts, double scale,
                                          std::vector<double>& r) {
-  const std::size_t stride = lattice.stride();
   double max_residual = 0.0;
   double sum_sq = 0.0;
   WeightBlock w;
@@ -128,11 +137,7 @@ std::pair<double, double> subtract_level(const Lattice& lattice, const std::vect
     const std::size_t n = std::min(kBlock, pts.size() - first);
     block_weights(pts.data() + first, n, scale, lattice, w);
     for (std::size_t q = 0; q < n; ++q) {
-      // Rows weighted by by_l summed first (vectorised), then one dot product with bx.
-      const double* c = lattice.phi.data() + w.offset[q];
-      Eigen::Array4d column = w.by[0][q] * Eigen::Map<const Eigen::Array4d>(c);
-      for (int l = 1; l < 4; ++l) column += w.by[l][q] * Eigen::Map<const Eigen::Array4d>(c + l * stride);
-      const double z = w.bx[0][q] * column[0] + w.bx[1][q] * column[1] + w.bx[2][q] * column[2] + w.bx[3][q] * column[3];
+      const double z = block_value(lattice, w, q);
       double& rc = r[first + q];
       rc -= z;
       max_residual = std::max(max_residual, std::abs(rc));
@@ -140,6 +145,137 @@ std::pair<double, double> subtract_level(const Lattice& lattice, const std::vect
     }
   }
   return {max_residual, sum_sq};
+}
+
+// y_q = f(p_q) for the lattice's coefficients (B x in the least-squares polish).
+void evaluate_points(const Lattice& lattice, const std::vector<LatticePoint>& pts, double scale, std::vector<double>& y) {
+  y.resize(pts.size());
+  WeightBlock w;
+  for (std::size_t first = 0; first < pts.size(); first += kBlock) {
+    const std::size_t n = std::min(kBlock, pts.size() - first);
+    block_weights(pts.data() + first, n, scale, lattice, w);
+    for (std::size_t q = 0; q < n; ++q) y[first + q] = block_value(lattice, w, q);
+  }
+}
+
+// out = B^T y (each point's value spread onto its 16 coefficients by their weights), and
+// diagonal += the squared weights when diagonal is not null.
+void scatter_points(const std::vector<LatticePoint>& pts, const std::vector<double>& y, double scale, const Lattice& shape,
+                    std::vector<double>& out, std::vector<double>* diagonal) {
+  const std::size_t stride = shape.stride();
+  std::fill(out.begin(), out.end(), 0.0);
+  WeightBlock w;
+  for (std::size_t first = 0; first < pts.size(); first += kBlock) {
+    const std::size_t n = std::min(kBlock, pts.size() - first);
+    block_weights(pts.data() + first, n, scale, shape, w);
+    for (std::size_t q = 0; q < n; ++q) {
+      const Eigen::Array4d bx(w.bx[0][q], w.bx[1][q], w.bx[2][q], w.bx[3][q]);
+      for (int l = 0; l < 4; ++l) {
+        const std::size_t at = w.offset[q] + static_cast<std::size_t>(l) * stride;
+        Eigen::Map<Eigen::Array4d>(out.data() + at) += (w.by[l][q] * y[first + q]) * bx;
+        if (diagonal != nullptr) Eigen::Map<Eigen::Array4d>(diagonal->data() + at) += (w.by[l][q] * w.by[l][q]) * bx * bx;
+      }
+    }
+  }
+}
+
+// out += mu * D^T D x for the thin-plate second differences D of a (n_x + 3) x (n_y + 3)
+// coefficient lattice: xx and yy differences of three neighbours, and the mixed one of a
+// 2 x 2 block weighted by 2. With x = null, adds mu * diag(D^T D) instead.
+void add_thin_plate(const std::vector<double>* x, std::size_t nx, std::size_t ny, double mu, std::vector<double>& out) {
+  auto at = [nx](std::size_t i, std::size_t j) { return j * nx + i; };
+  auto stencil = [&](const std::size_t* idx, const double* coef, int size, double weight) {
+    double d = 0.0;
+    if (x != nullptr)
+      for (int k = 0; k < size; ++k) d += coef[k] * (*x)[idx[k]];
+    for (int k = 0; k < size; ++k) out[idx[k]] += weight * mu * (x != nullptr ? coef[k] * d : coef[k] * coef[k]);
+  };
+  constexpr double kSecond[3] = {1.0, -2.0, 1.0};
+  constexpr double kMixed[4] = {1.0, -1.0, -1.0, 1.0};
+  for (std::size_t j = 0; j < ny; ++j) {
+    for (std::size_t i = 0; i < nx; ++i) {
+      if (i + 2 < nx) {
+        const std::size_t idx[3] = {at(i, j), at(i + 1, j), at(i + 2, j)};
+        stencil(idx, kSecond, 3, 1.0);
+      }
+      if (j + 2 < ny) {
+        const std::size_t idx[3] = {at(i, j), at(i, j + 1), at(i, j + 2)};
+        stencil(idx, kSecond, 3, 1.0);
+      }
+      if (i + 1 < nx && j + 1 < ny) {
+        const std::size_t idx[4] = {at(i, j), at(i + 1, j), at(i, j + 1), at(i + 1, j + 1)};
+        stencil(idx, kMixed, 4, 2.0);
+      }
+    }
+  }
+}
+
+// The least-squares polish (FitOptions::least_squares_iterations): the change delta of the
+// n_x x n_y lattice's coefficients minimising |B delta - r|^2 + mu |D delta|^2 + eps |delta|^2
+// by Jacobi-preconditioned conjugate gradients on the normal equations (matrix-free: B is
+// applied point by point, D by its stencils). mu = smoothing x the mean data weight of a
+// coefficient with data; eps = 1e-9 of it keeps coefficients without data at 0 change.
+Lattice least_squares_polish(const std::vector<LatticePoint>& pts, const std::vector<double>& r, int n_x, int n_y,
+                             double scale, int iterations, double smoothing) {
+  Lattice delta{n_x, n_y, {}};
+  const std::size_t nx = delta.stride(), ny = static_cast<std::size_t>(n_y) + 3, size = nx * ny;
+  delta.phi.assign(size, 0.0);
+  std::vector<double> b(size), diagonal(size, 0.0);
+  scatter_points(pts, r, scale, delta, b, &diagonal);
+  double data_weight = 0.0;
+  std::size_t n_with_data = 0;
+  for (const double d : diagonal) {
+    if (d > 0.0) {
+      data_weight += d;
+      ++n_with_data;
+    }
+  }
+  if (n_with_data == 0) return delta;
+  data_weight /= static_cast<double>(n_with_data);
+  const double mu = smoothing * data_weight, eps = 1e-9 * data_weight;
+  add_thin_plate(nullptr, nx, ny, mu, diagonal);
+  for (double& d : diagonal) d += eps;
+
+  Lattice direction{n_x, n_y, std::vector<double>(size, 0.0)};
+  std::vector<double> residual = b, z(size), a_p(size), values;
+  auto apply = [&](const std::vector<double>& x, std::vector<double>& out) {  // out = A x
+    direction.phi = x;
+    evaluate_points(direction, pts, scale, values);
+    scatter_points(pts, values, scale, delta, out, nullptr);
+    add_thin_plate(&x, nx, ny, mu, out);
+    for (std::size_t k = 0; k < size; ++k) out[k] += eps * x[k];
+  };
+  for (std::size_t k = 0; k < size; ++k) z[k] = residual[k] / diagonal[k];
+  std::vector<double> p = z;
+  double rz = 0.0, b_norm = 0.0;
+  for (std::size_t k = 0; k < size; ++k) {
+    rz += residual[k] * z[k];
+    b_norm += b[k] * b[k];
+  }
+  constexpr double kRelativeStop = 1e-8;
+  for (int it = 0; it < iterations && rz > 0.0; ++it) {
+    apply(p, a_p);
+    double p_ap = 0.0;
+    for (std::size_t k = 0; k < size; ++k) p_ap += p[k] * a_p[k];
+    if (!(p_ap > 0.0)) break;
+    const double alpha = rz / p_ap;
+    double r_norm = 0.0;
+    for (std::size_t k = 0; k < size; ++k) {
+      delta.phi[k] += alpha * p[k];
+      residual[k] -= alpha * a_p[k];
+      r_norm += residual[k] * residual[k];
+    }
+    if (r_norm <= kRelativeStop * kRelativeStop * b_norm) break;
+    double rz_next = 0.0;
+    for (std::size_t k = 0; k < size; ++k) {
+      z[k] = residual[k] / diagonal[k];
+      rz_next += residual[k] * z[k];
+    }
+    const double beta = rz_next / rz;
+    rz = rz_next;
+    for (std::size_t k = 0; k < size; ++k) p[k] = z[k] + beta * p[k];
+  }
+  return delta;
 }
 
 struct Bilinear {
@@ -211,6 +347,12 @@ void FitOptions::validate() const {
   if (base_cells < 1 || base_cells > 4096) throw InvalidInput("FitOptions: base_cells must be in [1, 4096]");
   if (max_control_points < 16) throw InvalidInput("FitOptions: max_control_points must be at least 16");
   if (final_passes < 0 || final_passes > 1000) throw InvalidInput("FitOptions: final_passes must be in [0, 1000]");
+  if (least_squares_iterations < 0 || least_squares_iterations > 100000) {
+    throw InvalidInput("FitOptions: least_squares_iterations must be in [0, 100000]");
+  }
+  if (!(least_squares_smoothing >= 0.0) || !std::isfinite(least_squares_smoothing)) {
+    throw InvalidInput("FitOptions: least_squares_smoothing must be >= 0 and finite");
+  }
   if (domain) domain->validate();
 }
 
@@ -379,6 +521,14 @@ FitResult fit_height_field(const std::vector<Eigen::Vector3d>& points, const Fit
       max_residual = subtract_level(lattice, pts, scale, r).first;
       auto& coefficients = field.mutable_coefficients();
       for (std::size_t k = 0; k < coefficients.size(); ++k) coefficients[k] += lattice.phi[k];
+      result.final_pass_max_residual.push_back(max_residual);
+    }
+    if (options.least_squares_iterations > 0 && max_residual > result.tolerance) {
+      const Lattice delta =
+          least_squares_polish(pts, r, n_x, n_y, scale, options.least_squares_iterations, options.least_squares_smoothing);
+      max_residual = subtract_level(delta, pts, scale, r).first;
+      auto& coefficients = field.mutable_coefficients();
+      for (std::size_t k = 0; k < coefficients.size(); ++k) coefficients[k] += delta.phi[k];
       result.final_pass_max_residual.push_back(max_residual);
     }
   }

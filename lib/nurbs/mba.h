@@ -42,6 +42,19 @@ struct FitOptions {
   //! weighted least-squares fit at that resolution (so a capped lattice averages a staircase
   //! well instead of stopping at the first, smoothing pass). Default 8; 0 = plain MBA.
   int final_passes = 8;
+  //! Conjugate-gradient iterations of a least-squares polish on the finest lattice used,
+  //! after the final passes, when a limit stopped the refinement and the tolerance is still
+  //! not met. The BA passes converge slowly where the data curve strongly at the lattice's
+  //! scale (their smoothing bias is about h^2 f'' / 6 for spacing h: on a sphere patch at a
+  //! 60 deg slope, f'' = 8 / radius); the polish minimises
+  //! sum_c (f(x_c, y_c) - z_c)^2 + least_squares_smoothing * d * |D2 delta|^2 over the change
+  //! delta of the coefficients, D2 the second differences of the lattice (thin plate) and d
+  //! the mean data weight of a coefficient, so coefficients without data follow their
+  //! neighbours. Jacobi-preconditioned, stops at a relative residual of 1e-8. Default 0 (off).
+  int least_squares_iterations = 0;
+  //! Weight of the second-difference term of the polish, relative to the mean data weight of
+  //! a coefficient (see least_squares_iterations). Default 1e-3.
+  double least_squares_smoothing = 1e-3;
   //! Start from the least-squares bilinear function a + bx + cy + dxy (represented exactly by
   //! the bicubic lattice), so planar and bilinear data are reproduced to round-off and the
   //! levels only fit what is left. Default true.
@@ -54,7 +67,8 @@ struct FitOptions {
 
   //! \throw InvalidInput for negative or non-finite tolerances or spacing, max_levels outside
   //!        [1, 20], base_cells outside [1, 4096], max_control_points < 16, final_passes
-  //!        outside [0, 1000] or an invalid domain.
+  //!        outside [0, 1000], least_squares_iterations outside [0, 100000], a negative
+  //!        least_squares_smoothing or an invalid domain.
   void validate() const;
 };
 
@@ -84,7 +98,8 @@ struct FitLevel {
 struct FitResult {
   BicubicHeightField field;        //!< all levels merged into the finest lattice
   std::vector<FitLevel> levels;    //!< one entry per level used, coarsest first
-  //! Max residual after each final pass on the finest lattice (see FitOptions::final_passes).
+  //! Max residual after each final pass on the finest lattice (see FitOptions::final_passes),
+  //! then after the least-squares polish if it ran (FitOptions::least_squares_iterations).
   std::vector<double> final_pass_max_residual;
   double base_max_residual = 0.0;  //!< max residual of the bilinear start (or of 0 without it)
   double tolerance = 0.0;          //!< the absolute tolerance used
@@ -111,7 +126,8 @@ struct FitResult {
 //!  4. The merged lattice is refined exactly to the next level's resolution and the level added.
 //!  5. Stop when the max residual <= tolerance, or at max_levels, min_spacing or
 //!     max_control_points; in the latter cases up to final_passes more BA passes on the
-//!     finest lattice fit what is left (until the tolerance is met).
+//!     finest lattice fit what is left (until the tolerance is met), then, if asked
+//!     (least_squares_iterations), a conjugate-gradient least-squares polish on that lattice.
 //! Duplicated points with different z are averaged; clusters and empty regions are fine.
 //!
 //! \param points  samples (x, y, z); at least 3, not all collinear in the xy-plane.

@@ -24,6 +24,9 @@ namespace {
 
 bool finite_positive(double x) { return std::isfinite(x) && x > 0.0; }
 
+// SizingOptions::chord_error = 0: this fraction of the uniform h.
+constexpr double kDefaultChordRelative = 0.05;
+
 // Runs task(i) for every i in [0, n) on `threads` workers pulling indices from an atomic
 // counter. Progress is reported from the calling thread (fraction f0 .. f1); returning
 // false from the callback stops the workers and throws Cancelled. The task must not throw
@@ -146,6 +149,8 @@ void PatchFitOptions::validate() const {
   if (!(std::isfinite(min_spacing_edges) && min_spacing_edges >= 0.0))
     bad_option("fit.min_spacing_edges must be finite and >= 0, got " + std::to_string(min_spacing_edges));
   if (max_levels < 1 || max_levels > 20) bad_option("fit.max_levels must be in [1, 20], got " + std::to_string(max_levels));
+  if (least_squares_iterations < 0 || least_squares_iterations > 100000)
+    bad_option("fit.least_squares_iterations must be in [0, 100000], got " + std::to_string(least_squares_iterations));
 }
 
 void CellGrid::validate() const {
@@ -196,6 +201,7 @@ SurfaceMesh mesh_surface(const TriMesh& input, const Segmentation& segmentation,
   out.input_mean_edge = mean_edge;
   out.target_size = h;
   SizeAt size_at = [h](const Eigen::Vector3d&) { return h; };
+  SizeAt front_size;  // empty: the front meshes with the uniform h
   if (options.sizing.callback) {
     const auto& callback = options.sizing.callback;
     size_at = [&callback](const Eigen::Vector3d& x) {
@@ -203,6 +209,31 @@ SurfaceMesh mesh_surface(const TriMesh& input, const Segmentation& segmentation,
       if (!(std::isfinite(s) && s > 0.0)) throw InvalidInput("mesh_surface: the sizing callback returned " + std::to_string(s));
       return s;
     };
+    front_size = size_at;
+  }
+  const std::size_t n_patches = segmentation.patches.size();
+  const unsigned threads = options.threads > 0 ? static_cast<unsigned>(options.threads)
+                                               : std::max(1U, std::thread::hardware_concurrency());
+  std::vector<PatchResult> results(n_patches);
+  auto fit_all = [&](const BorderNodes& nodes) {
+    run_parallel(n_patches, threads, options.progress, 0.0, 0.5, [&](std::size_t p) {
+      fit_patch(input, segmentation, static_cast<int>(p), nodes, options, mean_edge, results[p]);
+    });
+  };
+  double sizing_grid = 0.0;  // > 0: the front's sizes are sampled on a grid (adaptive)
+  if (options.sizing.adaptive) {
+    // The sizes come from the fits' curvature, so the patches are fitted before the borders
+    // are discretised (their rectangles then cover the patch's and overlap vertices only).
+    BorderNodes no_nodes;
+    no_nodes.curve_nodes.resize(segmentation.curves.size());
+    fit_all(no_nodes);
+    const double chord = options.sizing.chord_error > 0.0 ? options.sizing.chord_error : kDefaultChordRelative * h;
+    size_at = adaptive_sizing(input, segmentation, results, size_at, chord, options.sizing.min_size_fraction * h,
+                              options.sizing.gradation);
+    front_size = size_at;
+    // The adaptive sizes are piecewise linear on the input's triangles: a grid of the input's
+    // resolution in each patch plane holds them.
+    sizing_grid = mean_edge;
   }
   // Chords of the smoothed curves may cross in a small patch's plane, and a small loop
   // resampled into a few nodes may turn the other way round: such curves are resampled from
@@ -230,13 +261,7 @@ SurfaceMesh mesh_surface(const TriMesh& input, const Segmentation& segmentation,
   out.curve_is_feature = feature_curves(input, segmentation, options.crease_angle_deg);
   report_progress(options.progress, "surfmesh: borders", 1.0);
 
-  const std::size_t n_patches = segmentation.patches.size();
-  const unsigned threads = options.threads > 0 ? static_cast<unsigned>(options.threads)
-                                               : std::max(1U, std::thread::hardware_concurrency());
-  std::vector<PatchResult> results(n_patches);
-  run_parallel(n_patches, threads, options.progress, 0.0, 0.5, [&](std::size_t p) {
-    fit_patch(input, segmentation, static_cast<int>(p), borders, options, mean_edge, results[p]);
-  });
+  if (!options.sizing.adaptive) fit_all(borders);
 
   // With a cell grid the smoothed marching-cubes border is up to half a cell off the truth
   // while the band fits are not: border nodes go onto them too.
@@ -262,7 +287,7 @@ SurfaceMesh mesh_surface(const TriMesh& input, const Segmentation& segmentation,
   }
 
   run_parallel(n_patches, threads, options.progress, 0.5, 1.0, [&](std::size_t p) {
-    mesh_patch(segmentation, static_cast<int>(p), borders, options, h, results[p]);
+    mesh_patch(segmentation, static_cast<int>(p), borders, options, h, front_size, sizing_grid, results[p]);
     if (options.max_node_offset_edges > 0.0)
       results[p].report.n_clamped_nodes =
           clamp_inner_nodes(input, segmentation, static_cast<int>(p), options.max_node_offset_edges * mean_edge, results[p]);

@@ -130,9 +130,26 @@ void fit_patch(const TriMesh& mesh, const Segmentation& segmentation, int p, con
                const SurfMeshOptions& options, double mean_edge, PatchResult& result);
 
 //! The 2D front of patch p in its plane and the lift of the new nodes (fills triangles,
-//! inner_nodes, report mesh fields or MeshFailed).
+//! inner_nodes, report mesh fields or MeshFailed). The front's size is uniform_size, or
+//! size_at() at the lifted points when size_at is set (user callback, adaptive sizing):
+//! sampled on a grid of about sizing_grid spacing over the fit's rectangle and interpolated
+//! bilinearly when sizing_grid > 0, called directly otherwise.
 void mesh_patch(const Segmentation& segmentation, int p, const BorderNodes& borders, const SurfMeshOptions& options,
-                double uniform_size, PatchResult& result);
+                double uniform_size, const SizeAt& size_at, double sizing_grid, PatchResult& result);
+
+//! Largest |principal curvature| of a patch surface at the vertical projection of a world
+//! point (0 where it is not finite).
+[[nodiscard]] double max_abs_curvature(const PatchSurface& surface, const Eigen::Vector3d& world);
+
+//! Curvature-adaptive sizing (SizingOptions::adaptive): at every input vertex
+//! h = max(min(base(x), sqrt(8 chord_error / kappa_max)), min(min_size, base(x))), kappa_max
+//! the largest |principal curvature| of the fitted surfaces of its patches (fits without a
+//! surface are skipped), then limited along the input's edges by
+//! h_v <= h_w + (gradation - 1) |x_v - x_w|; at a world point, interpolated on the nearest
+//! input triangle. The returned function is thread-safe and deterministic.
+[[nodiscard]] SizeAt adaptive_sizing(const TriMesh& mesh, const Segmentation& segmentation,
+                                     const std::vector<PatchResult>& fits, const SizeAt& base, double chord_error,
+                                     double min_size, double gradation);
 
 //! Independently meshed patches can join the same two border nodes by an edge that is not
 //! their border segment (a chord): two patches on either side of a thin fin or of a tiny

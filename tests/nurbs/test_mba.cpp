@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <functional>
 #include <random>
 
@@ -235,6 +236,50 @@ TEST(Mba, CappedLevelsApproximateTheFunctionBetweenTheSamples) {
   }
 }
 
+TEST(Mba, LeastSquaresPolishReproducesABicubicOnTheCappedLattice) {
+  // A cubic polynomial is in the span of the capped lattice, so its least-squares fit is
+  // exact; the BA passes alone stop well short of it (their smoothing bias).
+  const Function f = [](double x, double y) { return x * x * x - 2.0 * x * y * y + 3.0 * y * y + 0.5 * x; };
+  const Rectangle domain = rect(-1.0, -1.0, 1.0, 1.0);
+  const auto pts = random_samples(f, 1500, domain, 21);
+  FitOptions o;
+  o.tolerance = 1e-12;
+  o.min_spacing = 0.2;
+  o.domain = domain;
+  const FitResult passes = fit_height_field(pts, o);
+  o.least_squares_iterations = 500;
+  o.least_squares_smoothing = 0.0;
+  const FitResult polished = fit_height_field(pts, o);
+  EXPECT_EQ(polished.stop, FitStop::kSpacingLimit);
+  ASSERT_EQ(polished.final_pass_max_residual.size(), static_cast<std::size_t>(o.final_passes) + 1);
+  EXPECT_GT(passes.max_residual(), 1e-4);
+  EXPECT_LT(polished.max_residual(), 1e-5);
+  EXPECT_LT(max_error_at(polished.field, random_samples(f, 500, domain, 22)), 1e-5);
+}
+
+TEST(Mba, LeastSquaresPolishLowersTheErrorOnASteepSphereCap) {
+  // z = sqrt(R^2 - x^2 - y^2) up to a 60 deg slope at the square's corners: the capped BA
+  // passes leave an error of about h^2 f'' / 6 there; the polish (default smoothing) lowers
+  // the error inside the square (its outermost cells, where the fourth derivatives are
+  // largest and the lattice is cut off, are left out: least squares is not a max norm).
+  const double radius = 1.0;
+  const double reach = radius * std::sin(60.0 * std::acos(-1.0) / 180.0) / std::sqrt(2.0);
+  const Rectangle domain = rect(-reach, -reach, reach, reach);
+  const Function f = [radius](double x, double y) { return std::sqrt(radius * radius - x * x - y * y); };
+  const auto pts = random_samples(f, 10000, domain, 23);
+  const auto probes = random_samples(f, 1000, rect(-0.8 * reach, -0.8 * reach, 0.8 * reach, 0.8 * reach), 24);
+  FitOptions o;
+  o.tolerance = 1e-12;
+  o.min_spacing = 0.05;
+  const FitResult passes = fit_height_field(pts, o);
+  o.least_squares_iterations = 60;
+  const FitResult polished = fit_height_field(pts, o);
+  const double e_passes = max_error_at(passes.field, probes), e_polished = max_error_at(polished.field, probes);
+  std::printf("inner max error: passes %.3g, polished %.3g\n", e_passes, e_polished);
+  EXPECT_LT(e_polished, 0.6 * e_passes);
+  EXPECT_LT(max_error_at(polished.field, probes), 1e-3 * radius);
+}
+
 TEST(Mba, FittedSphereCapHasCurvatureOneOverR) {
   const double radius = 2.0;
   std::vector<Eigen::Vector3d> pts;
@@ -328,6 +373,12 @@ TEST(Mba, BadInputGivesClearErrors) {
   bad = {};
   bad.min_spacing = NAN;
   expect_invalid(good, bad, "min_spacing");
+  bad = {};
+  bad.least_squares_iterations = -1;
+  expect_invalid(good, bad, "least_squares_iterations");
+  bad = {};
+  bad.least_squares_smoothing = -1.0;
+  expect_invalid(good, bad, "least_squares_smoothing");
 }
 
 TEST(Mba, ProgressCanCancel) {

@@ -1,0 +1,111 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Curvature-adaptive sizing (SizingOptions::adaptive): h = min(base h, sqrt(8 e / kappa_max))
+// at the input's vertices from the fitted patch surfaces, limited by the gradation along the
+// input's edges, interpolated on the input's triangles.
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <memory>
+#include <numeric>
+#include <queue>
+#include <utility>
+
+#include <Eigen/Geometry>
+
+#include "nurbsfront/core/soup.h"
+#include "nurbsfront/nurbs/nurbs_surface.h"
+#include "nurbsfront/quality/aabb_tree.h"
+#include "nurbsfront/surfmesh/surfmesh_internal.h"
+
+namespace nurbsfront::surfmesh_detail {
+
+namespace {
+
+// The sizes at the input's vertices and the tree to find the input triangle nearest to a
+// point; shared (read-only) by every copy of the SizeAt it makes, from any thread.
+struct VertexSizes {
+  TriangleSoup soup;
+  std::vector<double> size;  // per vertex
+  std::unique_ptr<quality_detail::AabbTree> tree;
+
+  [[nodiscard]] double at(const Eigen::Vector3d& x) const {
+    const auto closest = tree->closest(x, std::numeric_limits<std::uint32_t>::max());
+    const auto& t = soup.triangles[closest.face];
+    const Eigen::Vector3d& a = soup.points[t[0]];
+    const Eigen::Vector3d& b = soup.points[t[1]];
+    const Eigen::Vector3d& c = soup.points[t[2]];
+    const Eigen::Vector3d q = quality_detail::closest_point_on_triangle(x, a, b, c);
+    // Barycentric coordinates of q (areas of the sub-triangles; the closest point is in the
+    // triangle, so they are >= 0 up to round-off).
+    const Eigen::Vector3d n = (b - a).cross(c - a);
+    const double area = n.squaredNorm();
+    if (!(area > 0.0)) return std::min({size[t[0]], size[t[1]], size[t[2]]});
+    const double wa = std::max(0.0, (c - b).cross(q - b).dot(n) / area);
+    const double wb = std::max(0.0, (a - c).cross(q - c).dot(n) / area);
+    const double wc = std::max(0.0, 1.0 - wa - wb);
+    return wa * size[t[0]] + wb * size[t[1]] + wc * size[t[2]];
+  }
+};
+
+}  // namespace
+
+double max_abs_curvature(const PatchSurface& surface, const Eigen::Vector3d& world) {
+  const Eigen::Vector3d local = surface.frame.to_local(world);
+  const SurfaceCurvature c = curvature_from_derivatives(surface.field.derivatives(local.x(), local.y()));
+  const double k = std::max(std::abs(c.k1), std::abs(c.k2));
+  return std::isfinite(k) ? k : 0.0;
+}
+
+SizeAt adaptive_sizing(const TriMesh& mesh, const Segmentation& segmentation, const std::vector<PatchResult>& fits,
+                       const SizeAt& base, double chord_error, double min_size, double gradation) {
+  auto sizes = std::make_shared<VertexSizes>();
+  sizes->soup = to_soup(mesh);
+  const std::size_t n = mesh.n_vertices();
+  sizes->size.assign(n, 0.0);
+  // Curvature-limited size at each vertex: the largest principal curvature of the fitted
+  // surfaces of its faces' patches (at the vertex's vertical projection onto each).
+  for (const auto v : mesh.vertices()) {
+    const Eigen::Vector3d x = to_eigen(mesh.point(v));
+    double kappa = 0.0;
+    int last_patch = -1;
+    for (const auto f : mesh.vf_range(v)) {
+      const int p = segmentation.face_patch[static_cast<std::size_t>(f.idx())];
+      if (p == last_patch) continue;
+      last_patch = p;
+      const PatchResult& fit = fits[static_cast<std::size_t>(p)];
+      if (fit.has_surface) kappa = std::max(kappa, max_abs_curvature(fit.surface, x));
+    }
+    double h = base(x);
+    if (kappa > 0.0) h = std::min(h, std::sqrt(8.0 * chord_error / kappa));
+    sizes->size[static_cast<std::size_t>(v.idx())] = std::max(h, std::min(min_size, base(x)));
+  }
+  // Gradation: h_v <= h_w + (gradation - 1) |x_v - x_w| along the edges, by a Dijkstra-like
+  // sweep from the smallest sizes (ties by vertex index: the result does not depend on it,
+  // the order of equal keys only fixes the work).
+  using Item = std::pair<double, int>;
+  std::priority_queue<Item, std::vector<Item>, std::greater<>> queue;
+  for (std::size_t v = 0; v < n; ++v) queue.emplace(sizes->size[v], static_cast<int>(v));
+  const double slope = gradation - 1.0;
+  while (!queue.empty()) {
+    const auto [h, v] = queue.top();
+    queue.pop();
+    if (h > sizes->size[static_cast<std::size_t>(v)]) continue;  // stale
+    const TriMesh::VertexHandle vh(v);
+    for (const auto w : mesh.vv_range(vh)) {
+      const double limit = h + slope * (mesh.point(w) - mesh.point(vh)).norm();
+      double& hw = sizes->size[static_cast<std::size_t>(w.idx())];
+      if (limit < hw) {
+        hw = limit;
+        queue.emplace(limit, w.idx());
+      }
+    }
+  }
+  std::vector<std::uint32_t> faces(sizes->soup.triangles.size());
+  std::iota(faces.begin(), faces.end(), 0U);
+  sizes->tree = std::make_unique<quality_detail::AabbTree>(sizes->soup, std::move(faces));
+  return [sizes](const Eigen::Vector3d& x) { return sizes->at(x); };
+}
+
+}  // namespace nurbsfront::surfmesh_detail
