@@ -45,42 +45,12 @@ constexpr int kFitOverlapRings = 1;
 // Relative tolerance between the meshed area and the area inside the border (round-off).
 constexpr double kAreaTolerance = 1e-9;
 constexpr double kFitOverlapMinNormalDot = 0.5;
+// A patch with fewer input faces fits its own vertices only: on thin sheets and sharp folds
+// (many patches of a few faces) the ring around it is mostly the other sheet or the steep
+// side of the fold and pulled its surface across its neighbours' (self-intersecting pairs,
+// 2026-11-25: headsq 76 -> 34, liver 30 -> 22; 8 faces: 66 / 22, 100 faces: 32 / 24).
+constexpr std::size_t kFitOverlapMinFaces = 40;
 
-// Vertices of the faces of other patches within kFitOverlapRings vertex rings of patch p's
-// border that face its axis, not in the patch, ascending.
-std::vector<int> overlap_vertices(const TriMesh& mesh, const Segmentation& seg, int p) {
-  const Patch& patch = seg.patches[static_cast<std::size_t>(p)];
-  std::vector<int> frontier;
-  for (const int c : patch.curves)
-    for (const int v : seg.curves[static_cast<std::size_t>(c)].vertices) frontier.push_back(v);
-  std::unordered_set<int> taken_faces;
-  std::vector<int> added;
-  for (int ring = 0; ring < kFitOverlapRings && !frontier.empty(); ++ring) {
-    std::vector<int> next;
-    for (const int v : frontier) {
-      for (const auto f : mesh.vf_range(TriMesh::VertexHandle(v))) {
-        if (seg.face_patch[static_cast<std::size_t>(f.idx())] == p || taken_faces.count(f.idx()) != 0) continue;
-        const Eigen::Vector3d n = to_eigen(mesh.calc_face_normal(f));
-        if (!(n.dot(patch.axis) >= kFitOverlapMinNormalDot)) continue;
-        taken_faces.insert(f.idx());
-        for (const auto w : mesh.fv_range(f)) next.push_back(w.idx());
-      }
-    }
-    added.insert(added.end(), next.begin(), next.end());
-    frontier = std::move(next);
-  }
-  std::sort(added.begin(), added.end());
-  added.erase(std::unique(added.begin(), added.end()), added.end());
-  // Keep only vertices outside the patch (its own are fitted already).
-  std::vector<int> out;
-  for (const int v : added) {
-    bool in_patch = false;
-    for (const auto f : mesh.vf_range(TriMesh::VertexHandle(v)))
-      if (seg.face_patch[static_cast<std::size_t>(f.idx())] == p) in_patch = true;
-    if (!in_patch) out.push_back(v);
-  }
-  return out;
-}
 
 // MBA doubles its lattice per level and stops before the spacing falls below min_spacing,
 // so the finest spacing lands anywhere in [s, 2 s) (up to 3 s along the longer side of an
@@ -117,6 +87,41 @@ std::string what_of(const std::exception_ptr& error) {
 }
 
 }  // namespace
+
+std::vector<int> overlap_vertices(const TriMesh& mesh, const Segmentation& seg, int p) {
+  const Patch& patch = seg.patches[static_cast<std::size_t>(p)];
+  std::vector<int> frontier;
+  for (const int c : patch.curves)
+    for (const int v : seg.curves[static_cast<std::size_t>(c)].vertices) frontier.push_back(v);
+  std::unordered_set<int> taken_faces;
+  std::vector<int> added;
+  const int n_rings = patch.faces.size() < kFitOverlapMinFaces ? 0 : kFitOverlapRings;
+  for (int ring = 0; ring < n_rings && !frontier.empty(); ++ring) {
+    std::vector<int> next;
+    for (const int v : frontier) {
+      for (const auto f : mesh.vf_range(TriMesh::VertexHandle(v))) {
+        if (seg.face_patch[static_cast<std::size_t>(f.idx())] == p || taken_faces.count(f.idx()) != 0) continue;
+        const Eigen::Vector3d n = to_eigen(mesh.calc_face_normal(f));
+        if (!(n.dot(patch.axis) >= kFitOverlapMinNormalDot)) continue;
+        taken_faces.insert(f.idx());
+        for (const auto w : mesh.fv_range(f)) next.push_back(w.idx());
+      }
+    }
+    added.insert(added.end(), next.begin(), next.end());
+    frontier = std::move(next);
+  }
+  std::sort(added.begin(), added.end());
+  added.erase(std::unique(added.begin(), added.end()), added.end());
+  // Keep only vertices outside the patch (its own are fitted already).
+  std::vector<int> out;
+  for (const int v : added) {
+    bool in_patch = false;
+    for (const auto f : mesh.vf_range(TriMesh::VertexHandle(v)))
+      if (seg.face_patch[static_cast<std::size_t>(f.idx())] == p) in_patch = true;
+    if (!in_patch) out.push_back(v);
+  }
+  return out;
+}
 
 // Traces the directed edges into loops. Where loops touch (a node with several outgoing
 // edges), the next edge is the first outgoing one clockwise from the incoming edge's

@@ -124,6 +124,11 @@ struct PatchResult {
   std::vector<std::array<int, 3>> triangles;
 };
 
+//! The neighbours' vertices added to patch p's fit: those of the faces of other patches
+//! within one vertex ring of p's border that face its axis, not in p, ascending; none for
+//! a patch of fewer than 40 input faces (it fits its own vertices only).
+[[nodiscard]] std::vector<int> overlap_vertices(const TriMesh& mesh, const Segmentation& segmentation, int p);
+
 //! Frame and fit of patch p (fills result.surface, has_surface, report fit fields or
 //! FitFailed). Never throws except Cancelled-free internal errors caught by the caller.
 void fit_patch(const TriMesh& mesh, const Segmentation& segmentation, int p, const BorderNodes& borders,

@@ -323,6 +323,26 @@ TEST(Surfmesh, NeighbourTouchingTheOuterLoopAtACorner) {
   EXPECT_NEAR(area[1], 5.0 / (2.0 * kN * kN), 0.2 * 5.0 / (2.0 * kN * kN));  // chords cut its corners
 }
 
+TEST(Surfmesh, SmallPatchesFitTheirOwnVerticesOnly) {
+  // A flat 12 x 12 grid: patch 1 is the first column of cells (24 faces), patch 0 the rest
+  // (264 faces). Patch 0's fit also sees the ring of patch 1's faces along their common
+  // border, i.e. the grid's vertices at x = 0; patch 1 is small and sees none of patch 0's.
+  constexpr int kN = 12;
+  const TriMesh mesh = to_trimesh(test::grid_patch(kN, kN));
+  std::vector<int> face_patch(mesh.n_faces(), 0);
+  for (int j = 0; j < kN; ++j)
+    for (int k = 0; k < 2; ++k) face_patch[static_cast<std::size_t>(2 * j * kN + k)] = 1;
+  Segmentation seg = labelled_segmentation(mesh, face_patch, 2);
+  ASSERT_EQ(seg.patches[1].faces.size(), 2u * kN);
+  for (auto& patch : seg.patches) patch.axis = Eigen::Vector3d::UnitZ();
+  std::vector<int> left_side;
+  for (const auto v : mesh.vertices())
+    if (mesh.point(v)[0] == 0.0) left_side.push_back(v.idx());
+  ASSERT_EQ(left_side.size(), static_cast<std::size_t>(kN + 1));
+  EXPECT_EQ(surfmesh_detail::overlap_vertices(mesh, seg, 0), left_side);
+  EXPECT_TRUE(surfmesh_detail::overlap_vertices(mesh, seg, 1).empty());
+}
+
 // A one-voxel blob as marching cubes gives it (CT noise): an octahedron, top and bottom
 // halves as two patches sharing the 4-vertex equator. Meshed independently, both halves
 // triangulate the same discretised equator: with 3 nodes both make the same triangle
