@@ -94,10 +94,14 @@ std::string to_summary(const RemeshReport& r) {
   s += "alpha mean " + fixed(q.alpha_mean, 4) + ", min " + fixed(q.alpha_min, 4) + "; angles min " +
        fixed(q.min_angle_deg, 2) + " max " + fixed(q.max_angle_deg, 2) + " deg; obtuse " +
        fixed(100.0 * q.obtuse_fraction, 3) + "%\n";
-  s += "away from features (" + std::to_string(r.stitch.n_away_from_features) + " triangles): angle min " +
-       fixed(r.stitch.min_angle_away_from_features_deg, 2) + " deg, " +
-       std::to_string(r.stitch.n_small_angle_away_from_features) + " below " + fixed(kAwayFromFeaturesAngleBoundDeg, 0) +
-       " deg\n";
+  if (r.stitch.n_away_from_features == 0) {
+    s += "away from features: no triangle (every triangle touches a crease, boundary or corner node)\n";
+  } else {
+    s += "away from features (" + std::to_string(r.stitch.n_away_from_features) + " triangles): angle min " +
+         fixed(r.stitch.min_angle_away_from_features_deg, 2) + " deg, " +
+         std::to_string(r.stitch.n_small_angle_away_from_features) + " below " +
+         fixed(kAwayFromFeaturesAngleBoundDeg, 0) + " deg\n";
+  }
   if (r.output.distance) {
     const DistanceReport& d = *r.output.distance;
     s += "distance to input: hausdorff " + json::number(d.hausdorff) + " (" + json::number(d.hausdorff_relative) +
