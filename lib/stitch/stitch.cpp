@@ -437,6 +437,8 @@ StitchResult stitch_impl(const SurfaceMesh& surface, const TriMesh* input, const
       report.optimisation_undone = true;
       pairs = self_intersecting_pairs(to_soup(mesh), options.n_threads);
     }
+    // What remains was in the assembly (the surface mesh's own crossings).
+    stitch_detail::settle_intersections(surface, options, feature, result, pairs, report);
   }
   ReportOptions check;
   check.self_intersections = false;  // counted above

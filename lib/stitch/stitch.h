@@ -96,6 +96,12 @@ struct StitchReport {
   //! optimisation made, so the whole optimisation was undone (the assembled mesh is
   //! returned).
   bool optimisation_undone = false;
+  //! Nodes moved onto their patches' input faces (along the patch axes) because a triangle
+  //! of theirs intersected another in the assembled mesh (docs/stitch.md, "Crossings of the
+  //! assembly").
+  std::size_t n_settled_nodes = 0;
+  //! Edges of such triangles flipped because the flip left fewer intersecting pairs.
+  std::size_t n_settled_flips = 0;
   double alpha_mean_before = 0.0;      //!< mean alpha after assembly, before optimisation
   double alpha_min_before = 0.0;       //!< min alpha after assembly, before optimisation
   //! Triangles of the result away from features: none of their vertices is a feature node,
@@ -160,7 +166,10 @@ struct StitchResult {
 //!    nodes of those triangles go back to their assembled positions and the edges flips
 //!    made in them are flipped back; only the faces around these changes are checked
 //!    again (up to 6 rounds). If changed triangles still intersect, the optimisation is
-//!    undone as a whole. Intersections already in the assembly stay (and are errors).
+//!    undone as a whole. Intersections already in the assembly: the nodes of the crossing
+//!    triangles move onto their patches' input faces along the patch axes, then their edges
+//!    are flipped, each change kept only if fewer pairs cross; what still crosses is an
+//!    error.
 //! 3. Verification (quality module): 2-manifold, consistently oriented, no degenerate or
 //!    self-intersecting triangles; with an input mesh also: closed iff the input is, and
 //!    per component (matched to the input's by nearest bounding box) the same Euler

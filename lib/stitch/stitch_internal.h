@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Shared between the stitch sources (not part of the public API).
+#include <array>
 #include <cstdint>
 #include <utility>
 #include <vector>
@@ -41,5 +42,20 @@ std::vector<double> face_alphas(const TriMesh& mesh);
 //! is_feature: per node, 1 for a feature node (never moves); other corners move too.
 void optimise(const SurfaceMesh& surface, const StitchOptions& options, const std::vector<std::uint8_t>& is_feature,
               StitchResult& result, StitchReport& report);
+
+//! Intersecting pairs left after the optimisation's repair, i.e. of the assembled mesh
+//! (`pairs`: all pairs of result.mesh, sorted, updated in place). Per pair, the nodes of
+//! both triangles that are neither feature nodes nor on the input's boundary move to the
+//! mean of their projections onto the input faces of the patches around them, along each
+//! patch's axis (PatchSurface::project with no offset; not when a patch has no input
+//! heights). The moves are kept when no triangle around the moved nodes degenerates or
+//! turns its normal by more than acos(min_normal_dot), and those triangles then intersect in
+//! fewer pairs than before (exact check against the whole mesh). Then each edge of a
+//! triangle still crossing (not between two feature nodes, flippable) is flipped when both
+//! new triangles keep the old side and take part in fewer pairs. Up to 3 rounds. Counts in
+//! report.n_settled_nodes and n_settled_flips.
+void settle_intersections(const SurfaceMesh& surface, const StitchOptions& options,
+                          const std::vector<std::uint8_t>& is_feature, StitchResult& result,
+                          std::vector<std::array<std::uint32_t, 2>>& pairs, StitchReport& report);
 
 }  // namespace nurbsfront::stitch_detail

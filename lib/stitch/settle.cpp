@@ -1,0 +1,182 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Intersections already in the assembled surface mesh (two patches' triangles crossing on a
+// thin sheet or a sharp fold): the nodes of the crossing triangles are moved onto their
+// patches' own input faces, straight along the patch axes (an inner node keeps its place
+// in its patch's plane), then edges of the triangles still crossing are flipped; each
+// change is kept only if it leaves fewer crossing pairs (docs/stitch.md, "Crossings of the
+// assembly").
+#include <algorithm>
+#include <array>
+#include <cstdint>
+
+#include <Eigen/Geometry>
+
+#include "nurbsfront/core/tolerances.h"
+#include "nurbsfront/quality/report.h"
+#include "nurbsfront/stitch/stitch_internal.h"
+
+namespace nurbsfront::stitch_detail {
+
+namespace {
+
+using Vec = Eigen::Vector3d;
+
+// Rounds over the remaining pairs (a move can clear the way for another).
+constexpr int kSettleRounds = 3;
+
+}  // namespace
+
+void settle_intersections(const SurfaceMesh& surface, const StitchOptions& options,
+                          const std::vector<std::uint8_t>& is_feature, StitchResult& result,
+                          std::vector<std::array<std::uint32_t, 2>>& pairs, StitchReport& report) {
+  if (pairs.empty()) return;
+  TriMesh& mesh = result.mesh;
+  // The patches' surfaces with no offset allowed from their input faces (the projection
+  // then lands on the input face straight above or below, where there is one).
+  std::vector<PatchSurface> on_input(surface.surfaces.size());
+  std::vector<std::uint8_t> has_on_input(surface.surfaces.size(), 0);
+  auto surface_on_input = [&](std::size_t p) -> const PatchSurface& {
+    if (has_on_input[p] == 0) {
+      on_input[p] = surface.surfaces[p];
+      on_input[p].max_offset = 0.0;
+      has_on_input[p] = 1;
+    }
+    return on_input[p];
+  };
+  // The mean of the node's projections onto the input faces of the patches around it.
+  std::vector<std::size_t> patches;
+  auto target_of = [&](TriMesh::VertexHandle v, Vec& target) {
+    const auto g = static_cast<std::size_t>(result.vertex_node[static_cast<std::size_t>(v.idx())]);
+    if (is_feature[g] != 0 || mesh.is_boundary(v)) return false;
+    patches.clear();
+    for (auto f : mesh.vf_range(v)) patches.push_back(static_cast<std::size_t>(result.face_patch[static_cast<std::size_t>(f.idx())]));
+    std::sort(patches.begin(), patches.end());
+    patches.erase(std::unique(patches.begin(), patches.end()), patches.end());
+    const Vec p = to_eigen(mesh.point(v));
+    target = Vec::Zero();
+    for (const std::size_t patch : patches) {
+      if (!surface.surfaces[patch].input_heights) return false;
+      target += surface_on_input(patch).project(p);
+    }
+    target /= static_cast<double>(patches.size());
+    return target.allFinite() && target != p;
+  };
+
+  TriangleSoup soup = to_soup(mesh);
+  const double diagonal = bounding_box(soup).diagonal();
+  const double min_double_area = 2.0 * tolerance::kDegenerateAreaRelative * diagonal * diagonal;
+  auto area_vector = [&](std::uint32_t f) {
+    const auto& t = soup.triangles[f];
+    return Vec((soup.points[t[1]] - soup.points[t[0]]).cross(soup.points[t[2]] - soup.points[t[0]]));
+  };
+
+  for (int round = 0; round < kSettleRounds && !pairs.empty(); ++round) {
+    bool changed = false;
+    const std::vector<std::array<std::uint32_t, 2>> todo = pairs;
+    for (const auto& pair : todo) {
+      // Already resolved by an earlier move of this round?
+      if (!std::binary_search(pairs.begin(), pairs.end(), pair)) continue;
+      std::vector<std::pair<TriMesh::VertexHandle, Vec>> moves;
+      for (const std::uint32_t f : pair) {
+        for (auto v : mesh.fv_range(TriMesh::FaceHandle(static_cast<int>(f)))) {
+          Vec target;
+          if (std::none_of(moves.begin(), moves.end(), [&](const auto& m) { return m.first == v; }) && target_of(v, target)) {
+            moves.emplace_back(v, target);
+          }
+        }
+      }
+      if (moves.empty()) continue;
+      std::vector<std::uint32_t> touched;
+      for (const auto& m : moves) {
+        for (auto f : mesh.vf_range(m.first)) touched.push_back(static_cast<std::uint32_t>(f.idx()));
+      }
+      std::sort(touched.begin(), touched.end());
+      touched.erase(std::unique(touched.begin(), touched.end()), touched.end());
+      std::vector<Vec> old_normal;
+      for (const std::uint32_t f : touched) old_normal.push_back(area_vector(f));
+      std::vector<Vec> old_point;
+      for (const auto& m : moves) {
+        old_point.push_back(soup.points[static_cast<std::size_t>(m.first.idx())]);
+        soup.points[static_cast<std::size_t>(m.first.idx())] = m.second;
+      }
+      // No touched triangle may degenerate or turn its normal too far.
+      bool ok = true;
+      for (std::size_t i = 0; i < touched.size() && ok; ++i) {
+        const Vec n = area_vector(touched[i]);
+        ok = n.norm() > min_double_area && n.normalized().dot(old_normal[i].normalized()) >= options.min_normal_dot;
+      }
+      std::vector<std::array<std::uint32_t, 2>> fresh;
+      if (ok) fresh = intersecting_pairs_of(soup, touched);
+      auto is_touched = [&](std::uint32_t f) { return std::binary_search(touched.begin(), touched.end(), f); };
+      const auto n_before = static_cast<std::size_t>(std::count_if(pairs.begin(), pairs.end(), [&](const auto& p) {
+        return is_touched(p[0]) || is_touched(p[1]);
+      }));
+      if (!ok || fresh.size() >= n_before) {
+        for (std::size_t i = 0; i < moves.size(); ++i) soup.points[static_cast<std::size_t>(moves[i].first.idx())] = old_point[i];
+        continue;
+      }
+      for (const auto& m : moves) mesh.set_point(m.first, to_openmesh(m.second));
+      report.n_settled_nodes += moves.size();
+      std::erase_if(pairs, [&](const auto& p) { return is_touched(p[0]) || is_touched(p[1]); });
+      pairs.insert(pairs.end(), fresh.begin(), fresh.end());
+      std::sort(pairs.begin(), pairs.end());
+      pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
+      changed = true;
+    }
+    // Then edge flips of the triangles still crossing.
+    const std::vector<std::array<std::uint32_t, 2>> left = pairs;
+    for (const auto& pair : left) {
+      if (!std::binary_search(pairs.begin(), pairs.end(), pair)) continue;
+      bool flipped = false;
+      for (const std::uint32_t f : pair) {
+        for (auto h : mesh.fh_range(TriMesh::FaceHandle(static_cast<int>(f)))) {
+          if (flipped) break;
+          const auto e = mesh.edge_handle(h);
+          if (mesh.is_boundary(e) || !mesh.is_flip_ok(e)) continue;
+          const auto va = mesh.from_vertex_handle(h), vb = mesh.to_vertex_handle(h);
+          const auto ga = static_cast<std::size_t>(result.vertex_node[static_cast<std::size_t>(va.idx())]);
+          const auto gb = static_cast<std::size_t>(result.vertex_node[static_cast<std::size_t>(vb.idx())]);
+          if (is_feature[ga] != 0 && is_feature[gb] != 0) continue;
+          const auto f0 = static_cast<std::uint32_t>(mesh.face_handle(h).idx());
+          const auto f1 = static_cast<std::uint32_t>(mesh.opposite_face_handle(h).idx());
+          const Vec old_normal = area_vector(f0).normalized() + area_vector(f1).normalized();
+          const auto t0 = soup.triangles[f0], t1 = soup.triangles[f1];
+          mesh.flip(e);
+          for (const std::uint32_t g : {f0, f1}) {
+            std::array<std::uint32_t, 3> t{};
+            int k = 0;
+            for (auto v : mesh.fv_range(TriMesh::FaceHandle(static_cast<int>(g)))) t[static_cast<std::size_t>(k++)] = static_cast<std::uint32_t>(v.idx());
+            soup.triangles[g] = t;
+          }
+          bool ok = true;
+          for (const std::uint32_t g : {f0, f1}) {
+            const Vec n = area_vector(g);
+            ok = ok && n.norm() > min_double_area && n.dot(old_normal) > 0.0;
+          }
+          std::vector<std::array<std::uint32_t, 2>> fresh;
+          const std::vector<std::uint32_t> two{std::min(f0, f1), std::max(f0, f1)};
+          if (ok) fresh = intersecting_pairs_of(soup, two);
+          auto is_two = [&](std::uint32_t g) { return g == f0 || g == f1; };
+          const auto n_before = static_cast<std::size_t>(
+              std::count_if(pairs.begin(), pairs.end(), [&](const auto& p) { return is_two(p[0]) || is_two(p[1]); }));
+          if (!ok || fresh.size() >= n_before) {
+            mesh.flip(e);  // back: the flip of the new diagonal restores both faces
+            soup.triangles[f0] = t0;
+            soup.triangles[f1] = t1;
+            continue;
+          }
+          ++report.n_settled_flips;
+          std::erase_if(pairs, [&](const auto& p) { return is_two(p[0]) || is_two(p[1]); });
+          pairs.insert(pairs.end(), fresh.begin(), fresh.end());
+          std::sort(pairs.begin(), pairs.end());
+          pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
+          changed = flipped = true;
+        }
+        if (flipped) break;
+      }
+    }
+    if (!changed) break;
+  }
+}
+
+}  // namespace nurbsfront::stitch_detail
