@@ -43,23 +43,22 @@ void settle_intersections(const SurfaceMesh& surface, const StitchOptions& optio
     }
     return on_input[p];
   };
-  // The mean of the node's projections onto the input faces of the patches around it.
+  // The mean of the projections of p onto the input faces of the patches around node v.
   std::vector<std::size_t> patches;
-  auto target_of = [&](TriMesh::VertexHandle v, Vec& target) {
+  auto target_of = [&](TriMesh::VertexHandle v, const Vec& p, Vec& target) {
     const auto g = static_cast<std::size_t>(result.vertex_node[static_cast<std::size_t>(v.idx())]);
     if (is_feature[g] != 0 || mesh.is_boundary(v)) return false;
     patches.clear();
     for (auto f : mesh.vf_range(v)) patches.push_back(static_cast<std::size_t>(result.face_patch[static_cast<std::size_t>(f.idx())]));
     std::sort(patches.begin(), patches.end());
     patches.erase(std::unique(patches.begin(), patches.end()), patches.end());
-    const Vec p = to_eigen(mesh.point(v));
     target = Vec::Zero();
     for (const std::size_t patch : patches) {
       if (!surface.surfaces[patch].input_heights) return false;
       target += surface_on_input(patch).project(p);
     }
     target /= static_cast<double>(patches.size());
-    return target.allFinite() && target != p;
+    return target.allFinite() && target != to_eigen(mesh.point(v));
   };
 
   TriangleSoup soup = to_soup(mesh);
@@ -70,58 +69,82 @@ void settle_intersections(const SurfaceMesh& surface, const StitchOptions& optio
     return Vec((soup.points[t[1]] - soup.points[t[0]]).cross(soup.points[t[2]] - soup.points[t[0]]));
   };
 
+  // Applies the moves when they leave fewer pairs among the triangles around the moved
+  // nodes and none of these degenerates or turns too far; returns whether it did.
+  using Moves = std::vector<std::pair<TriMesh::VertexHandle, Vec>>;
+  auto try_moves = [&](const Moves& moves) {
+    if (moves.empty()) return false;
+    std::vector<std::uint32_t> touched;
+    for (const auto& m : moves) {
+      for (auto f : mesh.vf_range(m.first)) touched.push_back(static_cast<std::uint32_t>(f.idx()));
+    }
+    std::sort(touched.begin(), touched.end());
+    touched.erase(std::unique(touched.begin(), touched.end()), touched.end());
+    std::vector<Vec> old_normal;
+    for (const std::uint32_t f : touched) old_normal.push_back(area_vector(f));
+    std::vector<Vec> old_point;
+    for (const auto& m : moves) {
+      old_point.push_back(soup.points[static_cast<std::size_t>(m.first.idx())]);
+      soup.points[static_cast<std::size_t>(m.first.idx())] = m.second;
+    }
+    bool ok = true;
+    for (std::size_t i = 0; i < touched.size() && ok; ++i) {
+      const Vec n = area_vector(touched[i]);
+      ok = n.norm() > min_double_area && n.normalized().dot(old_normal[i].normalized()) >= options.min_normal_dot;
+    }
+    std::vector<std::array<std::uint32_t, 2>> fresh;
+    if (ok) fresh = intersecting_pairs_of(soup, touched);
+    auto is_touched = [&](std::uint32_t f) { return std::binary_search(touched.begin(), touched.end(), f); };
+    const auto n_before = static_cast<std::size_t>(std::count_if(pairs.begin(), pairs.end(), [&](const auto& p) {
+      return is_touched(p[0]) || is_touched(p[1]);
+    }));
+    if (!ok || fresh.size() >= n_before) {
+      for (std::size_t i = 0; i < moves.size(); ++i) soup.points[static_cast<std::size_t>(moves[i].first.idx())] = old_point[i];
+      return false;
+    }
+    for (const auto& m : moves) mesh.set_point(m.first, to_openmesh(m.second));
+    report.n_settled_nodes += moves.size();
+    std::erase_if(pairs, [&](const auto& p) { return is_touched(p[0]) || is_touched(p[1]); });
+    pairs.insert(pairs.end(), fresh.begin(), fresh.end());
+    std::sort(pairs.begin(), pairs.end());
+    pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
+    return true;
+  };
+
   for (int round = 0; round < kSettleRounds && !pairs.empty(); ++round) {
     bool changed = false;
     const std::vector<std::array<std::uint32_t, 2>> todo = pairs;
     for (const auto& pair : todo) {
       // Already resolved by an earlier move of this round?
       if (!std::binary_search(pairs.begin(), pairs.end(), pair)) continue;
-      std::vector<std::pair<TriMesh::VertexHandle, Vec>> moves;
+      Moves moves;
       for (const std::uint32_t f : pair) {
         for (auto v : mesh.fv_range(TriMesh::FaceHandle(static_cast<int>(f)))) {
           Vec target;
-          if (std::none_of(moves.begin(), moves.end(), [&](const auto& m) { return m.first == v; }) && target_of(v, target)) {
+          if (std::none_of(moves.begin(), moves.end(), [&](const auto& m) { return m.first == v; }) &&
+              target_of(v, to_eigen(mesh.point(v)), target)) {
             moves.emplace_back(v, target);
           }
         }
       }
-      if (moves.empty()) continue;
-      std::vector<std::uint32_t> touched;
-      for (const auto& m : moves) {
-        for (auto f : mesh.vf_range(m.first)) touched.push_back(static_cast<std::uint32_t>(f.idx()));
-      }
-      std::sort(touched.begin(), touched.end());
-      touched.erase(std::unique(touched.begin(), touched.end()), touched.end());
-      std::vector<Vec> old_normal;
-      for (const std::uint32_t f : touched) old_normal.push_back(area_vector(f));
-      std::vector<Vec> old_point;
-      for (const auto& m : moves) {
-        old_point.push_back(soup.points[static_cast<std::size_t>(m.first.idx())]);
-        soup.points[static_cast<std::size_t>(m.first.idx())] = m.second;
-      }
-      // No touched triangle may degenerate or turn its normal too far.
-      bool ok = true;
-      for (std::size_t i = 0; i < touched.size() && ok; ++i) {
-        const Vec n = area_vector(touched[i]);
-        ok = n.norm() > min_double_area && n.normalized().dot(old_normal[i].normalized()) >= options.min_normal_dot;
-      }
-      std::vector<std::array<std::uint32_t, 2>> fresh;
-      if (ok) fresh = intersecting_pairs_of(soup, touched);
-      auto is_touched = [&](std::uint32_t f) { return std::binary_search(touched.begin(), touched.end(), f); };
-      const auto n_before = static_cast<std::size_t>(std::count_if(pairs.begin(), pairs.end(), [&](const auto& p) {
-        return is_touched(p[0]) || is_touched(p[1]);
-      }));
-      if (!ok || fresh.size() >= n_before) {
-        for (std::size_t i = 0; i < moves.size(); ++i) soup.points[static_cast<std::size_t>(moves[i].first.idx())] = old_point[i];
+      if (try_moves(moves)) {
+        changed = true;
         continue;
       }
-      for (const auto& m : moves) mesh.set_point(m.first, to_openmesh(m.second));
-      report.n_settled_nodes += moves.size();
-      std::erase_if(pairs, [&](const auto& p) { return is_touched(p[0]) || is_touched(p[1]); });
-      pairs.insert(pairs.end(), fresh.begin(), fresh.end());
-      std::sort(pairs.begin(), pairs.end());
-      pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
-      changed = true;
+      // One node at a time to the centroid of its neighbours, onto the input faces.
+      for (const auto& [v, unused] : moves) {
+        Vec centroid = Vec::Zero();
+        double n = 0.0;
+        for (auto w : mesh.vv_range(v)) {
+          centroid += to_eigen(mesh.point(w));
+          n += 1.0;
+        }
+        Vec target;
+        if (n > 0.0 && target_of(v, centroid / n, target) && try_moves({{v, target}})) {
+          changed = true;
+          break;
+        }
+      }
     }
     // Then edge flips of the triangles still crossing.
     const std::vector<std::array<std::uint32_t, 2>> left = pairs;
