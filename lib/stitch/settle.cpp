@@ -69,6 +69,16 @@ void settle_intersections(const SurfaceMesh& surface, const StitchOptions& optio
     return Vec((soup.points[t[1]] - soup.points[t[0]]).cross(soup.points[t[2]] - soup.points[t[0]]));
   };
 
+  // The soup's triangles of `faces` read again from the mesh (after flips).
+  auto sync_faces = [&](const std::vector<std::uint32_t>& faces) {
+    for (const std::uint32_t g : faces) {
+      int k = 0;
+      for (auto v : mesh.fv_range(TriMesh::FaceHandle(static_cast<int>(g)))) {
+        soup.triangles[g][static_cast<std::size_t>(k++)] = static_cast<std::uint32_t>(v.idx());
+      }
+    }
+  };
+
   // Applies the moves when they leave fewer pairs among the triangles around the moved
   // nodes and none of these degenerates or turns too far; returns whether it did.
   using Moves = std::vector<std::pair<TriMesh::VertexHandle, Vec>>;
@@ -150,52 +160,55 @@ void settle_intersections(const SurfaceMesh& surface, const StitchOptions& optio
     const std::vector<std::array<std::uint32_t, 2>> left = pairs;
     for (const auto& pair : left) {
       if (!std::binary_search(pairs.begin(), pairs.end(), pair)) continue;
-      bool flipped = false;
+      std::vector<TriMesh::EdgeHandle> edges;
       for (const std::uint32_t f : pair) {
-        for (auto h : mesh.fh_range(TriMesh::FaceHandle(static_cast<int>(f)))) {
-          if (flipped) break;
-          const auto e = mesh.edge_handle(h);
-          if (mesh.is_boundary(e) || !mesh.is_flip_ok(e)) continue;
-          const auto va = mesh.from_vertex_handle(h), vb = mesh.to_vertex_handle(h);
-          const auto ga = static_cast<std::size_t>(result.vertex_node[static_cast<std::size_t>(va.idx())]);
-          const auto gb = static_cast<std::size_t>(result.vertex_node[static_cast<std::size_t>(vb.idx())]);
-          if (is_feature[ga] != 0 && is_feature[gb] != 0) continue;
-          const auto f0 = static_cast<std::uint32_t>(mesh.face_handle(h).idx());
-          const auto f1 = static_cast<std::uint32_t>(mesh.opposite_face_handle(h).idx());
-          const Vec old_normal = area_vector(f0).normalized() + area_vector(f1).normalized();
-          const auto t0 = soup.triangles[f0], t1 = soup.triangles[f1];
-          mesh.flip(e);
-          for (const std::uint32_t g : {f0, f1}) {
-            std::array<std::uint32_t, 3> t{};
-            int k = 0;
-            for (auto v : mesh.fv_range(TriMesh::FaceHandle(static_cast<int>(g)))) t[static_cast<std::size_t>(k++)] = static_cast<std::uint32_t>(v.idx());
-            soup.triangles[g] = t;
-          }
-          bool ok = true;
-          for (const std::uint32_t g : {f0, f1}) {
-            const Vec n = area_vector(g);
-            ok = ok && n.norm() > min_double_area && n.dot(old_normal) > 0.0;
-          }
-          std::vector<std::array<std::uint32_t, 2>> fresh;
-          const std::vector<std::uint32_t> two{std::min(f0, f1), std::max(f0, f1)};
-          if (ok) fresh = intersecting_pairs_of(soup, two);
-          auto is_two = [&](std::uint32_t g) { return g == f0 || g == f1; };
-          const auto n_before = static_cast<std::size_t>(
-              std::count_if(pairs.begin(), pairs.end(), [&](const auto& p) { return is_two(p[0]) || is_two(p[1]); }));
-          if (!ok || fresh.size() >= n_before) {
-            mesh.flip(e);  // back: the flip of the new diagonal restores both faces
-            soup.triangles[f0] = t0;
-            soup.triangles[f1] = t1;
-            continue;
-          }
-          ++report.n_settled_flips;
-          std::erase_if(pairs, [&](const auto& p) { return is_two(p[0]) || is_two(p[1]); });
-          pairs.insert(pairs.end(), fresh.begin(), fresh.end());
-          std::sort(pairs.begin(), pairs.end());
-          pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
-          changed = flipped = true;
+        for (auto h : mesh.fh_range(TriMesh::FaceHandle(static_cast<int>(f)))) edges.push_back(mesh.edge_handle(h));
+      }
+      for (const auto e : edges) {
+        if (mesh.is_boundary(e) || !mesh.is_flip_ok(e)) continue;
+        const auto h = mesh.halfedge_handle(e, 0);
+        const auto ga = static_cast<std::size_t>(result.vertex_node[static_cast<std::size_t>(mesh.from_vertex_handle(h).idx())]);
+        const auto gb = static_cast<std::size_t>(result.vertex_node[static_cast<std::size_t>(mesh.to_vertex_handle(h).idx())]);
+        if (is_feature[ga] != 0 && is_feature[gb] != 0) continue;
+        const auto f0 = static_cast<std::uint32_t>(mesh.face_handle(h).idx());
+        const auto f1 = static_cast<std::uint32_t>(mesh.opposite_face_handle(h).idx());
+        const Vec old_normal = area_vector(f0).normalized() + area_vector(f1).normalized();
+        const std::vector<std::uint32_t> two{std::min(f0, f1), std::max(f0, f1)};
+        auto is_two = [&](std::uint32_t g) { return g == f0 || g == f1; };
+        const auto n_before = static_cast<std::size_t>(
+            std::count_if(pairs.begin(), pairs.end(), [&](const auto& p) { return is_two(p[0]) || is_two(p[1]); }));
+        auto sorted_ids = [&](std::uint32_t g) {
+          std::array<std::uint32_t, 3> t = soup.triangles[g];
+          std::sort(t.begin(), t.end());
+          return t;
+        };
+        const std::array<std::uint32_t, 3> ids0 = sorted_ids(f0);
+        mesh.flip(e);
+        sync_faces(two);
+        bool ok = true;
+        for (const std::uint32_t g : two) {
+          const Vec n = area_vector(g);
+          ok = ok && n.norm() > min_double_area && n.dot(old_normal) > 0.0;
         }
-        if (flipped) break;
+        std::vector<std::array<std::uint32_t, 2>> fresh;
+        if (ok) fresh = intersecting_pairs_of(soup, two);
+        if (!ok || fresh.size() >= n_before) {
+          // Flipping back restores both triangles, possibly under each other's face index:
+          // their pairs are taken again.
+          mesh.flip(e);
+          sync_faces(two);
+          if (sorted_ids(f0) != ids0) std::swap(result.face_patch[f0], result.face_patch[f1]);
+          fresh = intersecting_pairs_of(soup, two);
+          ok = false;
+        } else {
+          ++report.n_settled_flips;
+          changed = true;
+        }
+        std::erase_if(pairs, [&](const auto& p) { return is_two(p[0]) || is_two(p[1]); });
+        pairs.insert(pairs.end(), fresh.begin(), fresh.end());
+        std::sort(pairs.begin(), pairs.end());
+        pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
+        if (ok) break;
       }
     }
     if (!changed) break;

@@ -437,8 +437,10 @@ StitchResult stitch_impl(const SurfaceMesh& surface, const TriMesh* input, const
       report.optimisation_undone = true;
       pairs = self_intersecting_pairs(to_soup(mesh), options.n_threads);
     }
-    // What remains was in the assembly (the surface mesh's own crossings).
+    // What remains was in the assembly (the surface mesh's own crossings). The count is
+    // taken again over the whole mesh when settling changed anything.
     stitch_detail::settle_intersections(surface, options, feature, result, pairs, report);
+    if (report.n_settled_nodes + report.n_settled_flips > 0) pairs = self_intersecting_pairs(to_soup(mesh), options.n_threads);
   }
   ReportOptions check;
   check.self_intersections = false;  // counted above
