@@ -61,20 +61,80 @@ void settle_intersections(const SurfaceMesh& surface, const StitchOptions& optio
     return target.allFinite() && target != to_eigen(mesh.point(v));
   };
 
-  TriangleSoup soup = to_soup(mesh);
-  const double diagonal = bounding_box(soup).diagonal();
+  // The checks run on the triangles near the crossings only (the whole mesh is checked
+  // again by the caller): those with a corner within the box of a pair's triangles and
+  // their neighbours, grown by the longest edge there.
+  const TriangleSoup whole = to_soup(mesh);
+  const double diagonal = bounding_box(whole).diagonal();
   const double min_double_area = 2.0 * tolerance::kDegenerateAreaRelative * diagonal * diagonal;
+  std::vector<BoundingBox> boxes;
+  for (const auto& pair : pairs) {
+    BoundingBox box;
+    double longest = 0.0;
+    for (const std::uint32_t f : pair) {
+      for (auto v : mesh.fv_range(TriMesh::FaceHandle(static_cast<int>(f)))) {
+        for (auto h : mesh.voh_range(v)) {
+          const Vec a = to_eigen(mesh.point(mesh.from_vertex_handle(h))), b = to_eigen(mesh.point(mesh.to_vertex_handle(h)));
+          box.extend(b);
+          longest = std::max(longest, (b - a).norm());
+        }
+      }
+    }
+    box.min.array() -= 2.0 * longest;
+    box.max.array() += 2.0 * longest;
+    boxes.push_back(box);
+  }
+  TriangleSoup soup;
+  std::vector<std::int64_t> local_point(whole.points.size(), -1);
+  std::vector<std::int64_t> local_of(whole.triangles.size(), -1);
+  std::vector<std::uint32_t> global_of;
+  for (std::size_t f = 0; f < whole.triangles.size(); ++f) {
+    BoundingBox box;
+    for (const std::uint32_t v : whole.triangles[f]) box.extend(whole.points[v]);
+    const bool near = std::any_of(boxes.begin(), boxes.end(), [&](const BoundingBox& b) {
+      return (box.min.array() <= b.max.array()).all() && (b.min.array() <= box.max.array()).all();
+    });
+    if (!near) continue;
+    local_of[f] = static_cast<std::int64_t>(soup.triangles.size());
+    global_of.push_back(static_cast<std::uint32_t>(f));
+    std::array<std::uint32_t, 3> t{};
+    for (std::size_t k = 0; k < 3; ++k) {
+      const std::uint32_t v = whole.triangles[f][k];
+      if (local_point[v] < 0) {
+        local_point[v] = static_cast<std::int64_t>(soup.points.size());
+        soup.points.push_back(whole.points[v]);
+      }
+      t[k] = static_cast<std::uint32_t>(local_point[v]);
+    }
+    soup.triangles.push_back(t);
+  }
+  auto point_of = [&](TriMesh::VertexHandle v) -> Vec& { return soup.points[static_cast<std::size_t>(local_point[static_cast<std::size_t>(v.idx())])]; };
+  auto tri = [&](std::uint32_t f) -> std::array<std::uint32_t, 3>& { return soup.triangles[static_cast<std::size_t>(local_of[f])]; };
+  auto is_local = [&](const std::vector<std::uint32_t>& faces) {
+    return std::all_of(faces.begin(), faces.end(), [&](std::uint32_t f) { return local_of[f] >= 0; });
+  };
+  // Intersecting pairs (face indices of the mesh, sorted) of local faces with local faces.
+  auto pairs_of = [&](const std::vector<std::uint32_t>& faces) {
+    std::vector<std::uint32_t> local;
+    for (const std::uint32_t f : faces) local.push_back(static_cast<std::uint32_t>(local_of[f]));
+    std::vector<std::array<std::uint32_t, 2>> out = intersecting_pairs_of(soup, local);
+    for (auto& p : out) {
+      p = {global_of[p[0]], global_of[p[1]]};
+      if (p[0] > p[1]) std::swap(p[0], p[1]);
+    }
+    std::sort(out.begin(), out.end());
+    return out;
+  };
   auto area_vector = [&](std::uint32_t f) {
-    const auto& t = soup.triangles[f];
+    const auto& t = tri(f);
     return Vec((soup.points[t[1]] - soup.points[t[0]]).cross(soup.points[t[2]] - soup.points[t[0]]));
   };
-
   // The soup's triangles of `faces` read again from the mesh (after flips).
   auto sync_faces = [&](const std::vector<std::uint32_t>& faces) {
     for (const std::uint32_t g : faces) {
       int k = 0;
       for (auto v : mesh.fv_range(TriMesh::FaceHandle(static_cast<int>(g)))) {
-        soup.triangles[g][static_cast<std::size_t>(k++)] = static_cast<std::uint32_t>(v.idx());
+        tri(g)[static_cast<std::size_t>(k++)] = static_cast<std::uint32_t>(local_point[static_cast<std::size_t>(v.idx())]);
       }
     }
   };
@@ -90,12 +150,13 @@ void settle_intersections(const SurfaceMesh& surface, const StitchOptions& optio
     }
     std::sort(touched.begin(), touched.end());
     touched.erase(std::unique(touched.begin(), touched.end()), touched.end());
+    if (!is_local(touched)) return false;
     std::vector<Vec> old_normal;
     for (const std::uint32_t f : touched) old_normal.push_back(area_vector(f));
     std::vector<Vec> old_point;
     for (const auto& m : moves) {
-      old_point.push_back(soup.points[static_cast<std::size_t>(m.first.idx())]);
-      soup.points[static_cast<std::size_t>(m.first.idx())] = m.second;
+      old_point.push_back(point_of(m.first));
+      point_of(m.first) = m.second;
     }
     bool ok = true;
     for (std::size_t i = 0; i < touched.size() && ok; ++i) {
@@ -103,13 +164,13 @@ void settle_intersections(const SurfaceMesh& surface, const StitchOptions& optio
       ok = n.norm() > min_double_area && n.normalized().dot(old_normal[i].normalized()) >= options.min_normal_dot;
     }
     std::vector<std::array<std::uint32_t, 2>> fresh;
-    if (ok) fresh = intersecting_pairs_of(soup, touched);
+    if (ok) fresh = pairs_of(touched);
     auto is_touched = [&](std::uint32_t f) { return std::binary_search(touched.begin(), touched.end(), f); };
     const auto n_before = static_cast<std::size_t>(std::count_if(pairs.begin(), pairs.end(), [&](const auto& p) {
       return is_touched(p[0]) || is_touched(p[1]);
     }));
     if (!ok || fresh.size() >= n_before) {
-      for (std::size_t i = 0; i < moves.size(); ++i) soup.points[static_cast<std::size_t>(moves[i].first.idx())] = old_point[i];
+      for (std::size_t i = 0; i < moves.size(); ++i) point_of(moves[i].first) = old_point[i];
       return false;
     }
     for (const auto& m : moves) mesh.set_point(m.first, to_openmesh(m.second));
@@ -172,13 +233,14 @@ void settle_intersections(const SurfaceMesh& surface, const StitchOptions& optio
         if (is_feature[ga] != 0 && is_feature[gb] != 0) continue;
         const auto f0 = static_cast<std::uint32_t>(mesh.face_handle(h).idx());
         const auto f1 = static_cast<std::uint32_t>(mesh.opposite_face_handle(h).idx());
+        if (local_of[f0] < 0 || local_of[f1] < 0) continue;
         const Vec old_normal = area_vector(f0).normalized() + area_vector(f1).normalized();
         const std::vector<std::uint32_t> two{std::min(f0, f1), std::max(f0, f1)};
         auto is_two = [&](std::uint32_t g) { return g == f0 || g == f1; };
         const auto n_before = static_cast<std::size_t>(
             std::count_if(pairs.begin(), pairs.end(), [&](const auto& p) { return is_two(p[0]) || is_two(p[1]); }));
         auto sorted_ids = [&](std::uint32_t g) {
-          std::array<std::uint32_t, 3> t = soup.triangles[g];
+          std::array<std::uint32_t, 3> t = tri(g);
           std::sort(t.begin(), t.end());
           return t;
         };
@@ -191,14 +253,14 @@ void settle_intersections(const SurfaceMesh& surface, const StitchOptions& optio
           ok = ok && n.norm() > min_double_area && n.dot(old_normal) > 0.0;
         }
         std::vector<std::array<std::uint32_t, 2>> fresh;
-        if (ok) fresh = intersecting_pairs_of(soup, two);
+        if (ok) fresh = pairs_of(two);
         if (!ok || fresh.size() >= n_before) {
           // Flipping back restores both triangles, possibly under each other's face index:
           // their pairs are taken again.
           mesh.flip(e);
           sync_faces(two);
           if (sorted_ids(f0) != ids0) std::swap(result.face_patch[f0], result.face_patch[f1]);
-          fresh = intersecting_pairs_of(soup, two);
+          fresh = pairs_of(two);
           ok = false;
         } else {
           ++report.n_settled_flips;
