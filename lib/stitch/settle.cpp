@@ -62,8 +62,9 @@ void settle_intersections(const SurfaceMesh& surface, const StitchOptions& optio
   };
 
   // The checks run on the triangles near the crossings only (the whole mesh is checked
-  // again by the caller): those with a corner within the box of a pair's triangles and
-  // their neighbours, grown by the longest edge there.
+  // again by the caller): those whose box meets the box of a pair's triangles and their
+  // neighbours, grown by twice the longest edge there. A change that would touch a triangle
+  // outside is not made.
   const TriangleSoup whole = to_soup(mesh);
   const double diagonal = bounding_box(whole).diagonal();
   const double min_double_area = 2.0 * tolerance::kDegenerateAreaRelative * diagonal * diagonal;
