@@ -109,6 +109,99 @@ void mark_creases(FaceGraph& graph, const FaceNormals& normals, double cos_creas
   }
 }
 
+// Bevel creases (SegmentOptions::bevel_creases): smallest dihedral (deg) of a bend, the
+// smallest angle between two face normals near both its ends, the smallest angle between
+// the mean normals of its two sides, and the rings of faces those means take. Measured on
+// marching cubes of the level-set DRAM cell at 128: box edges bend by 45 deg twice; the
+// level-set sphere and the occupancy sphere and torus at 128 get no bevel crease (their
+// terraces have steep face pairs within two rings, but side means at most ~35 deg apart).
+constexpr double kBevelMinDihedralDeg = 30.0;
+constexpr double kBevelMinSpreadDeg = 75.0;
+constexpr double kBevelMinSideAngleDeg = 40.0;
+constexpr int kBevelSideRings = 3;
+
+// Marks the bends of bevelled sharp edges as creases (see the constants above); returns
+// how many edges it marked that were not creases already.
+std::size_t mark_bevel_creases(FaceGraph& graph, const FaceNormals& normals) {
+  const int n = graph.n_faces();
+  const TriMesh& mesh = *graph.mesh;
+  const double cos_dihedral = std::cos(radians(kBevelMinDihedralDeg));
+  const double cos_spread = std::cos(radians(kBevelMinSpreadDeg));
+  const double cos_sides = std::cos(radians(kBevelMinSideAngleDeg));
+  // Spread at a vertex: whether the faces around it and around its neighbours hold two
+  // normals at least kBevelMinSpreadDeg apart (-1 unknown, 0 no, 1 yes; computed lazily).
+  std::vector<std::int8_t> spread(graph.points.size(), -1);
+  std::vector<int> near;
+  auto has_spread = [&](int v) {
+    if (spread[v] >= 0) return spread[v] == 1;
+    near.clear();
+    const TriMesh::VertexHandle vh(v);
+    for (const auto f : mesh.vf_range(vh)) near.push_back(f.idx());
+    for (const auto w : mesh.vv_range(vh))
+      for (const auto f : mesh.vf_range(w)) near.push_back(f.idx());
+    std::sort(near.begin(), near.end());
+    near.erase(std::unique(near.begin(), near.end()), near.end());
+    bool found = false;
+    for (std::size_t i = 0; i < near.size() && !found; ++i) {
+      if (normals.degenerate[near[i]] != 0) continue;
+      for (std::size_t j = i + 1; j < near.size() && !found; ++j)
+        found = normals.degenerate[near[j]] == 0 && normals.raw[near[i]].dot(normals.raw[near[j]]) <= cos_spread;
+    }
+    spread[v] = found ? 1 : 0;
+    return found;
+  };
+  std::vector<int> stamp(n, -1), frontier, next;
+  int epoch = 0;
+  // Whether the mean normals of the faces within kBevelSideRings rings of faces f and g,
+  // split by the plane through their shared edge (a, b) that bisects their normals, are at
+  // least kBevelMinSideAngleDeg apart.
+  auto sides_bend = [&](int f, int g, int a, int b) {
+    const Eigen::Vector3d& pa = graph.points[a];
+    const Eigen::Vector3d& pb = graph.points[b];
+    const Eigen::Vector3d middle = 0.5 * (pa + pb);
+    const Eigen::Vector3d across = (normals.raw[f] + normals.raw[g]).cross(pb - pa);
+    ++epoch;
+    frontier.assign({f, g});
+    stamp[f] = stamp[g] = epoch;
+    Eigen::Vector3d one = Eigen::Vector3d::Zero(), other = Eigen::Vector3d::Zero();
+    for (int ring = 0; ring <= kBevelSideRings && !frontier.empty(); ++ring) {
+      next.clear();
+      for (const int h : frontier) {
+        const auto& v = graph.vertices[h];
+        const Eigen::Vector3d centroid = (graph.points[v[0]] + graph.points[v[1]] + graph.points[v[2]]) / 3.0;
+        (across.dot(centroid - middle) > 0.0 ? one : other) += normals.area[h] * normals.raw[h];
+        if (ring == kBevelSideRings) continue;
+        for (const int q : graph.neighbours[h])
+          if (q >= 0 && stamp[q] != epoch) {
+            stamp[q] = epoch;
+            next.push_back(q);
+          }
+      }
+      std::swap(frontier, next);
+    }
+    const double length = one.norm() * other.norm();
+    return length > 0.0 && one.dot(other) <= cos_sides * length;
+  };
+  std::size_t n_marked = 0;
+  for (int f = 0; f < n; ++f) {
+    if (normals.degenerate[f] != 0) continue;
+    for (int i = 0; i < 3; ++i) {
+      const int g = graph.neighbours[f][i];
+      // Each edge once, from its lower face; crease edges are already borders.
+      if (g < f || normals.degenerate[g] != 0 || graph.is_crease(f, i)) continue;
+      if (normals.raw[f].dot(normals.raw[g]) > cos_dihedral) continue;
+      const int a = graph.vertices[f][i];
+      const int b = graph.vertices[f][(i + 1) % 3];
+      if (!sides_bend(f, g, a, b) || !has_spread(a) || !has_spread(b)) continue;
+      graph.crease[f] |= static_cast<std::uint8_t>(1U << i);
+      for (int k = 0; k < 3; ++k)
+        if (graph.neighbours[g][k] == f) graph.crease[g] |= static_cast<std::uint8_t>(1U << k);
+      ++n_marked;
+    }
+  }
+  return n_marked;
+}
+
 // Jacobi iterations of area-weighted averaging over edge-adjacent faces, not across creases.
 std::vector<Eigen::Vector3d> smooth_normals(const FaceGraph& graph, const FaceNormals& normals, int rings) {
   const int n = graph.n_faces();
@@ -640,6 +733,7 @@ Segmentation segment(const TriMesh& mesh, const SegmentOptions& options) {
   FaceGraph graph = build_graph(mesh);
   FaceNormals normals = face_normals(graph, bounding_box(mesh).diagonal());
   mark_creases(graph, normals, std::cos(radians(options.crease_angle_deg)));
+  if (options.bevel_creases) result.n_bevel_crease_edges = mark_bevel_creases(graph, normals);
   normals.smooth = smooth_normals(graph, normals, options.normal_smoothing_rings);
   const double max_slope = radians(options.max_slope_deg);
   // A face whose raw and smoothed normals are further apart than this admits no axis.

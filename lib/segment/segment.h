@@ -56,6 +56,19 @@ struct SegmentOptions {
   //! widens the averaging by one ring of faces. Default 6: enough to average the
   //! terraces of cell-based inputs (DESIGN.md, Pitfalls).
   int normal_smoothing_rings = 6;
+  //! Also make creases of the bends of bevelled sharp edges: marching cubes cuts a 90 deg
+  //! box edge into two ~45 deg bends around a strip of faces, below `crease_angle_deg`,
+  //! and a patch then holds one bend inside, which its fit rounds off. An edge is such a
+  //! crease when its dihedral is at least kBevelMinDihedralDeg (30), the faces within two
+  //! vertex rings of each of its ends include two normals at least kBevelMinSpreadDeg (75)
+  //! apart, and the mean normals of the faces within three rings on its two sides are at
+  //! least kBevelMinSideAngleDeg (40) apart (the terraces of cell-based inputs have
+  //! steep pairs of faces, but no such bend on the scale of three rings). Default false:
+  //! it halves the Hausdorff distance to the input at bevelled edges (trench, fandisk) but
+  //! each bevel strip becomes a narrow patch (about one target edge wide), and the surface
+  //! mesher does not yet stagger the nodes of its two border curves: more obtuse and
+  //! small-angle triangles (docs/segment.md, "Bevel creases").
+  bool bevel_creases = false;
   //! Patches with fewer faces are merged into an edge-adjacent neighbour when the merged
   //! patch still meets the slope bound and no crease separates them (0 disables).
   //! Default 50.
@@ -105,7 +118,8 @@ struct Segmentation {
   //! Vertices where three or more sides meet (patches, or patches and the input's
   //! boundary): the ends of the open curves. Ascending.
   std::vector<int> corners;
-  std::size_t n_crease_edges = 0;     //!< edges above the crease angle
+  std::size_t n_crease_edges = 0;     //!< crease edges (above the crease angle, or bevel bends)
+  std::size_t n_bevel_crease_edges = 0;  //!< of those, bends of bevelled edges (SegmentOptions::bevel_creases)
   std::size_t n_degenerate_faces = 0; //!< faces without a normal (zero area)
   //! Faces whose raw and smoothed normals are so far apart (over 90 deg + max_slope,
   //! a flipped face) that no axis satisfies both bounds: only the raw bound holds.
@@ -116,7 +130,8 @@ struct Segmentation {
 //! Splits the faces of `mesh` into slope-bounded patches and extracts their borders.
 //!
 //! Algorithm (details and measurements in docs/segment.md):
-//! 1. Raw unit face normals and areas; crease edges (dihedral > crease_angle_deg).
+//! 1. Raw unit face normals and areas; crease edges (dihedral > crease_angle_deg, and
+//!    the bends of bevelled edges when `bevel_creases`).
 //! 2. Smoothed normals: `normal_smoothing_rings` Jacobi iterations of area-weighted
 //!    averaging over edge-adjacent faces, not across creases.
 //! 3. Region growing, seeds in face-id order, breadth first through non-crease edges:

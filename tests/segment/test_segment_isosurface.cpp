@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <numbers>
 #include <string>
 
 #include "nurbsfront/isosurface/marching_cubes.h"
@@ -54,6 +56,53 @@ TEST(SegmentIsosurface, LevelSetSphereAndTorus) {
   EXPECT_LE(sphere.patches.size(), 30u);
   const Segmentation torus = segment_test::run(scene_mesh("torus", 32, SampleMode::LevelSet), options, 10.0);
   EXPECT_LE(torus.patches.size(), 60u);
+}
+
+// Edges with a dihedral of at least 30 deg whose two faces are in the same patch.
+std::size_t bends_inside_patches(const TriMesh& mesh, const Segmentation& seg) {
+  std::size_t n = 0;
+  const double cos_bend = std::cos(30.0 * std::numbers::pi / 180.0);
+  for (const auto e : mesh.edges()) {
+    if (mesh.is_boundary(e)) continue;
+    const auto f = mesh.face_handle(mesh.halfedge_handle(e, 0));
+    const auto g = mesh.face_handle(mesh.halfedge_handle(e, 1));
+    if (seg.face_patch[f.idx()] != seg.face_patch[g.idx()]) continue;
+    const TriMesh::Normal nf = mesh.calc_face_normal(f);
+    const TriMesh::Normal ng = mesh.calc_face_normal(g);
+    if (nf.norm() > 0 && ng.norm() > 0 && (nf | ng) / (nf.norm() * ng.norm()) < cos_bend) ++n;
+  }
+  return n;
+}
+
+TEST(SegmentIsosurface, BevelCreasesKeepTheBevelledBoxEdgesOutOfThePatches) {
+  // Marching cubes bevels the trench's 90 deg box edges into two ~45 deg bends, below the
+  // crease angle: without bevel creases a patch holds one bend of every bevel inside.
+  constexpr int kCells = 48;
+  const TriMesh mesh = scene_mesh("trench", kCells, SampleMode::LevelSet);
+  SegmentOptions options;
+  const Segmentation plain = segment(mesh, options);  // the default path's contracts are tested above
+  EXPECT_EQ(plain.n_bevel_crease_edges, 0u);
+  EXPECT_GT(bends_inside_patches(mesh, plain), static_cast<std::size_t>(kCells));
+  options.bevel_creases = true;
+  // A bevel strip is its own patch: its raw normals may lean further from its axis than on a
+  // smooth surface (the raw bound kSegmentMinRawNormalDot still holds, checked).
+  const Segmentation bevel = segment_test::run(mesh, options, kTerracedSlack);
+  EXPECT_GT(bevel.n_bevel_crease_edges, static_cast<std::size_t>(2 * kCells));
+  EXPECT_EQ(bevel.n_crease_edges, plain.n_crease_edges + bevel.n_bevel_crease_edges);
+  EXPECT_EQ(bends_inside_patches(mesh, bevel), 0u);
+  // Terraces of cell-based inputs and smooth level sets are not bevels (the occupancy torus
+  // at 48 cells, a tube of radius ~6 cells, gets some: see the slow test below).
+  EXPECT_EQ(segment(scene_mesh("sphere", kCells, SampleMode::Occupancy), options).n_bevel_crease_edges, 0u);
+  EXPECT_EQ(segment(scene_mesh("sphere", kCells, SampleMode::LevelSet), options).n_bevel_crease_edges, 0u);
+}
+
+TEST(SegmentIsosurfaceSlow, BevelCreasesLeaveTerracesAlone) {
+  SegmentOptions options;
+  options.bevel_creases = true;
+  for (const char* name : {"sphere", "torus"}) {
+    EXPECT_EQ(segment(scene_mesh(name, 96, SampleMode::Occupancy), options).n_bevel_crease_edges, 0u) << name;
+    EXPECT_EQ(segment(scene_mesh(name, 96, SampleMode::LevelSet), options).n_bevel_crease_edges, 0u) << name;
+  }
 }
 
 TEST(SegmentIsosurface, OccupancyTrench) {

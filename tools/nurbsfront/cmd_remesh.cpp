@@ -39,6 +39,7 @@ struct RemeshArgs {
   std::optional<double> chord;
   std::optional<double> max_slope;
   std::optional<double> crease;
+  bool bevel_creases = false;
   std::optional<unsigned> threads;
   std::string report;
   std::string vtk;
@@ -82,6 +83,7 @@ void run_remesh(RemeshArgs& args) {
   if (args.chord) options.surfmesh.sizing.chord_error = *args.chord;
   if (args.max_slope) options.segment.max_slope_deg = *args.max_slope;
   if (args.crease) options.segment.crease_angle_deg = *args.crease;
+  if (args.bevel_creases) options.segment.bevel_creases = true;
   if (args.threads) options.set_threads(*args.threads);
   if (!args.cell_grid.empty()) {
     if (!args.scene.empty()) throw InvalidInput("remesh: --cell-grid applies to an input file (an occupancy scene sets it itself)");
@@ -159,6 +161,9 @@ void add_remesh_command(CLI::App& app) {
   cmd->add_option("--chord", args->chord, "Chord error for --adaptive (length units; default 0.05 x size)");
   cmd->add_option("--max-slope", args->max_slope, "Largest angle (deg) between a face normal and its patch axis (default 60)");
   cmd->add_option("--crease", args->crease, "Dihedral angle (deg) above which an edge is a crease (default 80)");
+  cmd->add_flag("--bevel-creases", args->bevel_creases,
+                "Also make creases of the ~45 deg bends of bevelled (marching-cubes) sharp edges: closer to "
+                "the input at box edges, more narrow patches (docs/segment.md)");
   cmd->add_option("--threads", args->threads, "Worker threads for every stage (default: all for patches, 2 for checks)");
   cmd->add_option("--report", args->report, "Write the report as JSON");
   cmd->add_option("--vtk", args->vtk, "Write the output with per-face patch id and alpha (.vtk/.vtu)");
