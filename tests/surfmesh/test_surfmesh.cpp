@@ -290,6 +290,20 @@ Segmentation labelled_segmentation(const TriMesh& mesh, const std::vector<int>& 
   return seg;
 }
 
+// Per patch, the area of its triangles of a flat mesh in the plane z = 0; every triangle
+// must face +z.
+std::vector<double> flat_patch_areas(const SurfaceMesh& sm, std::size_t n_patches) {
+  std::vector<double> area(n_patches, 0.0);
+  for (std::size_t t = 0; t < sm.triangles.size(); ++t) {
+    const auto& tri = sm.triangles[t];
+    const Eigen::Vector3d n = (sm.nodes[static_cast<std::size_t>(tri[1])] - sm.nodes[static_cast<std::size_t>(tri[0])])
+                                  .cross(sm.nodes[static_cast<std::size_t>(tri[2])] - sm.nodes[static_cast<std::size_t>(tri[0])]);
+    EXPECT_GT(n.z(), 0.0);
+    area[static_cast<std::size_t>(sm.triangle_patch[t])] += 0.5 * n.z();
+  }
+  return area;
+}
+
 TEST(Surfmesh, NeighbourTouchingTheOuterLoopAtACorner) {
   // A flat 12 x 12 grid; patch 1 is a small block inside patch 0 that touches the grid's
   // boundary at one vertex only (the upper triangle of cell (5, 0) and cells (5, 1), (6, 1)).
@@ -311,14 +325,7 @@ TEST(Surfmesh, NeighbourTouchingTheOuterLoopAtACorner) {
   EXPECT_FALSE(f.closed);
   EXPECT_EQ(f.euler, 1);
   // The two patches together cover the unit square once.
-  double area[2] = {0.0, 0.0};
-  for (std::size_t t = 0; t < sm.triangles.size(); ++t) {
-    const auto& tri = sm.triangles[t];
-    const Eigen::Vector3d n = (sm.nodes[static_cast<std::size_t>(tri[1])] - sm.nodes[static_cast<std::size_t>(tri[0])])
-                                  .cross(sm.nodes[static_cast<std::size_t>(tri[2])] - sm.nodes[static_cast<std::size_t>(tri[0])]);
-    EXPECT_GT(n.z(), 0.0);
-    area[sm.triangle_patch[t]] += 0.5 * n.z();
-  }
+  const std::vector<double> area = flat_patch_areas(sm, 2);
   EXPECT_NEAR(area[0] + area[1], 1.0, 1e-9);
   EXPECT_NEAR(area[1], 5.0 / (2.0 * kN * kN), 0.2 * 5.0 / (2.0 * kN * kN));  // chords cut its corners
 }
@@ -450,6 +457,53 @@ TEST(Surfmesh, FlippedHoleLoopFound) {
   std::swap(borders.positions[static_cast<std::size_t>(nodes[1])], borders.positions[static_cast<std::size_t>(nodes[2])]);
   EXPECT_EQ(surfmesh_detail::flipped_loops(mesh, seg, borders), std::vector<int>{hole});
   EXPECT_EQ(surfmesh_detail::extra_outer_loop_curves(seg, borders), std::vector<int>{hole});
+}
+
+TEST(Surfmesh, SmoothedBorderThatFoldsASmallPatchFallsBackToInputPositions) {
+  // A flat 12 x 12 grid: patch 0 below y = 0.5, patch 2 above, patch 1 the cells (5, 5) and
+  // (6, 5) just below the line, touching patch 2 (corners at (5, 6) and (7, 6) in cells).
+  // Its border with patch 0 gets smoothed points moved above the line, as Taubin steps move
+  // the zig-zag of a patch thinner than their displacement (CGAL femur, headsq at iso 1150):
+  // resampled, its border is then a simple polygon turning clockwise, which no crossing or
+  // loop check sees, and the patch failed ("0 counter-clockwise loops"). The curves of such a
+  // patch now fall back to their input positions.
+  constexpr int kN = 12;
+  const TriMesh mesh = to_trimesh(test::grid_patch(kN, kN));
+  std::vector<int> face_patch(mesh.n_faces(), 0);
+  auto cell = [](int i, int j) { return static_cast<std::size_t>(2 * (j * kN + i)); };
+  for (int j = kN / 2; j < kN; ++j)
+    for (int i = 0; i < kN; ++i) face_patch[cell(i, j)] = face_patch[cell(i, j) + 1] = 2;
+  for (const int i : {5, 6}) face_patch[cell(i, 5)] = face_patch[cell(i, 5) + 1] = 1;
+  Segmentation seg = labelled_segmentation(mesh, face_patch, 3);
+  int lower = -1;  // the curve between patches 0 and 1
+  for (std::size_t c = 0; c < seg.curves.size(); ++c)
+    if (seg.curves[c].patch_left == 0 && seg.curves[c].patch_right == 1) lower = static_cast<int>(c);
+  ASSERT_GE(lower, 0);
+  BorderCurve& curve = seg.curves[static_cast<std::size_t>(lower)];
+  ASSERT_EQ(curve.vertices.size(), 5u);  // (5, 6) (5, 5) (6, 5) (7, 5) (7, 6) or reversed
+  const double cell_size = 1.0 / kN;
+  for (std::size_t i = 1; i + 1 < curve.smoothed.size(); ++i) curve.smoothed[i].y() = 6.4 * cell_size;
+  SurfMeshOptions options;
+  options.sizing.size = 1.5 * cell_size;
+  const std::vector<surfmesh_detail::CurveSource> smoothed(seg.curves.size(), surfmesh_detail::CurveSource::Smoothed);
+  const auto size_at = [&](const Eigen::Vector3d&) { return options.sizing.size; };
+  const surfmesh_detail::BorderNodes folded = surfmesh_detail::discretise_borders(mesh, seg, size_at, smoothed);
+  EXPECT_TRUE(surfmesh_detail::crossing_curves(seg, folded).empty());
+  EXPECT_TRUE(surfmesh_detail::extra_outer_loop_curves(seg, folded).empty());
+  const std::vector<int> found = surfmesh_detail::folded_border_curves(seg, folded, smoothed);
+  EXPECT_NE(std::find(found.begin(), found.end(), lower), found.end());
+  for (const int c : found) EXPECT_NE(std::find(seg.patches[1].curves.begin(), seg.patches[1].curves.end(), c), seg.patches[1].curves.end());
+  const SurfaceMesh sm = mesh_surface(mesh, seg, options);
+  expect_consistent(seg, sm);
+  const SoupFigures f = figures(sm);
+  EXPECT_EQ(f.euler, 1);
+  // The three patches cover the unit square once, patch 1 its two cells.
+  const std::vector<double> area = flat_patch_areas(sm, 3);
+  EXPECT_NEAR(area[0] + area[1] + area[2], 1.0, 1e-9);
+  // Resampled from the input positions (a first fallback), its border's chords cut the
+  // two lower corners of the block.
+  EXPECT_LE(area[1], 2.0 * cell_size * cell_size + 1e-12);
+  EXPECT_GT(area[1], 1.5 * cell_size * cell_size);
 }
 
 // Largest |height of an inner node - height of the input face straight below it| (frame z
