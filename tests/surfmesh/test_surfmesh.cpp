@@ -506,6 +506,67 @@ TEST(Surfmesh, SmoothedBorderThatFoldsASmallPatchFallsBackToInputPositions) {
   EXPECT_GT(area[1], 1.5 * cell_size * cell_size);
 }
 
+TEST(Surfmesh, OneVoxelBlobGetsItsCentreNodeOnTheBulgingSide) {
+  // ironProt at iso 128 has one-voxel blobs: a marching-cubes octahedron of 8 faces split
+  // into a one-face patch and the 7 others, joined by a closed 3-node curve. Both patches
+  // mesh it as the same triangle; the later one got a centre node on its own (flat) surface,
+  // a tetrahedron of no volume, which stitch collapsed into two coinciding triangles. The
+  // node goes to the patch whose surface bulges out of the triangle.
+  TriangleSoup soup;
+  soup.points = {{-0.027, 0, 0}, {0.1429, 0, 0}, {0, -0.027, 0}, {0, 0.1429, 0}, {0, 0, -0.0385}, {0, 0, 0.3333}};
+  double volume = 0.0;  // of the octahedron
+  for (const int sx : {0, 1})
+    for (const int sy : {2, 3})
+      for (const int sz : {4, 5}) {
+        std::array<std::uint32_t, 3> t{static_cast<std::uint32_t>(sx), static_cast<std::uint32_t>(sy), static_cast<std::uint32_t>(sz)};
+        const auto& p = soup.points;
+        if (((sx == 1) + (sy == 3) + (sz == 5)) % 2 == 0) std::swap(t[1], t[2]);
+        soup.triangles.push_back(t);
+        volume += p[t[0]].dot(p[t[1]].cross(p[t[2]])) / 6.0;
+      }
+  ASSERT_GT(volume, 0.0);  // outward
+  const TriMesh mesh = to_trimesh(soup);
+  std::vector<int> face_patch(mesh.n_faces(), 0);
+  std::size_t top = 0;  // the face (+x, +y, +z)
+  for (std::size_t t = 0; t < soup.triangles.size(); ++t) {
+    std::array<std::uint32_t, 3> sorted = soup.triangles[t];
+    std::sort(sorted.begin(), sorted.end());
+    if (sorted == std::array<std::uint32_t, 3>{1, 3, 5}) top = t;
+  }
+  face_patch[top] = 1;
+  Segmentation seg = labelled_segmentation(mesh, face_patch, 2);
+  seg.patches[0].axis = Eigen::Vector3d(-0.582091, -0.582091, -0.56775).normalized();  // as segment() gave it
+  const TriangleSoup input = to_soup(mesh);
+  seg.patches[1].axis = (input.points[input.triangles[top][1]] - input.points[input.triangles[top][0]])
+                            .cross(input.points[input.triangles[top][2]] - input.points[input.triangles[top][0]])
+                            .normalized();
+  for (const int f : seg.patches[0].faces) {
+    const auto& t = input.triangles[static_cast<std::size_t>(f)];
+    ASSERT_GT((input.points[t[1]] - input.points[t[0]]).cross(input.points[t[2]] - input.points[t[0]]).dot(seg.patches[0].axis), 0.0);
+  }
+  ASSERT_EQ(seg.curves.size(), 1u);
+  ASSERT_TRUE(seg.curves[0].is_closed);
+  const SurfaceMesh sm = mesh_surface(mesh, seg, {});
+  expect_consistent(seg, sm);
+  EXPECT_EQ(sm.n_shared_chords_resolved, 1u);
+  std::set<std::array<int, 3>> distinct;
+  double meshed_volume = 0.0;
+  for (const auto& t : sm.triangles) {
+    std::array<int, 3> sorted = t;
+    std::sort(sorted.begin(), sorted.end());
+    EXPECT_TRUE(distinct.insert(sorted).second);
+    const auto at = [&](int k) { return sm.nodes[static_cast<std::size_t>(t[static_cast<std::size_t>(k)])]; };
+    meshed_volume += at(0).dot(at(1).cross(at(2))) / 6.0;
+  }
+  const SoupFigures f = figures(sm);
+  EXPECT_TRUE(f.closed);
+  EXPECT_EQ(f.euler, 2);
+  // A tetrahedron whose apex is on the 7-face patch's side (about half the blob's depth
+  // below the face: a fifth of its volume; a node on the flat face's patch gave none).
+  EXPECT_EQ(sm.triangles.size(), 4u);
+  EXPECT_GT(meshed_volume, 0.1 * volume);
+}
+
 // Largest |height of an inner node - height of the input face straight below it| (frame z
 // is the world z here: one flat patch with axis z).
 double max_inner_offset(const TriMesh& mesh, const SurfaceMesh& sm) {
