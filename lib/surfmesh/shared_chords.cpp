@@ -99,10 +99,14 @@ std::size_t resolve_shared_chords(const Segmentation& seg, const BorderNodes& bo
     std::vector<std::pair<std::size_t, std::size_t>> to_fill;  // (patch, triangle)
     for (std::size_t t = 0; t < r.triangles.size(); ++t) {
       const std::array<int, 3>& tri = r.triangles[t];
-      if (tri[0] < 0 || tri[1] < 0 || tri[2] < 0) continue;
-      bool all_border = true;
+      // Chords are edges between two border nodes, also in a triangle with an inner node
+      // (headsq at iso 1150: both sides of a fin had the same chord, one patch between two
+      // of its own triangles, the other between two triangles with an inner node each).
+      bool all_border = tri[0] >= 0 && tri[1] >= 0 && tri[2] >= 0;
       for (int k = 0; k < 3; ++k) {
-        const Edge e = key(tri[static_cast<std::size_t>(k)], tri[static_cast<std::size_t>((k + 1) % 3)]);
+        const int u = tri[static_cast<std::size_t>(k)], v = tri[static_cast<std::size_t>((k + 1) % 3)];
+        if (u < 0 || v < 0) continue;
+        const Edge e = key(u, v);
         if (own.count(e) != 0) continue;
         all_border = false;
         chords.insert(e);

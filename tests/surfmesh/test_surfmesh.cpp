@@ -398,23 +398,38 @@ TEST(Surfmesh, TinyClosedComponentKeepsItsTopology) {
   }
 }
 
+// A flat kN x kN grid split along x = 0.5 into patches 0 and 1, its borders discretised at
+// the input vertices, and the curve between the two patches.
+struct HalvedGrid {
+  TriMesh mesh;
+  Segmentation seg;
+  surfmesh_detail::BorderNodes borders;
+  int middle = -1;
+};
+
+HalvedGrid halved_grid(int kN) {
+  HalvedGrid out;
+  out.mesh = to_trimesh(test::grid_patch(kN, kN));
+  std::vector<int> face_patch(out.mesh.n_faces(), 0);
+  for (int j = 0; j < kN; ++j)
+    for (int i = kN / 2; i < kN; ++i) face_patch[static_cast<std::size_t>(2 * (j * kN + i))] = face_patch[static_cast<std::size_t>(2 * (j * kN + i) + 1)] = 1;
+  out.seg = labelled_segmentation(out.mesh, face_patch, 2);
+  const std::vector<surfmesh_detail::CurveSource> source(out.seg.curves.size(), surfmesh_detail::CurveSource::InputVertices);
+  out.borders = surfmesh_detail::discretise_borders(out.mesh, out.seg, [kN](const Eigen::Vector3d&) { return 1.0 / kN; }, source);
+  for (std::size_t c = 0; c < out.seg.curves.size(); ++c)
+    if (out.seg.curves[c].patch_right >= 0) out.middle = static_cast<int>(c);
+  return out;
+}
+
 TEST(Surfmesh, CrossingCurvesFoundInThePatchPlane) {
   // Two patches of a flat grid split along x = 0.5: one curve between them, plus the
   // boundary curves. Moving one node of the middle curve across a boundary curve makes
   // both cross; a node moved onto its neighbour's segment makes one overlap.
-  constexpr int kN = 8;
-  const TriMesh mesh = to_trimesh(test::grid_patch(kN, kN));
-  std::vector<int> face_patch(mesh.n_faces(), 0);
-  for (int j = 0; j < kN; ++j)
-    for (int i = kN / 2; i < kN; ++i) face_patch[static_cast<std::size_t>(2 * (j * kN + i))] = face_patch[static_cast<std::size_t>(2 * (j * kN + i) + 1)] = 1;
-  const Segmentation seg = labelled_segmentation(mesh, face_patch, 2);
-  const std::vector<surfmesh_detail::CurveSource> source(seg.curves.size(), surfmesh_detail::CurveSource::InputVertices);
-  surfmesh_detail::BorderNodes borders =
-      surfmesh_detail::discretise_borders(mesh, seg, [](const Eigen::Vector3d&) { return 1.0 / kN; }, source);
+  const HalvedGrid grid = halved_grid(8);
+  const Segmentation& seg = grid.seg;
+  const surfmesh_detail::BorderNodes& borders = grid.borders;
+  const int middle = grid.middle;
   EXPECT_TRUE(surfmesh_detail::crossing_curves(seg, borders).empty());
-  int middle = -1;
-  for (std::size_t c = 0; c < seg.curves.size(); ++c)
-    if (seg.curves[c].patch_right >= 0) middle = static_cast<int>(c);
   ASSERT_GE(middle, 0);
   const std::vector<int>& nodes = borders.curve_nodes[static_cast<std::size_t>(middle)];
   ASSERT_GE(nodes.size(), 4u);
@@ -565,6 +580,39 @@ TEST(Surfmesh, OneVoxelBlobGetsItsCentreNodeOnTheBulgingSide) {
   // below the face: a fifth of its volume; a node on the flat face's patch gave none).
   EXPECT_EQ(sm.triangles.size(), 4u);
   EXPECT_GT(meshed_volume, 0.1 * volume);
+}
+
+TEST(Surfmesh, SharedChordInTrianglesWithInnerNodesIsSplit) {
+  // Two patches of a flat 4 x 4 grid (x < 0.5, x > 0.5) that both join the border nodes a
+  // and c of their common curve (a fin's two sides cutting the same ear off it): patch 0 by
+  // a triangle of border nodes, patch 1 between two triangles with an inner node each. The
+  // later patch's chord must be split (headsq at iso 1150: it was not, as chords were only
+  // looked for in triangles of three border nodes; stitch rejected 2 triangles).
+  constexpr int kN = 4;
+  const HalvedGrid grid = halved_grid(kN);
+  const TriMesh& mesh = grid.mesh;
+  const Segmentation& seg = grid.seg;
+  const surfmesh_detail::BorderNodes& borders = grid.borders;
+  const int middle = grid.middle;
+  ASSERT_GE(middle, 0);
+  const std::vector<int>& nodes = borders.curve_nodes[static_cast<std::size_t>(middle)];
+  ASSERT_EQ(nodes.size(), 5u);
+  const int a = nodes[1], b = nodes[2], c = nodes[3];
+  std::vector<surfmesh_detail::PatchResult> results(2);
+  for (int p = 0; p < 2; ++p) {
+    surfmesh_detail::fit_patch(mesh, seg, p, borders, {}, 1.0 / kN, results[static_cast<std::size_t>(p)]);
+    ASSERT_TRUE(results[static_cast<std::size_t>(p)].has_surface);
+  }
+  results[0].triangles = {{a, b, c}};
+  results[1].inner_nodes = {{0.6, 0.5, 0.0}, {0.7, 0.5, 0.0}};
+  results[1].triangles = {{a, c, -1}, {c, a, -2}};
+  EXPECT_EQ(surfmesh_detail::resolve_shared_chords(seg, borders, results), 1u);
+  EXPECT_EQ(results[0].triangles.size(), 1u);
+  EXPECT_EQ(results[1].triangles.size(), 4u);
+  EXPECT_EQ(results[1].inner_nodes.size(), 3u);
+  for (const auto& t : results[1].triangles)
+    for (int k = 0; k < 3; ++k)
+      EXPECT_FALSE(std::minmax(t[static_cast<std::size_t>(k)], t[static_cast<std::size_t>((k + 1) % 3)]) == std::minmax(a, c));
 }
 
 // Largest |height of an inner node - height of the input face straight below it| (frame z
