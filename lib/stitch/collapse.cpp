@@ -184,12 +184,31 @@ class Collapser {
     return smallest;
   }
 
+  // True when collapsing h leaves two faces on the same three nodes: faces (a, c, d) and
+  // (b, c, d) exist, c and d the nodes opposite h (a closed component of four nodes, a
+  // tetrahedron, would become two coinciding triangles; ironProt's one-voxel blobs).
+  bool leaves_duplicate_face(TriMesh::HalfedgeHandle h) const {
+    const auto vb = mesh_.from_vertex_handle(h);
+    const auto va = mesh_.to_vertex_handle(h);
+    const auto vc = mesh_.to_vertex_handle(mesh_.next_halfedge_handle(h));
+    const auto vd = mesh_.to_vertex_handle(mesh_.next_halfedge_handle(mesh_.opposite_halfedge_handle(h)));
+    const auto cd = mesh_.find_halfedge(vc, vd);
+    if (!cd.is_valid()) return false;
+    int n_found = 0;
+    for (const auto g : {cd, mesh_.opposite_halfedge_handle(cd)}) {
+      if (mesh_.is_boundary(g)) continue;
+      const auto w = mesh_.to_vertex_handle(mesh_.next_halfedge_handle(g));
+      if (w == va || w == vb) ++n_found;
+    }
+    return n_found == 2;
+  }
+
   // Collapses b = from(h) into a = to(h) at the best candidate position when the smallest
   // angle around them grows; records the merge.
   bool try_collapse(TriMesh::HalfedgeHandle h, NodeMerges& merges) {
     std::array<Vec, 3> q;
     const int n = candidates(h, q);
-    if (n == 0 || !mesh_.is_collapse_ok(h)) return false;
+    if (n == 0 || !mesh_.is_collapse_ok(h) || leaves_duplicate_face(h)) return false;
     const auto vb = mesh_.from_vertex_handle(h);
     const auto va = mesh_.to_vertex_handle(h);
     double old_min = 180.0;

@@ -401,6 +401,54 @@ std::vector<int> extra_outer_loop_curves(const Segmentation& seg, const BorderNo
   return out;
 }
 
+std::vector<int> folded_border_curves(const Segmentation& seg, const BorderNodes& borders, const std::vector<CurveSource>& source) {
+  std::vector<int> out;
+  for (std::size_t p = 0; p < seg.patches.size(); ++p) {
+    const PatchBorder border = patch_border(seg, static_cast<int>(p), borders);
+    if (border.edges.size() < 3) continue;
+    const std::vector<Eigen::Vector2d> xy = plane_points(seg.patches[p].axis, border, borders);
+    const BorderCycles cycles = border_cycles(xy, border.edges);
+    if (cycles.meshable()) continue;
+    // The bad cycles: a winding other than 0 and 1 (a hole poking out of the outer loop, a
+    // loop turning the wrong way round), degenerate, or counter-clockwise besides the largest.
+    std::size_t largest = cycles.polygons.size();
+    for (std::size_t k = 0; k < cycles.polygons.size(); ++k)
+      if (cycles.areas[k] >= 0.0 && (largest == cycles.polygons.size() || cycles.areas[k] > cycles.areas[largest])) largest = k;
+    Eigen::AlignedBox2d bad_box;
+    std::vector<std::uint8_t> is_bad(cycles.polygons.size(), 0);
+    for (std::size_t k = 0; k < cycles.polygons.size(); ++k) {
+      is_bad[k] = cycles.has_inside[k] == 0 || (cycles.winding[k] != 0.0 && cycles.winding[k] != 1.0) ||
+                  (cycles.n_ccw_loops != 1 && cycles.areas[k] >= 0.0 && k != largest);
+      if (is_bad[k] != 0)
+        for (const auto& q : cycles.polygons[k]) bad_box.extend(q);
+    }
+    std::vector<int> curves;
+    std::map<std::pair<int, int>, int> edge_curve;
+    for (std::size_t e = 0; e < border.edges.size(); ++e) {
+      edge_curve[{border.edges[e][0], border.edges[e][1]}] = border.edge_curve[e];
+      Eigen::AlignedBox2d box(xy[static_cast<std::size_t>(border.edges[e][0])]);
+      box.extend(xy[static_cast<std::size_t>(border.edges[e][1])]);
+      if (!bad_box.isEmpty() && box.intersects(bad_box)) curves.push_back(border.edge_curve[e]);
+    }
+    for (std::size_t k = 0; k < cycles.cycles.size(); ++k) {
+      if (is_bad[k] == 0) continue;
+      const auto& cycle = cycles.cycles[k];
+      for (std::size_t i = 0; i < cycle.size(); ++i) {
+        const auto it = edge_curve.find({cycle[i], cycle[(i + 1) % cycle.size()]});
+        if (it != edge_curve.end()) curves.push_back(it->second);
+      }
+    }
+    const bool all_input = std::all_of(curves.begin(), curves.end(), [&](int c) {
+      return source[static_cast<std::size_t>(c)] == CurveSource::InputVertices;
+    });
+    if (all_input) curves = seg.patches[p].curves;
+    out.insert(out.end(), curves.begin(), curves.end());
+  }
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
+  return out;
+}
+
 std::vector<double> curve_crease_angles(const TriMesh& mesh, const Segmentation& seg, int rings) {
   std::vector<double> out(seg.curves.size(), 180.0);
   std::vector<int> stamp(mesh.n_faces(), -1);

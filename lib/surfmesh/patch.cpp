@@ -193,6 +193,54 @@ bool point_inside_polygon(const std::vector<Eigen::Vector2d>& polygon, Eigen::Ve
   return false;
 }
 
+BorderCycles border_cycles(const std::vector<Eigen::Vector2d>& xy, const std::vector<std::array<int, 2>>& edges) {
+  BorderCycles out;
+  for (const auto& loop : trace_loops(xy, edges)) {
+    double loop_area = 0.0;
+    for (auto& cycle : split_at_repeated_vertices(loop)) {
+      std::vector<Eigen::Vector2d>& polygon = out.polygons.emplace_back();
+      for (const int i : cycle) polygon.push_back(xy[static_cast<std::size_t>(i)]);
+      out.areas.push_back(signed_area(polygon));
+      loop_area += out.areas.back();
+      out.cycles.push_back(std::move(cycle));
+    }
+    out.area += loop_area;
+    if (loop_area >= 0.0) ++out.n_ccw_loops;
+  }
+  // Faces of the loop arrangement with winding number 0 are holes, 1 is the domain; the
+  // y range of each cycle skips most even-odd tests (exactly: no edge straddles a point
+  // outside it).
+  const std::size_t n = out.polygons.size();
+  std::vector<double> orientation(n), y_lo(n), y_hi(n);
+  for (std::size_t k = 0; k < n; ++k) {
+    const auto& polygon = out.polygons[k];
+    orientation[k] = out.areas[k] >= 0.0 ? 1.0 : -1.0;
+    y_lo[k] = y_hi[k] = polygon.front().y();
+    for (const auto& q : polygon) {
+      y_lo[k] = std::min(y_lo[k], q.y());
+      y_hi[k] = std::max(y_hi[k], q.y());
+    }
+  }
+  out.has_inside.assign(n, 0);
+  out.inside.assign(n, Eigen::Vector2d::Zero());
+  out.winding.assign(n, 0.0);
+  for (std::size_t k = 0; k < n; ++k) {
+    Eigen::Vector2d& q = out.inside[k];
+    if (!point_inside_polygon(out.polygons[k], q)) continue;
+    out.has_inside[k] = 1;
+    for (std::size_t j = 0; j < n; ++j)
+      if (q.y() >= y_lo[j] && q.y() < y_hi[j] && polygon_contains(out.polygons[j], q)) out.winding[k] += orientation[j];
+  }
+  return out;
+}
+
+bool BorderCycles::meshable() const {
+  if (n_ccw_loops != 1) return false;
+  for (std::size_t k = 0; k < cycles.size(); ++k)
+    if (has_inside[k] == 0 || (winding[k] != 0.0 && winding[k] != 1.0)) return false;
+  return true;
+}
+
 void fit_patch(const TriMesh& mesh, const Segmentation& seg, int p, const BorderNodes& borders,
                const SurfMeshOptions& options, double mean_edge, PatchResult& result) {
   const Stopwatch clock;
@@ -346,37 +394,19 @@ void mesh_patch(const Segmentation& seg, int p, const BorderNodes& borders, cons
     pslg.segments = border.edges;
     // Faces of the loop arrangement with winding number 0 are holes (front2d needs a point
     // inside each); 1 is the domain; anything else means the projected border folds.
-    std::vector<std::vector<Eigen::Vector2d>> polygons;
-    std::vector<double> orientation;
-    double border_area = 0.0;  // area on the left of the directed border
-    std::size_t n_ccw = 0;  // traced loops (a loop through a touching corner counts once)
-    for (const auto& loop : trace_loops(pslg.points, border.edges)) {
-      double loop_area = 0.0;
-      for (const auto& cycle : split_at_repeated_vertices(loop)) {
-        std::vector<Eigen::Vector2d>& polygon = polygons.emplace_back();
-        for (const int i : cycle) polygon.push_back(pslg.points[static_cast<std::size_t>(i)]);
-        const double area = signed_area(polygon);
-        loop_area += area;
-        orientation.push_back(area >= 0.0 ? 1.0 : -1.0);
-      }
-      border_area += loop_area;
-      if (loop_area >= 0.0) ++n_ccw;
-    }
+    const BorderCycles cycles = border_cycles(pslg.points, border.edges);
+    const double border_area = cycles.area;  // area on the left of the directed border
     // The segmentation guarantees one counter-clockwise (outer) loop; a second one means
     // the discretised border folds in this plane.
-    if (n_ccw != 1)
-      throw std::runtime_error("the border has " + std::to_string(n_ccw) +
+    if (cycles.n_ccw_loops != 1)
+      throw std::runtime_error("the border has " + std::to_string(cycles.n_ccw_loops) +
                                " counter-clockwise loops in the patch plane (expected 1: it folds)");
-    for (const auto& polygon : polygons) {
-      Eigen::Vector2d inside;
-      if (!point_inside_polygon(polygon, inside)) throw std::runtime_error("a border loop is degenerate in the patch plane");
-      double winding = 0.0;
-      for (std::size_t k = 0; k < polygons.size(); ++k)
-        if (polygon_contains(polygons[k], inside)) winding += orientation[k];
-      if (winding == 0.0) {
-        pslg.holes.push_back(inside);
-      } else if (winding != 1.0) {
-        throw std::runtime_error("the border folds in the patch plane (winding number " + std::to_string(winding) + ")");
+    for (std::size_t k = 0; k < cycles.cycles.size(); ++k) {
+      if (cycles.has_inside[k] == 0) throw std::runtime_error("a border loop is degenerate in the patch plane");
+      if (cycles.winding[k] == 0.0) {
+        pslg.holes.push_back(cycles.inside[k]);
+      } else if (cycles.winding[k] != 1.0) {
+        throw std::runtime_error("the border folds in the patch plane (winding number " + std::to_string(cycles.winding[k]) + ")");
       }
     }
 

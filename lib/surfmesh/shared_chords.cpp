@@ -5,8 +5,12 @@
 #include <algorithm>
 #include <array>
 #include <cstdint>
+#include <cmath>
+#include <map>
 #include <set>
 #include <utility>
+
+#include <Eigen/Geometry>
 
 #include "nurbsfront/surfmesh/surfmesh_internal.h"
 
@@ -52,6 +56,26 @@ void split_edge(PatchResult& r, const BorderNodes& borders, int a, int b) {
   }
 }
 
+// The centroid of a triangle of patch r in its plane.
+Eigen::Vector2d centre(const PatchResult& r, const BorderNodes& borders, const std::array<int, 3>& tri) {
+  return (plane_point(r, borders, tri[0]) + plane_point(r, borders, tri[1]) + plane_point(r, borders, tri[2])) / 3.0;
+}
+
+// Height of patch r's surface above the centroid of its triangle of border nodes, along the
+// triangle's normal (oriented like the patch's triangles: outwards).
+double bulge(const PatchResult& r, const BorderNodes& borders, const std::array<int, 3>& tri) {
+  const Eigen::Vector3d& a = borders.positions[static_cast<std::size_t>(tri[0])];
+  const Eigen::Vector3d& b = borders.positions[static_cast<std::size_t>(tri[1])];
+  const Eigen::Vector3d& c = borders.positions[static_cast<std::size_t>(tri[2])];
+  const Eigen::Vector3d normal = (b - a).cross(c - a);
+  const double length = normal.norm();
+  if (!(length > 0.0)) return 0.0;
+  const Eigen::Vector2d xy = centre(r, borders, tri);
+  const Eigen::Vector3d m = r.surface.project(r.surface.frame.to_world(Eigen::Vector3d(xy.x(), xy.y(), 0.0)));
+  const double height = (m - (a + b + c) / 3.0).dot(normal) / length;
+  return std::isfinite(height) ? height : 0.0;
+}
+
 }  // namespace
 
 std::size_t resolve_shared_chords(const Segmentation& seg, const BorderNodes& borders, std::vector<PatchResult>& results) {
@@ -61,7 +85,8 @@ std::size_t resolve_shared_chords(const Segmentation& seg, const BorderNodes& bo
     for (std::size_t i = 0; i + 1 < nodes.size(); ++i) taken.insert(key(nodes[i], nodes[i + 1]));
     if (seg.curves[c].is_closed && nodes.size() > 1) taken.insert(key(nodes.back(), nodes.front()));
   }
-  std::set<std::array<int, 3>> border_triangles;  // node-sorted triangles of border segments only
+  // Node-sorted triangles of border segments only -> (patch, triangle index).
+  std::map<std::array<int, 3>, std::pair<std::size_t, std::size_t>> border_triangles;
   std::size_t n_changes = 0;
   for (std::size_t p = 0; p < results.size(); ++p) {
     PatchResult& r = results[p];
@@ -71,13 +96,17 @@ std::size_t resolve_shared_chords(const Segmentation& seg, const BorderNodes& bo
     for (const auto& e : border.edges)
       own.insert(key(border.nodes[static_cast<std::size_t>(e[0])], border.nodes[static_cast<std::size_t>(e[1])]));
     std::set<Edge> chords, to_split;
-    std::vector<std::size_t> to_fill;
+    std::vector<std::pair<std::size_t, std::size_t>> to_fill;  // (patch, triangle)
     for (std::size_t t = 0; t < r.triangles.size(); ++t) {
       const std::array<int, 3>& tri = r.triangles[t];
-      if (tri[0] < 0 || tri[1] < 0 || tri[2] < 0) continue;
-      bool all_border = true;
+      // Chords are edges between two border nodes, also in a triangle with an inner node
+      // (headsq at iso 1150: both sides of a fin had the same chord, one patch between two
+      // of its own triangles, the other between two triangles with an inner node each).
+      bool all_border = tri[0] >= 0 && tri[1] >= 0 && tri[2] >= 0;
       for (int k = 0; k < 3; ++k) {
-        const Edge e = key(tri[static_cast<std::size_t>(k)], tri[static_cast<std::size_t>((k + 1) % 3)]);
+        const int u = tri[static_cast<std::size_t>(k)], v = tri[static_cast<std::size_t>((k + 1) % 3)];
+        if (u < 0 || v < 0) continue;
+        const Edge e = key(u, v);
         if (own.count(e) != 0) continue;
         all_border = false;
         chords.insert(e);
@@ -85,16 +114,27 @@ std::size_t resolve_shared_chords(const Segmentation& seg, const BorderNodes& bo
       }
       std::array<int, 3> sorted = tri;
       std::sort(sorted.begin(), sorted.end());
-      if (all_border && !border_triangles.insert(sorted).second) to_fill.push_back(t);
+      if (!all_border) continue;
+      const auto [it, is_new] = border_triangles.emplace(sorted, std::make_pair(p, t));
+      if (is_new) continue;
+      // The node goes to the side that bulges: a blob of one voxel split into a one-face
+      // patch and the rest has the triangle in the plane of that face, and a node on that
+      // patch's surface made a flat tetrahedron (ironProt: stitch collapsed it into two
+      // coinciding triangles).
+      const auto& [q, u] = it->second;
+      to_fill.push_back(bulge(results[q], borders, results[q].triangles[u]) > bulge(r, borders, tri) ? it->second
+                                                                                                      : std::make_pair(p, t));
     }
     for (const Edge& e : to_split) split_edge(r, borders, e.first, e.second);
-    for (const std::size_t t : to_fill) {
-      const std::array<int, 3> tri = r.triangles[t];
-      const int m = add_inner_node(r, (plane_point(r, borders, tri[0]) + plane_point(r, borders, tri[1]) +
-                                       plane_point(r, borders, tri[2])) / 3.0);
-      r.triangles[t] = {tri[0], tri[1], m};
-      r.triangles.push_back({tri[1], tri[2], m});
-      r.triangles.push_back({tri[2], tri[0], m});
+    for (const auto& [q, t] : to_fill) {
+      PatchResult& f = results[q];
+      const std::array<int, 3> tri = f.triangles[t];
+      const int m = add_inner_node(f, centre(f, borders, tri));
+      f.triangles[t] = {tri[0], tri[1], m};
+      f.triangles.push_back({tri[1], tri[2], m});
+      f.triangles.push_back({tri[2], tri[0], m});
+      f.report.n_inner_nodes = f.inner_nodes.size();
+      f.report.n_triangles = f.triangles.size();
     }
     for (const Edge& e : chords)
       if (to_split.count(e) == 0) taken.insert(e);

@@ -181,6 +181,33 @@ std::size_t resolve_shared_chords(const Segmentation& segmentation, const Border
 //! counter-clockwise loop for the input vertices).
 [[nodiscard]] std::vector<int> extra_outer_loop_curves(const Segmentation& segmentation, const BorderNodes& borders);
 
+//! A patch border's traced loops split into simple cycles (split_at_repeated_vertices), as
+//! mesh_patch() checks them: the border is meshable when exactly one traced loop turns
+//! counter-clockwise and the border's winding number at a point inside every cycle is 0 (a
+//! hole) or 1 (the domain).
+struct BorderCycles {
+  std::vector<std::vector<int>> cycles;       //!< node indices (into xy)
+  std::vector<std::vector<Eigen::Vector2d>> polygons;  //!< the cycles' points
+  std::vector<double> areas;                  //!< signed areas of the cycles
+  std::vector<std::uint8_t> has_inside;       //!< 0: no inside point found (degenerate cycle)
+  std::vector<Eigen::Vector2d> inside;        //!< a point inside each cycle
+  std::vector<double> winding;                //!< the border's winding number there
+  std::size_t n_ccw_loops = 0;                //!< traced loops of area >= 0
+  double area = 0.0;                          //!< area on the left of the directed border
+  //! Exactly one counter-clockwise loop, no degenerate cycle, windings 0 or 1.
+  [[nodiscard]] bool meshable() const;
+};
+[[nodiscard]] BorderCycles border_cycles(const std::vector<Eigen::Vector2d>& xy, const std::vector<std::array<int, 2>>& edges);
+
+//! Curves of the patches whose discretised border is not meshable in their plane
+//! (BorderCycles::meshable; simple polygons turning the wrong way round are not crossings):
+//! per such patch, the curves of its bad cycles (winding other than 0 and 1, degenerate, or
+//! a counter-clockwise cycle besides the largest) and every curve of the patch with a
+//! segment whose bounding box meets theirs; all its curves when every one of those already
+//! takes its input vertices (`source`). Ascending, no repeats.
+[[nodiscard]] std::vector<int> folded_border_curves(const Segmentation& segmentation, const BorderNodes& borders,
+                                                    const std::vector<CurveSource>& source);
+
 //! Sets patch p's surface to keep projections within max_offset of the patch's own input
 //! faces along its axis (PatchSurface::input_heights; the patch's faces are a graph over
 //! its plane, so the face straight above or below a point is unique) and moves the inner

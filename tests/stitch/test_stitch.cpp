@@ -316,6 +316,25 @@ TEST(Stitch, UnusedNodesAreDroppedAndCounted) {
   EXPECT_EQ(r.mesh.n_vertices(), soup.points.size());
 }
 
+TEST(Stitch, ATetrahedronIsNotCollapsedIntoTwoCoincidingTriangles) {
+  // The smallest closed surface: a base triangle (patch 1) and an inner node close to the
+  // middle of one of its edges, slightly above it (patch 0, three slivers). Collapsing that
+  // node into a base node would raise the smallest angle but leave the base triangle twice
+  // (ironProt's one-voxel blobs: "output has 3 duplicate triangles").
+  TriangleSoup soup;
+  soup.points = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0.45, 0.45, 0.02}};
+  soup.triangles = {{0, 2, 1}, {0, 1, 3}, {1, 2, 3}, {2, 0, 3}};
+  const SurfaceMesh surface = make_surface(soup, {1, 0, 0, 0}, 2);
+  ASSERT_EQ(surface.node_kind[3], NodeKind::Inner);
+  const StitchResult r = stitch(surface, to_trimesh(soup));
+  EXPECT_EQ(r.report.n_collapses, 0u);
+  EXPECT_EQ(r.report.output.topology.n_duplicate_faces, 0u);
+  EXPECT_EQ(r.mesh.n_faces(), 4u);
+  EXPECT_TRUE(r.report.output.topology.is_closed);
+  EXPECT_EQ(r.report.output.topology.euler_characteristic, 2);
+  EXPECT_TRUE(r.report.ok()) << joined(r.report.errors);
+}
+
 TEST(Stitch, DuplicatedTriangleIsAnError) {
   const TriangleSoup soup = test::icosphere(2);
   SurfaceMesh surface = cube_map_surface(soup);

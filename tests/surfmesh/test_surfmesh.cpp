@@ -290,6 +290,20 @@ Segmentation labelled_segmentation(const TriMesh& mesh, const std::vector<int>& 
   return seg;
 }
 
+// Per patch, the area of its triangles of a flat mesh in the plane z = 0; every triangle
+// must face +z.
+std::vector<double> flat_patch_areas(const SurfaceMesh& sm, std::size_t n_patches) {
+  std::vector<double> area(n_patches, 0.0);
+  for (std::size_t t = 0; t < sm.triangles.size(); ++t) {
+    const auto& tri = sm.triangles[t];
+    const Eigen::Vector3d n = (sm.nodes[static_cast<std::size_t>(tri[1])] - sm.nodes[static_cast<std::size_t>(tri[0])])
+                                  .cross(sm.nodes[static_cast<std::size_t>(tri[2])] - sm.nodes[static_cast<std::size_t>(tri[0])]);
+    EXPECT_GT(n.z(), 0.0);
+    area[static_cast<std::size_t>(sm.triangle_patch[t])] += 0.5 * n.z();
+  }
+  return area;
+}
+
 TEST(Surfmesh, NeighbourTouchingTheOuterLoopAtACorner) {
   // A flat 12 x 12 grid; patch 1 is a small block inside patch 0 that touches the grid's
   // boundary at one vertex only (the upper triangle of cell (5, 0) and cells (5, 1), (6, 1)).
@@ -311,14 +325,7 @@ TEST(Surfmesh, NeighbourTouchingTheOuterLoopAtACorner) {
   EXPECT_FALSE(f.closed);
   EXPECT_EQ(f.euler, 1);
   // The two patches together cover the unit square once.
-  double area[2] = {0.0, 0.0};
-  for (std::size_t t = 0; t < sm.triangles.size(); ++t) {
-    const auto& tri = sm.triangles[t];
-    const Eigen::Vector3d n = (sm.nodes[static_cast<std::size_t>(tri[1])] - sm.nodes[static_cast<std::size_t>(tri[0])])
-                                  .cross(sm.nodes[static_cast<std::size_t>(tri[2])] - sm.nodes[static_cast<std::size_t>(tri[0])]);
-    EXPECT_GT(n.z(), 0.0);
-    area[sm.triangle_patch[t]] += 0.5 * n.z();
-  }
+  const std::vector<double> area = flat_patch_areas(sm, 2);
   EXPECT_NEAR(area[0] + area[1], 1.0, 1e-9);
   EXPECT_NEAR(area[1], 5.0 / (2.0 * kN * kN), 0.2 * 5.0 / (2.0 * kN * kN));  // chords cut its corners
 }
@@ -391,23 +398,38 @@ TEST(Surfmesh, TinyClosedComponentKeepsItsTopology) {
   }
 }
 
+// A flat kN x kN grid split along x = 0.5 into patches 0 and 1, its borders discretised at
+// the input vertices, and the curve between the two patches.
+struct HalvedGrid {
+  TriMesh mesh;
+  Segmentation seg;
+  surfmesh_detail::BorderNodes borders;
+  int middle = -1;
+};
+
+HalvedGrid halved_grid(int kN) {
+  HalvedGrid out;
+  out.mesh = to_trimesh(test::grid_patch(kN, kN));
+  std::vector<int> face_patch(out.mesh.n_faces(), 0);
+  for (int j = 0; j < kN; ++j)
+    for (int i = kN / 2; i < kN; ++i) face_patch[static_cast<std::size_t>(2 * (j * kN + i))] = face_patch[static_cast<std::size_t>(2 * (j * kN + i) + 1)] = 1;
+  out.seg = labelled_segmentation(out.mesh, face_patch, 2);
+  const std::vector<surfmesh_detail::CurveSource> source(out.seg.curves.size(), surfmesh_detail::CurveSource::InputVertices);
+  out.borders = surfmesh_detail::discretise_borders(out.mesh, out.seg, [kN](const Eigen::Vector3d&) { return 1.0 / kN; }, source);
+  for (std::size_t c = 0; c < out.seg.curves.size(); ++c)
+    if (out.seg.curves[c].patch_right >= 0) out.middle = static_cast<int>(c);
+  return out;
+}
+
 TEST(Surfmesh, CrossingCurvesFoundInThePatchPlane) {
   // Two patches of a flat grid split along x = 0.5: one curve between them, plus the
   // boundary curves. Moving one node of the middle curve across a boundary curve makes
   // both cross; a node moved onto its neighbour's segment makes one overlap.
-  constexpr int kN = 8;
-  const TriMesh mesh = to_trimesh(test::grid_patch(kN, kN));
-  std::vector<int> face_patch(mesh.n_faces(), 0);
-  for (int j = 0; j < kN; ++j)
-    for (int i = kN / 2; i < kN; ++i) face_patch[static_cast<std::size_t>(2 * (j * kN + i))] = face_patch[static_cast<std::size_t>(2 * (j * kN + i) + 1)] = 1;
-  const Segmentation seg = labelled_segmentation(mesh, face_patch, 2);
-  const std::vector<surfmesh_detail::CurveSource> source(seg.curves.size(), surfmesh_detail::CurveSource::InputVertices);
-  surfmesh_detail::BorderNodes borders =
-      surfmesh_detail::discretise_borders(mesh, seg, [](const Eigen::Vector3d&) { return 1.0 / kN; }, source);
+  const HalvedGrid grid = halved_grid(8);
+  const Segmentation& seg = grid.seg;
+  const surfmesh_detail::BorderNodes& borders = grid.borders;
+  const int middle = grid.middle;
   EXPECT_TRUE(surfmesh_detail::crossing_curves(seg, borders).empty());
-  int middle = -1;
-  for (std::size_t c = 0; c < seg.curves.size(); ++c)
-    if (seg.curves[c].patch_right >= 0) middle = static_cast<int>(c);
   ASSERT_GE(middle, 0);
   const std::vector<int>& nodes = borders.curve_nodes[static_cast<std::size_t>(middle)];
   ASSERT_GE(nodes.size(), 4u);
@@ -450,6 +472,147 @@ TEST(Surfmesh, FlippedHoleLoopFound) {
   std::swap(borders.positions[static_cast<std::size_t>(nodes[1])], borders.positions[static_cast<std::size_t>(nodes[2])]);
   EXPECT_EQ(surfmesh_detail::flipped_loops(mesh, seg, borders), std::vector<int>{hole});
   EXPECT_EQ(surfmesh_detail::extra_outer_loop_curves(seg, borders), std::vector<int>{hole});
+}
+
+TEST(Surfmesh, SmoothedBorderThatFoldsASmallPatchFallsBackToInputPositions) {
+  // A flat 12 x 12 grid: patch 0 below y = 0.5, patch 2 above, patch 1 the cells (5, 5) and
+  // (6, 5) just below the line, touching patch 2 (corners at (5, 6) and (7, 6) in cells).
+  // Its border with patch 0 gets smoothed points moved above the line, as Taubin steps move
+  // the zig-zag of a patch thinner than their displacement (CGAL femur, headsq at iso 1150):
+  // resampled, its border is then a simple polygon turning clockwise, which no crossing or
+  // loop check sees, and the patch failed ("0 counter-clockwise loops"). The curves of such a
+  // patch now fall back to their input positions.
+  constexpr int kN = 12;
+  const TriMesh mesh = to_trimesh(test::grid_patch(kN, kN));
+  std::vector<int> face_patch(mesh.n_faces(), 0);
+  auto cell = [](int i, int j) { return static_cast<std::size_t>(2 * (j * kN + i)); };
+  for (int j = kN / 2; j < kN; ++j)
+    for (int i = 0; i < kN; ++i) face_patch[cell(i, j)] = face_patch[cell(i, j) + 1] = 2;
+  for (const int i : {5, 6}) face_patch[cell(i, 5)] = face_patch[cell(i, 5) + 1] = 1;
+  Segmentation seg = labelled_segmentation(mesh, face_patch, 3);
+  int lower = -1;  // the curve between patches 0 and 1
+  for (std::size_t c = 0; c < seg.curves.size(); ++c)
+    if (seg.curves[c].patch_left == 0 && seg.curves[c].patch_right == 1) lower = static_cast<int>(c);
+  ASSERT_GE(lower, 0);
+  BorderCurve& curve = seg.curves[static_cast<std::size_t>(lower)];
+  ASSERT_EQ(curve.vertices.size(), 5u);  // (5, 6) (5, 5) (6, 5) (7, 5) (7, 6) or reversed
+  const double cell_size = 1.0 / kN;
+  for (std::size_t i = 1; i + 1 < curve.smoothed.size(); ++i) curve.smoothed[i].y() = 6.4 * cell_size;
+  SurfMeshOptions options;
+  options.sizing.size = 1.5 * cell_size;
+  const std::vector<surfmesh_detail::CurveSource> smoothed(seg.curves.size(), surfmesh_detail::CurveSource::Smoothed);
+  const auto size_at = [&](const Eigen::Vector3d&) { return options.sizing.size; };
+  const surfmesh_detail::BorderNodes folded = surfmesh_detail::discretise_borders(mesh, seg, size_at, smoothed);
+  EXPECT_TRUE(surfmesh_detail::crossing_curves(seg, folded).empty());
+  EXPECT_TRUE(surfmesh_detail::extra_outer_loop_curves(seg, folded).empty());
+  const std::vector<int> found = surfmesh_detail::folded_border_curves(seg, folded, smoothed);
+  EXPECT_NE(std::find(found.begin(), found.end(), lower), found.end());
+  for (const int c : found) EXPECT_NE(std::find(seg.patches[1].curves.begin(), seg.patches[1].curves.end(), c), seg.patches[1].curves.end());
+  const SurfaceMesh sm = mesh_surface(mesh, seg, options);
+  expect_consistent(seg, sm);
+  const SoupFigures f = figures(sm);
+  EXPECT_EQ(f.euler, 1);
+  // The three patches cover the unit square once, patch 1 its two cells.
+  const std::vector<double> area = flat_patch_areas(sm, 3);
+  EXPECT_NEAR(area[0] + area[1] + area[2], 1.0, 1e-9);
+  // Resampled from the input positions (a first fallback), its border's chords cut the
+  // two lower corners of the block.
+  EXPECT_LE(area[1], 2.0 * cell_size * cell_size + 1e-12);
+  EXPECT_GT(area[1], 1.5 * cell_size * cell_size);
+}
+
+TEST(Surfmesh, OneVoxelBlobGetsItsCentreNodeOnTheBulgingSide) {
+  // ironProt at iso 128 has one-voxel blobs: a marching-cubes octahedron of 8 faces split
+  // into a one-face patch and the 7 others, joined by a closed 3-node curve. Both patches
+  // mesh it as the same triangle; the later one got a centre node on its own (flat) surface,
+  // a tetrahedron of no volume, which stitch collapsed into two coinciding triangles. The
+  // node goes to the patch whose surface bulges out of the triangle.
+  TriangleSoup soup;
+  soup.points = {{-0.027, 0, 0}, {0.1429, 0, 0}, {0, -0.027, 0}, {0, 0.1429, 0}, {0, 0, -0.0385}, {0, 0, 0.3333}};
+  double volume = 0.0;  // of the octahedron
+  for (const int sx : {0, 1})
+    for (const int sy : {2, 3})
+      for (const int sz : {4, 5}) {
+        std::array<std::uint32_t, 3> t{static_cast<std::uint32_t>(sx), static_cast<std::uint32_t>(sy), static_cast<std::uint32_t>(sz)};
+        const auto& p = soup.points;
+        if (((sx == 1) + (sy == 3) + (sz == 5)) % 2 == 0) std::swap(t[1], t[2]);
+        soup.triangles.push_back(t);
+        volume += p[t[0]].dot(p[t[1]].cross(p[t[2]])) / 6.0;
+      }
+  ASSERT_GT(volume, 0.0);  // outward
+  const TriMesh mesh = to_trimesh(soup);
+  std::vector<int> face_patch(mesh.n_faces(), 0);
+  std::size_t top = 0;  // the face (+x, +y, +z)
+  for (std::size_t t = 0; t < soup.triangles.size(); ++t) {
+    std::array<std::uint32_t, 3> sorted = soup.triangles[t];
+    std::sort(sorted.begin(), sorted.end());
+    if (sorted == std::array<std::uint32_t, 3>{1, 3, 5}) top = t;
+  }
+  face_patch[top] = 1;
+  Segmentation seg = labelled_segmentation(mesh, face_patch, 2);
+  seg.patches[0].axis = Eigen::Vector3d(-0.582091, -0.582091, -0.56775).normalized();  // as segment() gave it
+  const TriangleSoup input = to_soup(mesh);
+  seg.patches[1].axis = (input.points[input.triangles[top][1]] - input.points[input.triangles[top][0]])
+                            .cross(input.points[input.triangles[top][2]] - input.points[input.triangles[top][0]])
+                            .normalized();
+  for (const int f : seg.patches[0].faces) {
+    const auto& t = input.triangles[static_cast<std::size_t>(f)];
+    ASSERT_GT((input.points[t[1]] - input.points[t[0]]).cross(input.points[t[2]] - input.points[t[0]]).dot(seg.patches[0].axis), 0.0);
+  }
+  ASSERT_EQ(seg.curves.size(), 1u);
+  ASSERT_TRUE(seg.curves[0].is_closed);
+  const SurfaceMesh sm = mesh_surface(mesh, seg, {});
+  expect_consistent(seg, sm);
+  EXPECT_EQ(sm.n_shared_chords_resolved, 1u);
+  std::set<std::array<int, 3>> distinct;
+  double meshed_volume = 0.0;
+  for (const auto& t : sm.triangles) {
+    std::array<int, 3> sorted = t;
+    std::sort(sorted.begin(), sorted.end());
+    EXPECT_TRUE(distinct.insert(sorted).second);
+    const auto at = [&](int k) { return sm.nodes[static_cast<std::size_t>(t[static_cast<std::size_t>(k)])]; };
+    meshed_volume += at(0).dot(at(1).cross(at(2))) / 6.0;
+  }
+  const SoupFigures f = figures(sm);
+  EXPECT_TRUE(f.closed);
+  EXPECT_EQ(f.euler, 2);
+  // A tetrahedron whose apex is on the 7-face patch's side (about half the blob's depth
+  // below the face: a fifth of its volume; a node on the flat face's patch gave none).
+  EXPECT_EQ(sm.triangles.size(), 4u);
+  EXPECT_GT(meshed_volume, 0.1 * volume);
+}
+
+TEST(Surfmesh, SharedChordInTrianglesWithInnerNodesIsSplit) {
+  // Two patches of a flat 4 x 4 grid (x < 0.5, x > 0.5) that both join the border nodes a
+  // and c of their common curve (a fin's two sides cutting the same ear off it): patch 0 by
+  // a triangle of border nodes, patch 1 between two triangles with an inner node each. The
+  // later patch's chord must be split (headsq at iso 1150: it was not, as chords were only
+  // looked for in triangles of three border nodes; stitch rejected 2 triangles).
+  constexpr int kN = 4;
+  const HalvedGrid grid = halved_grid(kN);
+  const TriMesh& mesh = grid.mesh;
+  const Segmentation& seg = grid.seg;
+  const surfmesh_detail::BorderNodes& borders = grid.borders;
+  const int middle = grid.middle;
+  ASSERT_GE(middle, 0);
+  const std::vector<int>& nodes = borders.curve_nodes[static_cast<std::size_t>(middle)];
+  ASSERT_EQ(nodes.size(), 5u);
+  const int a = nodes[1], b = nodes[2], c = nodes[3];
+  std::vector<surfmesh_detail::PatchResult> results(2);
+  for (int p = 0; p < 2; ++p) {
+    surfmesh_detail::fit_patch(mesh, seg, p, borders, {}, 1.0 / kN, results[static_cast<std::size_t>(p)]);
+    ASSERT_TRUE(results[static_cast<std::size_t>(p)].has_surface);
+  }
+  results[0].triangles = {{a, b, c}};
+  results[1].inner_nodes = {{0.6, 0.5, 0.0}, {0.7, 0.5, 0.0}};
+  results[1].triangles = {{a, c, -1}, {c, a, -2}};
+  EXPECT_EQ(surfmesh_detail::resolve_shared_chords(seg, borders, results), 1u);
+  EXPECT_EQ(results[0].triangles.size(), 1u);
+  EXPECT_EQ(results[1].triangles.size(), 4u);
+  EXPECT_EQ(results[1].inner_nodes.size(), 3u);
+  for (const auto& t : results[1].triangles)
+    for (int k = 0; k < 3; ++k)
+      EXPECT_FALSE(std::minmax(t[static_cast<std::size_t>(k)], t[static_cast<std::size_t>((k + 1) % 3)]) == std::minmax(a, c));
 }
 
 // Largest |height of an inner node - height of the input face straight below it| (frame z
