@@ -41,6 +41,10 @@ struct StitchOptions {
   //! does not drop below min(its old value, alpha_floor) (in [0, 1]). Defaults 0.5 and 0.5.
   double min_normal_dot = 0.5;
   double alpha_floor = 0.5;
+  //! A smoothing move is accepted only if the smallest angle (deg) of the incident
+  //! triangles does not drop below min(its old value, angle_floor_deg), in [0, 60): a move
+  //! never makes a triangle below issue 5's bound that was not there. Default 25.
+  double angle_floor_deg = kAwayFromFeaturesAngleBoundDeg;
   //! Triangles whose smallest angle (deg) is below this get their shortest edge collapsed
   //! before the optimisation, when the merge is allowed and improves the worst triangle
   //! around it (feature nodes never removed or moved; see docs/stitch.md), in [0, 60); 0

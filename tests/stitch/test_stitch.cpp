@@ -422,6 +422,41 @@ TEST(Stitch, MovesThroughANearbySheetAreUndone) {
   EXPECT_EQ(*r.report.output.topology.n_self_intersecting_pairs, 0u);
 }
 
+// Issue 5, DRAM cell at 256 cells: where one patch's fit is far off (steep where the input
+// is not), a border node's smoothing target (the mean of its projections onto both fits)
+// lies off the curve, and the move turned good triangles into needles. A move never takes
+// the smallest angle of its triangles below min(old, angle_floor_deg).
+TEST(Stitch, SmoothingMakesNoNewTriangleBelowTheAngleFloor) {
+  const TriangleSoup sheet = test::grid_patch(8, 8);  // unit square, edges 1/8
+  std::vector<int> face_patch(sheet.triangles.size());
+  for (std::size_t t = 0; t < sheet.triangles.size(); ++t) {
+    const auto& tri = sheet.triangles[t];
+    face_patch[t] = (sheet.points[tri[0]] + sheet.points[tri[1]] + sheet.points[tri[2]]).x() < 1.5 ? 0 : 1;
+  }
+  SurfaceMesh surface = make_surface(sheet, face_patch, 2);
+  // Patch 1's fit planted as a plane tilted by 30 deg about the curve's direction (y),
+  // through (0.5, 0.5, -0.05): 0.4 edges off the sheet along its axis.
+  PatchSurface& planted = surface.surfaces[1];
+  planted.frame.axes = Eigen::AngleAxisd(M_PI / 6.0, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  const double local_z = planted.frame.to_local(Eigen::Vector3d(0.5, 0.5, -0.05)).z();
+  for (double& c : planted.field.mutable_coefficients()) c = local_z;
+  const TriMesh input = to_trimesh(sheet);
+  StitchOptions unguarded;
+  unguarded.angle_floor_deg = 0.0;
+  const StitchResult bad = stitch(surface, input, unguarded);
+  EXPECT_GT(bad.report.n_small_angle_away_from_features, 0u);  // the planted defect works
+  StitchOptions assembled_only;
+  assembled_only.optimisation_passes = 0;
+  const StitchResult assembled = stitch(surface, input, assembled_only);
+  ASSERT_EQ(assembled.report.n_small_angle_away_from_features, 0u);
+  const StitchResult r = stitch(surface, input);
+  EXPECT_TRUE(r.report.ok()) << joined(r.report.errors);
+  EXPECT_GT(r.report.n_smoothing_moves, 0u);
+  EXPECT_EQ(r.report.n_small_angle_away_from_features, 0u);
+  EXPECT_GE(r.report.min_angle_away_from_features_deg, kAwayFromFeaturesAngleBoundDeg);
+  EXPECT_GE(r.report.output.quality.min_angle_deg, std::min(assembled.report.output.quality.min_angle_deg, 25.0));
+}
+
 TEST(Stitch, OnlyTheOffendingMovesAreUndone) {
   // The two sheets of the test above (the upper one pushed through the lower one) and a
   // third, jittered sheet far away whose smoothing moves are harmless: they must stay.
