@@ -134,7 +134,8 @@ class Optimiser {
         old_sine = std::min(old_sine, min_angle_sine(p, b, c));
         new_sine = std::min(new_sine, min_angle_sine(q, b, c));
       }
-      if (ok && new_min >= std::min(old_min, options_.alpha_floor) && new_sine >= std::min(old_sine, sin_angle_floor_)) {
+      if (ok && new_min >= std::min(old_min, options_.alpha_floor) &&
+          new_sine >= std::min(old_sine, sin_angle_floor_)) {
         mesh_.set_point(v, to_openmesh(q));
         ++counts[0];
       } else {

@@ -454,7 +454,8 @@ TEST(Stitch, SmoothingMakesNoNewTriangleBelowTheAngleFloor) {
   EXPECT_GT(r.report.n_smoothing_moves, 0u);
   EXPECT_EQ(r.report.n_small_angle_away_from_features, 0u);
   EXPECT_GE(r.report.min_angle_away_from_features_deg, kAwayFromFeaturesAngleBoundDeg);
-  EXPECT_GE(r.report.output.quality.min_angle_deg, std::min(assembled.report.output.quality.min_angle_deg, 25.0));
+  EXPECT_GE(r.report.output.quality.min_angle_deg,
+            std::min(assembled.report.output.quality.min_angle_deg, 25.0));
 }
 
 TEST(Stitch, OnlyTheOffendingMovesAreUndone) {
