@@ -32,6 +32,9 @@ int rank(NodeKind kind) {
   return 2;
 }
 
+// Two feature corners closer than this (in target edge lengths) may merge.
+constexpr double kCoincidentCornersSize = 0.05;
+
 double min_angle_deg(const Vec& a, const Vec& b, const Vec& c) {
   const std::array<double, 3> angles = triangle_angles_deg(a, b, c);
   return std::min({angles[0], angles[1], angles[2]});
@@ -109,13 +112,22 @@ class Collapser {
     const auto va = mesh_.to_vertex_handle(h);
     const auto b = static_cast<std::size_t>(node(vb));
     const auto a = static_cast<std::size_t>(node(va));
-    if (is_feature_[b] != 0 || is_frozen_[b] != 0 || mesh_.is_boundary(vb) || mesh_.is_boundary(va)) return 0;
+    if (is_frozen_[b] != 0 || mesh_.is_boundary(vb) || mesh_.is_boundary(va)) return 0;
     const NodeKind kb = surface_.node_kind[b];
     const NodeKind ka = surface_.node_kind[a];
     if (rank(kb) > rank(ka)) return 0;
     const Vec pa = point(mesh_, va), pb = point(mesh_, vb);
     const Vec middle = 0.5 * (pa + pb);
     q[0] = pa;
+    // A feature node goes only into a feature corner it nearly coincides with, at the other
+    // end of a one-piece curve (two corners the segmentation put a hair apart): the features
+    // move by that hair and the survivor stays.
+    if (is_feature_[b] != 0) {
+      const bool coincident = kb == NodeKind::Corner && ka == NodeKind::Corner && is_feature_[a] != 0 &&
+                              (pa - pb).norm() < kCoincidentCornersSize * surface_.target_size &&
+                              is_one_piece_curve(static_cast<int>(a), static_cast<int>(b));
+      return coincident ? 1 : 0;
+    }
     if (is_feature_[a] != 0) return 1;
     if (kb == NodeKind::Inner) {
       if (ka != NodeKind::Inner) return 1;  // into the border (or corner) node, which stays
@@ -145,15 +157,18 @@ class Collapser {
       return q[1].allFinite() ? 2 : 1;
     }
     // Two corners: only when the edge is a whole curve (one piece).
-    for (const auto& nodes : surface_.curve_nodes) {
-      if (nodes.size() == 2 && ((nodes[0] == static_cast<int>(a) && nodes[1] == static_cast<int>(b)) ||
-                                (nodes[0] == static_cast<int>(b) && nodes[1] == static_cast<int>(a)))) {
-        q[1] = middle;
-        q[2] = pb;
-        return 3;
-      }
-    }
-    return 0;
+    if (!is_one_piece_curve(static_cast<int>(a), static_cast<int>(b))) return 0;
+    q[1] = middle;
+    q[2] = pb;
+    return 3;
+  }
+
+  // A curve of exactly the two nodes a and b.
+  bool is_one_piece_curve(int a, int b) const {
+    return std::any_of(
+        surface_.curve_nodes.begin(), surface_.curve_nodes.end(), [&](const std::vector<int>& nodes) {
+          return nodes.size() == 2 && ((nodes[0] == a && nodes[1] == b) || (nodes[0] == b && nodes[1] == a));
+        });
   }
 
   // Smallest angle (deg) of the triangles around va and vb after collapsing h (b = from(h)

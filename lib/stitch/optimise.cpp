@@ -23,6 +23,16 @@ Vec point(const TriMesh& mesh, TriMesh::VertexHandle v) { return to_eigen(mesh.p
 // Twice the area vector (a, b, c counter-clockwise).
 Vec area_vector(const Vec& a, const Vec& b, const Vec& c) { return (b - a).cross(c - a); }
 
+// Sine of the smallest interior angle of (a, b, c): twice the area over the product of the
+// two longest edges (the smallest angle is below 90 deg, so its sine orders it); 0 for a
+// degenerate triangle.
+double min_angle_sine(const Vec& a, const Vec& b, const Vec& c) {
+  std::array<double, 3> l2{(b - a).squaredNorm(), (c - b).squaredNorm(), (a - c).squaredNorm()};
+  std::sort(l2.begin(), l2.end());
+  const double product = std::sqrt(l2[1] * l2[2]);
+  return product > 0.0 ? area_vector(a, b, c).norm() / product : 0.0;
+}
+
 // What the optimisation may do with a vertex.
 struct NodeInfo {
   bool is_movable = false;  // inner node, or border node of a non-feature curve between two patches
@@ -41,6 +51,7 @@ class Optimiser {
     const double diagonal = bounding_box(mesh_).diagonal();
     min_double_area_ = 2.0 * tolerance::kDegenerateAreaRelative * diagonal * diagonal;
     cos_dihedral_ = std::cos(options.max_flip_dihedral_deg * std::numbers::pi / 180.0);
+    sin_angle_floor_ = std::sin(options.angle_floor_deg * std::numbers::pi / 180.0);
     classify_nodes(result.vertex_node);
   }
 
@@ -108,6 +119,7 @@ class Optimiser {
       }
       if (!q.allFinite()) continue;
       double old_min = 1.0, new_min = 1.0;
+      double old_sine = 1.0, new_sine = 1.0;  // of the smallest angle
       bool ok = true;
       for (const auto& [b, c] : ring_) {
         const Vec n_old = area_vector(p, b, c);
@@ -119,8 +131,11 @@ class Optimiser {
         }
         old_min = std::min(old_min, triangle_alpha(p, b, c));
         new_min = std::min(new_min, triangle_alpha(q, b, c));
+        old_sine = std::min(old_sine, min_angle_sine(p, b, c));
+        new_sine = std::min(new_sine, min_angle_sine(q, b, c));
       }
-      if (ok && new_min >= std::min(old_min, options_.alpha_floor)) {
+      if (ok && new_min >= std::min(old_min, options_.alpha_floor) &&
+          new_sine >= std::min(old_sine, sin_angle_floor_)) {
         mesh_.set_point(v, to_openmesh(q));
         ++counts[0];
       } else {
@@ -210,6 +225,7 @@ class Optimiser {
   std::vector<std::array<Vec, 2>> ring_;
   double min_double_area_ = 0.0;
   double cos_dihedral_ = 1.0;
+  double sin_angle_floor_ = 0.0;
 };
 
 }  // namespace

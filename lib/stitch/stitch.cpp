@@ -24,6 +24,7 @@ void StitchOptions::validate() const {
   if (!(smoothing_relaxation > 0.0 && smoothing_relaxation <= 1.0)) fail("smoothing_relaxation must be in (0, 1]");
   if (!(min_normal_dot >= -1.0 && min_normal_dot < 1.0)) fail("min_normal_dot must be in [-1, 1)");
   if (!(alpha_floor >= 0.0 && alpha_floor <= 1.0)) fail("alpha_floor must be in [0, 1]");
+  if (!(angle_floor_deg >= 0.0 && angle_floor_deg < 60.0)) fail("angle_floor_deg must be in [0, 60)");
   if (!(collapse_below_angle_deg >= 0.0 && collapse_below_angle_deg < 60.0)) fail("collapse_below_angle_deg must be in [0, 60)");
   if (n_threads == 0) fail("n_threads must be >= 1");
 }

@@ -41,9 +41,15 @@ struct StitchOptions {
   //! does not drop below min(its old value, alpha_floor) (in [0, 1]). Defaults 0.5 and 0.5.
   double min_normal_dot = 0.5;
   double alpha_floor = 0.5;
+  //! A smoothing move is accepted only if the smallest angle (deg) of the incident
+  //! triangles does not drop below min(its old value, angle_floor_deg), in [0, 60): a move
+  //! never makes a triangle below issue 5's bound that was not there. Default 25.
+  double angle_floor_deg = kAwayFromFeaturesAngleBoundDeg;
   //! Triangles whose smallest angle (deg) is below this get their shortest edge collapsed
   //! before the optimisation, when the merge is allowed and improves the worst triangle
-  //! around it (feature nodes never removed or moved; see docs/stitch.md), in [0, 60); 0
+  //! around it (feature nodes never moved, and removed only into a feature corner less
+  //! than 0.05 target sizes away at the other end of a one-piece curve; see
+  //! docs/stitch.md), in [0, 60); 0
   //! switches it off. Default 25 (issue 5's bound away from features).
   double collapse_below_angle_deg = 25.0;
   //! Run the exact self-intersection check on the result (the most expensive check).
@@ -144,8 +150,9 @@ struct StitchResult {
 //!    node, an edge already used in that direction, a closed vertex fan) is counted and
 //!    reported as an error; it is never silently dropped.
 //! 1b. Short-edge collapse (collapse_below_angle_deg): the shortest edge of each triangle
-//!    with a smaller angle is collapsed when allowed (never removing or moving a feature
-//!    node) and the smallest angle around it grows; the triangles are re-assembled by the
+//!    with a smaller angle is collapsed when allowed (never moving a feature node, never
+//!    removing one but into a feature corner a hair away) and the smallest angle around it
+//!    grows; the triangles are re-assembled by the
 //!    merged node ids; merges whose faces intersect others are given up (docs/stitch.md).
 //! 2. `optimisation_passes` rounds of
 //!    a. edge flips: an interior edge whose two triangles are within the dihedral bound

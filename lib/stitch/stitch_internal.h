@@ -22,7 +22,9 @@ struct NodeMerges {
 
 //! The triangles with a smallest angle below StitchOptions::collapse_below_angle_deg, worst
 //! first, get their shortest edge collapsed (either way round) when the removed node is no
-//! feature node (is_feature) nor frozen (is_frozen), ranks no higher than the survivor
+//! feature node (is_feature; but a feature corner merges into a feature corner less than
+//! 0.05 SurfaceMesh::target_size away at the other end of a one-piece curve, which stays)
+//! nor frozen (is_frozen), ranks no higher than the survivor
 //! (inner < border < corner), an inner node merges within its patch or into a border node, a
 //! border node only into its neighbour along its own curve, a corner only into the other end
 //! of a one-piece curve; the survivor goes onto the fitted surface(s) (midpoint) unless it

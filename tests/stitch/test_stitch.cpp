@@ -441,6 +441,129 @@ TEST(Stitch, MovesThroughANearbySheetAreUndone) {
   EXPECT_EQ(*r.report.output.topology.n_self_intersecting_pairs, 0u);
 }
 
+// Issue 5, DRAM cell at 256 cells: where one patch's fit is far off (steep where the input
+// is not), a border node's smoothing target (the mean of its projections onto both fits)
+// lies off the curve, and the move turned good triangles into needles. A move never takes
+// the smallest angle of its triangles below min(old, angle_floor_deg).
+TEST(Stitch, SmoothingMakesNoNewTriangleBelowTheAngleFloor) {
+  const TriangleSoup sheet = test::grid_patch(8, 8);  // unit square, edges 1/8
+  std::vector<int> face_patch(sheet.triangles.size());
+  for (std::size_t t = 0; t < sheet.triangles.size(); ++t) {
+    const auto& tri = sheet.triangles[t];
+    face_patch[t] = (sheet.points[tri[0]] + sheet.points[tri[1]] + sheet.points[tri[2]]).x() < 1.5 ? 0 : 1;
+  }
+  SurfaceMesh surface = make_surface(sheet, face_patch, 2);
+  // Patch 1's fit planted as a plane tilted by 30 deg about the curve's direction (y),
+  // through (0.5, 0.5, -0.05): 0.4 edges off the sheet along its axis.
+  PatchSurface& planted = surface.surfaces[1];
+  planted.frame.axes = Eigen::AngleAxisd(M_PI / 6.0, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  const double local_z = planted.frame.to_local(Eigen::Vector3d(0.5, 0.5, -0.05)).z();
+  for (double& c : planted.field.mutable_coefficients()) c = local_z;
+  const TriMesh input = to_trimesh(sheet);
+  StitchOptions unguarded;
+  unguarded.angle_floor_deg = 0.0;
+  const StitchResult bad = stitch(surface, input, unguarded);
+  EXPECT_GT(bad.report.n_small_angle_away_from_features, 0u);  // the planted defect works
+  StitchOptions assembled_only;
+  assembled_only.optimisation_passes = 0;
+  const StitchResult assembled = stitch(surface, input, assembled_only);
+  ASSERT_EQ(assembled.report.n_small_angle_away_from_features, 0u);
+  const StitchResult r = stitch(surface, input);
+  EXPECT_TRUE(r.report.ok()) << joined(r.report.errors);
+  EXPECT_GT(r.report.n_smoothing_moves, 0u);
+  EXPECT_EQ(r.report.n_small_angle_away_from_features, 0u);
+  EXPECT_GE(r.report.min_angle_away_from_features_deg, kAwayFromFeaturesAngleBoundDeg);
+  EXPECT_GE(r.report.output.quality.min_angle_deg,
+            std::min(assembled.report.output.quality.min_angle_deg, 25.0));
+}
+
+// Issue 5, DRAM cell at 256 cells: two feature corners 0.001 h apart at the ends of a
+// one-piece curve (a cup's rim) made 0.6 and 1.0 deg triangles that no move removes. A
+// feature corner merges into a feature corner a hair away (under 0.05 h), which stays.
+TEST(Stitch, FeatureCornersAHairApartMerge) {
+  TriangleSoup sheet = test::grid_patch(8, 8);  // unit square, edges 1/8; node (i, j) is 9 j + i
+  // Quadrants, the right ones split one row higher: corners a = (4, 4) (patches 0, 1, 3)
+  // and b = (4, 5) (patches 0, 2, 3), joined by the one-edge curve between patches 0 and 3.
+  std::vector<int> face_patch(sheet.triangles.size());
+  for (std::size_t t = 0; t < sheet.triangles.size(); ++t) {
+    const std::size_t cell = t / 2;
+    const std::size_t i = cell % 8, j = cell / 8;
+    face_patch[t] = i < 4 ? (j >= 4 ? 0 : 1) : (j >= 5 ? 2 : 3);
+  }
+  const int a = 9 * 4 + 4, b = 9 * 5 + 4;
+  sheet.points[static_cast<std::size_t>(b)] =
+      sheet.points[static_cast<std::size_t>(a)] + Eigen::Vector3d(0.0, 5e-4, 0.0);
+  SurfaceMesh surface = make_surface(sheet, face_patch, 4);
+  ASSERT_EQ(surface.node_kind[static_cast<std::size_t>(a)], NodeKind::Corner);
+  ASSERT_EQ(surface.node_kind[static_cast<std::size_t>(b)], NodeKind::Corner);
+  surface.target_size = 0.125;
+  // Every curve a crease, with its nodes (order matters only for the one-piece curve a-b).
+  std::map<std::pair<int, int>, std::vector<int>> curve_of_pair;
+  for (std::size_t g = 0; g < surface.nodes.size(); ++g) {
+    std::set<int> patches;
+    for (std::size_t t = 0; t < surface.triangles.size(); ++t) {
+      for (int k : surface.triangles[t]) {
+        if (k == static_cast<int>(g)) patches.insert(surface.triangle_patch[t]);
+      }
+    }
+    const Eigen::Vector3d& x = surface.nodes[g];
+    if (x.x() == 0.0 || x.x() == 1.0 || x.y() == 0.0 || x.y() == 1.0)
+      patches.insert(-1);  // the sheet's boundary
+    for (int p : patches) {
+      for (int q : patches) {
+        if (p < q) curve_of_pair[{p, q}].push_back(static_cast<int>(g));
+      }
+    }
+  }
+  surface.curve_nodes.clear();
+  for (const auto& [pair, nodes] : curve_of_pair) {
+    if (pair.first == 0 && pair.second == 3) {
+      ASSERT_EQ(nodes, (std::vector<int>{a, b}));
+    }
+    surface.curve_nodes.push_back(nodes);
+  }
+  surface.curve_is_feature.assign(surface.curve_nodes.size(), 1);
+  for (std::size_t g = 0; g < surface.nodes.size(); ++g) {
+    if (surface.node_kind[g] != NodeKind::Border) continue;
+    for (std::size_t c = 0; c < surface.curve_nodes.size(); ++c) {
+      const auto& nodes = surface.curve_nodes[c];
+      if (std::find(nodes.begin(), nodes.end(), static_cast<int>(g)) != nodes.end())
+        surface.node_owner[g] = static_cast<int>(c);
+    }
+  }
+  const TriMesh input = to_trimesh(sheet);
+  StitchOptions off;
+  off.collapse_below_angle_deg = 0.0;
+  const StitchResult kept = stitch(surface, input, off);
+  EXPECT_LT(kept.report.output.quality.min_angle_deg, 1.0);  // the planted defect works
+  const StitchResult r = stitch(surface, input);
+  EXPECT_TRUE(r.report.ok()) << joined(r.report.errors);
+  EXPECT_GE(r.report.n_collapses, 1u);
+  EXPECT_GT(r.report.output.quality.min_angle_deg, 20.0);
+  // One of the two corners is gone, the other is where it was; no other node moved (all
+  // curves are creases, the sheet's inner nodes are already on their plane).
+  int n_corners = 0;
+  for (auto v : r.mesh.vertices()) {
+    const auto g = static_cast<std::size_t>(r.vertex_node[static_cast<std::size_t>(v.idx())]);
+    if (g == static_cast<std::size_t>(a) || g == static_cast<std::size_t>(b)) {
+      ++n_corners;
+      EXPECT_EQ(to_eigen(r.mesh.point(v)), surface.nodes[g]);
+    }
+  }
+  EXPECT_EQ(n_corners, 1);
+  // Two crease corners further apart (0.1 h) stay apart.
+  sheet.points[static_cast<std::size_t>(b)] =
+      sheet.points[static_cast<std::size_t>(a)] + Eigen::Vector3d(0.0, 0.0125, 0.0);
+  surface.nodes[static_cast<std::size_t>(b)] = sheet.points[static_cast<std::size_t>(b)];
+  const StitchResult apart = stitch(surface, to_trimesh(sheet));
+  int n_apart = 0;
+  for (auto v : apart.mesh.vertices()) {
+    const int g = apart.vertex_node[static_cast<std::size_t>(v.idx())];
+    n_apart += g == a || g == b ? 1 : 0;
+  }
+  EXPECT_EQ(n_apart, 2);
+}
+
 TEST(Stitch, OnlyTheOffendingMovesAreUndone) {
   // The two sheets of the test above (the upper one pushed through the lower one) and a
   // third, jittered sheet far away whose smoothing moves are harmless: they must stay.
