@@ -83,6 +83,14 @@ double max_cos_in_metric(const Vec& a, const Vec& b, const Vec& c, const Mat& M)
   return m;
 }
 
+// Distance from x to the segment uw.
+double distance_to_segment(const Vec& x, const Vec& u, const Vec& w) {
+  const Vec d = w - u;
+  const double l2 = d.squaredNorm();
+  const double t = l2 > 0 ? std::clamp((x - u).dot(d) / l2, 0.0, 1.0) : 0.0;
+  return (u + t * d - x).norm();
+}
+
 // Evaluates a SizingField, gradation-limited.
 class Sizing {
  public:
@@ -1096,9 +1104,7 @@ class Optimiser {
 
   // Whether x is closer to the piece uw than the smallest gap the refinement resolves.
   [[nodiscard]] static bool too_close(const Vec& u, const Vec& w, const Vec& x, const RefineContext& rc) {
-    const Vec d = w - u;
-    const double t = std::clamp((x - u).dot(d) / d.squaredNorm(), 0.0, 1.0);
-    return (u + t * d - x).norm() < rc.min_gap_fraction * (*rc.size)(0.5 * (u + w));
+    return distance_to_segment(x, u, w) < rc.min_gap_fraction * (*rc.size)(0.5 * (u + w));
   }
   // Whether x lies in the diametral circle of the piece uw.
   [[nodiscard]] static bool encroaches(const Vec& u, const Vec& w, const Vec& x) { return (u - x).dot(w - x) < 0.0; }
@@ -1489,24 +1495,17 @@ class Optimiser {
   std::vector<int> seg_stack_;    // refinement scratch
 };
 
-// Distance from x to the segment uw.
-double distance_to_segment(const Vec& x, const Vec& u, const Vec& w) {
-  const Vec d = w - u;
-  const double l2 = d.squaredNorm();
-  const double t = l2 > 0 ? std::clamp((x - u).dot(d) / l2, 0.0, 1.0) : 0.0;
-  return (u + t * d - x).norm();
-}
-
 // Convex hull pieces along gaps the refinement leaves unresolved (step 10). A split point of
 // a convex hull edge whose every neighbour lies closer to that edge than the smallest gap the
 // refinement resolves bounds only such a gap: every triangle there is a sliver, and each split
 // point of the hull edge adds one. The point is removed by collapsing it into its neighbour
 // along the edge (kept only if the triangles stay exactly counter-clockwise and the link
 // condition holds), so the gap keeps the fewest slivers: one per node on its other side.
-// The triangles, their regions and the chains are compacted; input points keep their indices.
+// The triangles, their regions, the points and the chains are compacted; only split points
+// are removed, so input points keep their indices.
 // Returns the number of points removed.
 std::size_t collapse_hull_points_in_gaps(std::vector<Vec>& P, std::vector<std::array<int, 3>>& T, std::vector<int>& regions,
-                                         std::vector<std::vector<int>>& chains, const std::vector<bool>& is_hull, int n_input,
+                                         std::vector<std::vector<int>>& chains, const std::vector<bool>& is_hull,
                                          const Sizing& size, double gap_fraction) {
   bool any = false;
   for (std::size_t k = 0; k < chains.size(); ++k) any = any || (is_hull[k] && chains[k].size() > 2);
@@ -1603,7 +1602,6 @@ std::size_t collapse_hull_points_in_gaps(std::vector<Vec>& P, std::vector<std::a
   regions.resize(m);
   for (auto& ch : chains)
     for (int& x : ch) x = index[static_cast<std::size_t>(x)];
-  (void)n_input;
   return n_removed;
 }
 
@@ -1784,23 +1782,18 @@ Mesh2d mesh_pslg(const Pslg& pslg, const FrontOptions& options) {
     mesh.report.n_refinement_points = opt.refine(rc);
     if (mesh.report.n_refinement_points > 0 && options.smoothing_passes > 0) {
       // Smoothing of the refined mesh (the refinement's graded points), keeping good triangles
-      // good, then the relocation. Their swaps can turn an excused triangle next to a small
-      // angle into an unexcused one: a second refinement pass (one scan when there is none).
+      // good and bad ones no worse, then the relocation.
       opt.smooth(options.smoothing_passes, first_free, &slide, true);
       mesh.report.n_swaps += opt.delaunay_swaps();
       relocate();
-      rc.max_points -= std::min(rc.max_points, mesh.report.n_refinement_points);
-      const std::size_t more = opt.refine(rc);
-      mesh.report.n_refinement_points += more;
-      if (more > 0) relocate();
     }
   }
   mesh.triangle_regions = opt.regions(side_marker);
   std::vector<bool> is_hull(dom.segments.size(), true);  // the convex hull edges added (enclose_convex_hull)
   for (int k : dom.input_segment) is_hull[static_cast<std::size_t>(k)] = false;
   if (options.refine_min_angle && options.split_segments && !metric) {
-    mesh.report.n_gap_hull_points_removed = collapse_hull_points_in_gaps(P, mesh.triangles, mesh.triangle_regions, chains, is_hull,
-                                                                        static_cast<int>(pslg.points.size()), size, kRefineMinGapFraction);
+    mesh.report.n_gap_hull_points_removed =
+        collapse_hull_points_in_gaps(P, mesh.triangles, mesh.triangle_regions, chains, is_hull, size, kRefineMinGapFraction);
   }
   mesh.report.seconds_optimise = clock.seconds();
   report_progress(options.progress, "front2d: optimise", 1.0);

@@ -30,8 +30,8 @@
 //!     (Ruppert; Shewchuk) of the triangles still below 30 deg: circumcentres inserted,
 //!     encroached segment pieces split (concentric shells at small input angles), triangles
 //!     at input angles below 60 deg excused, gaps narrower than h / 100 left; capped. Then
-//!     smoothing that keeps good triangles good, a second refinement pass, and the split
-//!     points of convex hull edges that bound only such a gap are removed.
+//!     smoothing that keeps good triangles good, and the split points of convex hull edges
+//!     that bound only such a gap are removed.
 //!
 //! Output: counter-clockwise triangles, every input segment a chain of mesh edges, every
 //! input point kept at its input index.
