@@ -1495,7 +1495,7 @@ class Optimiser {
   std::vector<int> seg_stack_;    // refinement scratch
 };
 
-// Convex hull pieces along gaps the refinement leaves unresolved (step 10). A split point of
+// Convex hull pieces along gaps the refinement leaves unresolved (docs step 11). A split point of
 // a convex hull edge whose every neighbour lies closer to that edge than the smallest gap the
 // refinement resolves bounds only such a gap: every triangle there is a sliver, and each split
 // point of the hull edge adds one. The point is removed by collapsing it into its neighbour
