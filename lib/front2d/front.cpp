@@ -43,7 +43,7 @@ constexpr int kRelocateRounds = 2;          // relocation + swaps rounds
 // Delaunay refinement (Optimiser::refine).
 constexpr std::size_t kMaxCavity = 4096;          // triangles examined for encroachment per circumcentre
 constexpr double kRefineMinLengthRelative = 1e-9;  // no piece shorter than twice this times the bbox diagonal is split
-constexpr double kRefineMinGapFraction = 0.01;     // gaps narrower than this times h are not resolved
+constexpr double kRefineMinGapFraction = 0.005;    // a vertex closer than this times h to a piece does not encroach it
 constexpr double kRefineMaxPointsFactor = 2.0;     // at most this times the triangles (+1000) new points
 constexpr double kAutoSizeDivisor = 40.0;  // automatic uniform size: bbox diagonal / this
 constexpr int kSizingGridCells = 128;      // background grid of callback sizing fields, per side
