@@ -43,7 +43,7 @@ constexpr int kRelocateRounds = 2;          // relocation + swaps rounds
 // Delaunay refinement (Optimiser::refine).
 constexpr std::size_t kMaxCavity = 4096;          // triangles examined for encroachment per circumcentre
 constexpr double kRefineMinLengthRelative = 1e-9;  // no piece shorter than twice this times the bbox diagonal is split
-constexpr double kRefineMinGapFraction = 0.01;     // gaps narrower than this times h are not resolved
+constexpr double kRefineMinGapFraction = 0.005;    // a vertex closer than this times h to a piece does not encroach it
 constexpr double kRefineMaxPointsFactor = 2.0;     // at most this times the triangles (+1000) new points
 constexpr double kAutoSizeDivisor = 40.0;  // automatic uniform size: bbox diagonal / this
 constexpr int kSizingGridCells = 128;      // background grid of callback sizing fields, per side
@@ -81,6 +81,14 @@ double max_cos_in_metric(const Vec& a, const Vec& b, const Vec& c, const Mat& M)
     m = std::max(m, n > 0 ? u.dot(M * w) / n : 1.0);
   }
   return m;
+}
+
+// Distance from x to the segment uw.
+double distance_to_segment(const Vec& x, const Vec& u, const Vec& w) {
+  const Vec d = w - u;
+  const double l2 = d.squaredNorm();
+  const double t = l2 > 0 ? std::clamp((x - u).dot(d) / l2, 0.0, 1.0) : 0.0;
+  return (u + t * d - x).norm();
 }
 
 // Evaluates a SizingField, gradation-limited.
@@ -804,12 +812,25 @@ class Optimiser {
     return n;
   }
 
-  void smooth(int passes, int first_free) {
+  // Laplacian smoothing of the points from first_free on. With `fixed` (per point, true for
+  // points that must not move: segment split points after the refinement), those are skipped;
+  // with keep_good, a move must also keep every star triangle that has no angle below
+  // kMinAngleTargetDeg so, and must not make the smallest angle of any other star triangle
+  // smaller (after the refinement: excused triangles stay as they are).
+  void smooth(int passes, int first_free, const std::vector<std::array<int, 2>>* fixed = nullptr, bool keep_good = false) {
     const Incidence inc = incidence();
+    const double target = std::cos(kMinAngleTargetDeg * std::numbers::pi / 180.0);
+    // With keep_good: the cosine of the smallest angle of each star triangle before the move.
+    std::vector<double> before;
     for (int pass = 0; pass < passes; ++pass) {
       for (std::size_t vtx = static_cast<std::size_t>(first_free); vtx < P_.size(); ++vtx) {
         const int b0 = inc.start[vtx], b1 = inc.start[vtx + 1];
         if (b0 == b1) continue;
+        if (fixed && vtx < fixed->size() && (*fixed)[vtx][0] >= 0) continue;
+        if (keep_good) {
+          before.clear();
+          for (int k = b0; k < b1; ++k) before.push_back(max_cos(T_[static_cast<std::size_t>(inc.tri[static_cast<std::size_t>(k)])]));
+        }
         const Vec old = P_[vtx];
         const Mat old_m = metric_ ? Mv_[vtx] : Mat::Identity();
         move(static_cast<int>(vtx), smoothing_target(static_cast<int>(vtx), inc));
@@ -835,6 +856,8 @@ class Optimiser {
             if (metric_) Mv_[vtx] = moved_m;
           }
         }
+        for (int k = b0; k < b1 && ok && keep_good; ++k)
+          ok = max_cos(T_[static_cast<std::size_t>(inc.tri[static_cast<std::size_t>(k)])]) <= std::max(before[static_cast<std::size_t>(k - b0)], target);
         if (!ok) {
           P_[vtx] = old;
           if (metric_) Mv_[vtx] = old_m;
@@ -1081,9 +1104,7 @@ class Optimiser {
 
   // Whether x is closer to the piece uw than the smallest gap the refinement resolves.
   [[nodiscard]] static bool too_close(const Vec& u, const Vec& w, const Vec& x, const RefineContext& rc) {
-    const Vec d = w - u;
-    const double t = std::clamp((x - u).dot(d) / d.squaredNorm(), 0.0, 1.0);
-    return (u + t * d - x).norm() < rc.min_gap_fraction * (*rc.size)(0.5 * (u + w));
+    return distance_to_segment(x, u, w) < rc.min_gap_fraction * (*rc.size)(0.5 * (u + w));
   }
   // Whether x lies in the diametral circle of the piece uw.
   [[nodiscard]] static bool encroaches(const Vec& u, const Vec& w, const Vec& x) { return (u - x).dot(w - x) < 0.0; }
@@ -1474,6 +1495,116 @@ class Optimiser {
   std::vector<int> seg_stack_;    // refinement scratch
 };
 
+// Convex hull pieces along gaps the refinement leaves unresolved (docs step 11). A split point of
+// a convex hull edge whose every neighbour lies closer to that edge than the smallest gap the
+// refinement resolves bounds only such a gap: every triangle there is a sliver, and each split
+// point of the hull edge adds one. The point is removed by collapsing it into its neighbour
+// along the edge (kept only if the triangles stay exactly counter-clockwise and the link
+// condition holds), so the gap keeps the fewest slivers: one per node on its other side.
+// The triangles, their regions, the points and the chains are compacted; only split points
+// are removed, so input points keep their indices.
+// Returns the number of points removed.
+std::size_t collapse_hull_points_in_gaps(std::vector<Vec>& P, std::vector<std::array<int, 3>>& T, std::vector<int>& regions,
+                                         std::vector<std::vector<int>>& chains, const std::vector<bool>& is_hull,
+                                         const Sizing& size, double gap_fraction) {
+  bool any = false;
+  for (std::size_t k = 0; k < chains.size(); ++k) any = any || (is_hull[k] && chains[k].size() > 2);
+  if (!any) return 0;
+  std::vector<std::vector<int>> inc(P.size());
+  for (std::size_t t = 0; t < T.size(); ++t)
+    for (int x : T[t]) inc[static_cast<std::size_t>(x)].push_back(static_cast<int>(t));
+  std::vector<bool> dead(T.size(), false);
+  std::vector<int> nb_p, nb_q;
+  auto neighbours = [&](int v, std::vector<int>& out) {
+    out.clear();
+    for (int t : inc[static_cast<std::size_t>(v)])
+      if (!dead[static_cast<std::size_t>(t)])
+        for (int x : T[static_cast<std::size_t>(t)])
+          if (x != v) out.push_back(x);
+    std::sort(out.begin(), out.end());
+    out.erase(std::unique(out.begin(), out.end()), out.end());
+  };
+  // Collapses p into q (p q a boundary edge); false (nothing changed) if not valid.
+  auto collapse = [&](int p, int q) {
+    int t_pq = -1;
+    for (int t : inc[static_cast<std::size_t>(p)]) {
+      if (dead[static_cast<std::size_t>(t)]) continue;
+      const auto& tr = T[static_cast<std::size_t>(t)];
+      if (tr[0] == q || tr[1] == q || tr[2] == q) {
+        if (t_pq >= 0) return false;  // pq is not a boundary edge
+        t_pq = t;
+      }
+    }
+    if (t_pq < 0) return false;
+    const auto& tr = T[static_cast<std::size_t>(t_pq)];
+    const int r = tr[0] != p && tr[0] != q ? tr[0] : (tr[1] != p && tr[1] != q ? tr[1] : tr[2]);
+    neighbours(p, nb_p);
+    neighbours(q, nb_q);
+    std::size_t common = 0;
+    for (int x : nb_p) common += std::binary_search(nb_q.begin(), nb_q.end(), x) ? 1 : 0;
+    if (common != 1 || !std::binary_search(nb_p.begin(), nb_p.end(), r)) return false;  // link condition
+    for (int t : inc[static_cast<std::size_t>(p)]) {
+      if (dead[static_cast<std::size_t>(t)] || t == t_pq) continue;
+      std::array<int, 3> u = T[static_cast<std::size_t>(t)];
+      for (int& x : u) x = x == p ? q : x;
+      if (orient2d(P[static_cast<std::size_t>(u[0])], P[static_cast<std::size_t>(u[1])], P[static_cast<std::size_t>(u[2])]) <= 0) return false;
+    }
+    dead[static_cast<std::size_t>(t_pq)] = true;
+    for (int t : inc[static_cast<std::size_t>(p)]) {
+      if (dead[static_cast<std::size_t>(t)]) continue;
+      for (int& x : T[static_cast<std::size_t>(t)]) x = x == p ? q : x;
+      inc[static_cast<std::size_t>(q)].push_back(t);
+    }
+    inc[static_cast<std::size_t>(p)].clear();
+    return true;
+  };
+  std::vector<bool> removed(P.size(), false);
+  std::size_t n_removed = 0;
+  for (std::size_t k = 0; k < chains.size(); ++k) {
+    auto& ch = chains[k];
+    if (!is_hull[k] || ch.size() <= 2) continue;
+    const Vec& A = P[static_cast<std::size_t>(ch.front())];
+    const Vec& B = P[static_cast<std::size_t>(ch.back())];
+    std::vector<int> kept{ch.front()};
+    for (std::size_t i = 1; i + 1 < ch.size(); ++i) {
+      const int p = ch[i];
+      const double gap = gap_fraction * size(P[static_cast<std::size_t>(p)]);
+      neighbours(p, nb_p);
+      bool thin = true;
+      for (int x : nb_p) thin = thin && distance_to_segment(P[static_cast<std::size_t>(x)], A, B) < gap;
+      if (thin && (collapse(p, kept.back()) || collapse(p, ch[i + 1]))) {
+        removed[static_cast<std::size_t>(p)] = true;
+        ++n_removed;
+      } else {
+        kept.push_back(p);
+      }
+    }
+    kept.push_back(ch.back());
+    ch = std::move(kept);
+  }
+  if (n_removed == 0) return 0;
+  std::vector<int> index(P.size(), -1);
+  std::size_t n = 0;
+  for (std::size_t i = 0; i < P.size(); ++i)
+    if (!removed[i]) {
+      index[i] = static_cast<int>(n);
+      P[n++] = P[i];
+    }
+  P.resize(n);
+  std::size_t m = 0;
+  for (std::size_t t = 0; t < T.size(); ++t)
+    if (!dead[t]) {
+      for (int& x : T[t]) x = index[static_cast<std::size_t>(x)];
+      T[m] = T[t];
+      regions[m++] = regions[t];
+    }
+  T.resize(m);
+  regions.resize(m);
+  for (auto& ch : chains)
+    for (int& x : ch) x = index[static_cast<std::size_t>(x)];
+  return n_removed;
+}
+
 }  // namespace
 
 void FrontOptions::validate() const {
@@ -1642,14 +1773,28 @@ Mesh2d mesh_pslg(const Pslg& pslg, const FrontOptions& options) {
     rc.size = &size;
     rc.min_gap_fraction = kRefineMinGapFraction;
     rc.max_points = static_cast<std::size_t>(kRefineMaxPointsFactor * static_cast<double>(mesh.triangles.size())) + 1000;
-    mesh.report.n_refinement_points = opt.refine(rc);
-    if (mesh.report.n_refinement_points > 0 && options.smoothing_passes > 0)
+    const auto relocate = [&]() {
       for (int round = 0; round < kRelocateRounds; ++round) {
         if (opt.improve_min_angle(first_free, slide, true) == 0) break;
         mesh.report.n_swaps += opt.delaunay_swaps();
       }
+    };
+    mesh.report.n_refinement_points = opt.refine(rc);
+    if (mesh.report.n_refinement_points > 0 && options.smoothing_passes > 0) {
+      // Smoothing of the refined mesh (the refinement's graded points), keeping good triangles
+      // good and bad ones no worse, then the relocation.
+      opt.smooth(options.smoothing_passes, first_free, &slide, true);
+      mesh.report.n_swaps += opt.delaunay_swaps();
+      relocate();
+    }
   }
   mesh.triangle_regions = opt.regions(side_marker);
+  std::vector<bool> is_hull(dom.segments.size(), true);  // the convex hull edges added (enclose_convex_hull)
+  for (int k : dom.input_segment) is_hull[static_cast<std::size_t>(k)] = false;
+  if (options.refine_min_angle && options.split_segments && !metric) {
+    mesh.report.n_gap_hull_points_removed =
+        collapse_hull_points_in_gaps(P, mesh.triangles, mesh.triangle_regions, chains, is_hull, size, kRefineMinGapFraction);
+  }
   mesh.report.seconds_optimise = clock.seconds();
   report_progress(options.progress, "front2d: optimise", 1.0);
 
@@ -1659,6 +1804,8 @@ Mesh2d mesh_pslg(const Pslg& pslg, const FrontOptions& options) {
     mesh.segment_chains.push_back(ch);
     if (ch.front() != pslg.segments[k][0]) std::reverse(mesh.segment_chains.back().begin(), mesh.segment_chains.back().end());
   }
+  for (std::size_t k = 0; k < dom.segments.size(); ++k)
+    if (is_hull[k]) mesh.hull_chains.push_back(chains[k]);
   return mesh;
 }
 

@@ -572,15 +572,30 @@ void mesh_cgal_files(double divisor, bool include_img5) {
   }
 }
 
-// Triangles with an angle below 30 deg not excused by an input angle below 60 deg. Excused:
-// a triangle that touches an input vertex where two consecutive incident segments make less
-// than 60 deg (a dangling segment end counts as 0), or one whose shortest edge joins split
-// points of two input segments that meet at an input vertex under less than 60 deg (it lies
-// in the narrow wedge of that angle, where the two segments are closer than h: Shewchuk's
-// rule in Delaunay refinement).
-std::size_t count_unexcused_small_angles(const Pslg& p, const Mesh2d& m) {
+// Triangles with an angle below 30 deg not excused. The boundary segments are the input
+// segments and the convex hull edges the mesher added (Mesh2d::hull_chains: with
+// enclose_convex_hull they are segments of the domain, as with Triangle's -c). Excused:
+// - a triangle that touches an input vertex where two consecutive boundary segments make
+//   less than 60 deg (a dangling segment end counts as 0);
+// - one whose shortest edge joins split points of two boundary segments that meet at an
+//   input vertex under less than 60 deg (it lies in the narrow wedge of that angle, where the
+//   two segments are closer than h: Shewchuk's rule in Delaunay refinement);
+// - with gap > 0, one that lies in a gap narrower than `gap`: its three vertices lie within
+//   gap of one boundary segment s, and each within gap of another boundary segment that
+//   shares no vertex with s or meets it under less than 60 deg (Ruppert 1995: a mesh with
+//   angles >= 30 deg needs Omega(L / w) triangles along a gap of width w and length L; the
+//   refinement leaves gaps narrower than h / 100).
+std::size_t count_unexcused_small_angles(const Pslg& p, const Mesh2d& m, double gap = 0) {
+  std::vector<std::array<int, 2>> segs = p.segments;
+  std::vector<int> segment_of(m.points.size(), -1);  // boundary segment of each split point
+  for (std::size_t k = 0; k < m.segment_chains.size(); ++k)
+    for (std::size_t i = 1; i + 1 < m.segment_chains[k].size(); ++i) segment_of[m.segment_chains[k][i]] = static_cast<int>(k);
+  for (const auto& ch : m.hull_chains) {
+    for (std::size_t i = 1; i + 1 < ch.size(); ++i) segment_of[ch[i]] = static_cast<int>(segs.size());
+    segs.push_back({ch.front(), ch.back()});
+  }
   std::vector<std::vector<double>> dirs(p.points.size());
-  for (const auto& s : p.segments)
+  for (const auto& s : segs)
     for (int e = 0; e < 2; ++e) {
       const Vec d = p.points[s[1 - e]] - p.points[s[e]];
       dirs[s[e]].push_back(std::atan2(d.y(), d.x()));
@@ -592,24 +607,50 @@ std::size_t count_unexcused_small_angles(const Pslg& p, const Mesh2d& m) {
     if (d.size() < 2) continue;
     std::sort(d.begin(), d.end());
     for (std::size_t i = 0; i < d.size(); ++i) {
-      double gap = (i + 1 < d.size() ? d[i + 1] : d[0] + 2 * std::numbers::pi) - d[i];
-      if (gap * 180.0 / std::numbers::pi < 60.0) small[v] = true;
+      double gap_angle = (i + 1 < d.size() ? d[i + 1] : d[0] + 2 * std::numbers::pi) - d[i];
+      if (gap_angle * 180.0 / std::numbers::pi < 60.0) small[v] = true;
     }
   }
-  std::vector<int> segment_of(m.points.size(), -1);  // input segment of each split point
-  for (std::size_t k = 0; k < m.segment_chains.size(); ++k)
-    for (std::size_t i = 1; i + 1 < m.segment_chains[k].size(); ++i) segment_of[m.segment_chains[k][i]] = static_cast<int>(k);
+  // Whether segments x and y share no vertex or meet under less than 60 deg.
+  auto apart = [&](std::size_t x, std::size_t y) {
+    const auto& s1 = segs[x];
+    const auto& s2 = segs[y];
+    for (int a : s1)
+      for (int b : s2)
+        if (a == b) {
+          const Vec d1 = p.points[s1[0] == a ? s1[1] : s1[0]] - p.points[a];
+          const Vec d2 = p.points[s2[0] == a ? s2[1] : s2[0]] - p.points[a];
+          return angle_at(Vec(0, 0), d1, d2) < 60.0;
+        }
+    return true;
+  };
   auto in_wedge = [&](int a, int b) {
     if (segment_of[a] < 0 || segment_of[b] < 0 || segment_of[a] == segment_of[b]) return false;
-    const auto& s1 = p.segments[segment_of[a]];
-    const auto& s2 = p.segments[segment_of[b]];
-    for (int x : s1)
-      for (int y : s2)
-        if (x == y) {
-          const Vec d1 = p.points[s1[0] == x ? s1[1] : s1[0]] - p.points[x];
-          const Vec d2 = p.points[s2[0] == x ? s2[1] : s2[0]] - p.points[x];
-          if (angle_at(Vec(0, 0), d1, d2) < 60.0) return true;
-        }
+    const auto x = static_cast<std::size_t>(segment_of[a]), y = static_cast<std::size_t>(segment_of[b]);
+    const auto& s1 = segs[x];
+    const auto& s2 = segs[y];
+    const bool share = s1[0] == s2[0] || s1[0] == s2[1] || s1[1] == s2[0] || s1[1] == s2[1];
+    return share && apart(x, y);
+  };
+  auto dist = [&](const Vec& x, const std::array<int, 2>& sg) {
+    const Vec& a = p.points[sg[0]];
+    const Vec d = p.points[sg[1]] - a;
+    const double t = std::clamp((x - a).dot(d) / d.squaredNorm(), 0.0, 1.0);
+    return (a + t * d - x).norm();
+  };
+  auto in_gap = [&](const std::array<int, 3>& t) {
+    for (std::size_t k = 0; k < segs.size(); ++k) {
+      bool near = true;
+      for (int v : t) near = near && dist(m.points[v], segs[k]) < gap;
+      if (!near) continue;
+      bool across = true;
+      for (int v : t) {
+        bool any = false;
+        for (std::size_t j = 0; j < segs.size() && !any; ++j) any = j != k && dist(m.points[v], segs[j]) < gap && apart(k, j);
+        across = across && any;
+      }
+      if (across) return true;
+    }
     return false;
   };
   std::size_t bad = 0;
@@ -621,13 +662,15 @@ std::size_t count_unexcused_small_angles(const Pslg& p, const Mesh2d& m) {
     const std::array<double, 3> len = {(b - c).squaredNorm(), (c - a).squaredNorm(), (a - b).squaredNorm()};
     const auto i = static_cast<std::size_t>(std::min_element(len.begin(), len.end()) - len.begin());
     excused = excused || in_wedge(t[(i + 1) % 3], t[(i + 2) % 3]);
+    excused = excused || (gap > 0 && in_gap(t));
     if (!excused) ++bad;
   }
   return bad;
 }
 
-// img5 has segments of 1/1000 of its size: h must resolve them for a mean alpha >= 0.92,
-// so at the coarse size it is checked for the invariants only.
+// img5's slivers between its polyline and its convex hull (2e-5 .. 6e-4 wide) are needles
+// at any h; at this coarse h they are too large a share for a mean alpha >= 0.92 (0.88), so
+// it is checked for the invariants only here (mean alpha at diag / 100 and / 200 below).
 TEST(Front2dFiles, CgalDemoDomains) {
   mesh_cgal_files(60, false);
   // trivial.poly: a quadrilateral of area 8 and a point outside it (dropped); with the
@@ -645,26 +688,28 @@ TEST(Front2dFiles, CgalDemoDomains) {
   EXPECT_EQ(with_hull.report.n_dropped_points, 0u);
 }
 
-// Issue 4: with uniform sizing, min angle >= 30 deg except at input angles below 60 deg.
-// Asserted on the domains where the mesher achieves it at h = diag / 100 (img5 and img6, with
-// gaps far narrower than h between their polylines and the convex hull, are documented in
-// docs/front2d.md and tested below).
+// The gap excused by the min-angle rule at size h: the refinement leaves a vertex closer
+// than h / 200 to a boundary piece alone (it does not encroach the piece); a triangle across
+// such a gap has its vertices within h / 200 of one side and up to about twice that from the
+// other where the gap widens (img6's 0.5 deg wedges between a polyline and a hull edge), so
+// gaps narrower than h / 100 are excused.
+double excused_gap(double h) { return h / 100; }
+
+// Issue 4: with uniform sizing, min angle >= 30 deg except at input angles below 60 deg
+// (convex hull edges included) and in gaps narrower than h / 100. Asserted on the domains
+// where the mesher achieves it at h = diag / 100 (img5, where it does not, is tested below).
 void expect_min_angle_rule(const Pslg& p) {
-  Vec lo = p.points[0], hi = p.points[0];
-  for (const auto& x : p.points) {
-    lo = lo.cwiseMin(x);
-    hi = hi.cwiseMax(x);
-  }
-  const Mesh2d m = mesh_file(p, (hi - lo).norm() / 100);
+  const double h = bbox_diagonal(p) / 100;
+  const Mesh2d m = mesh_file(p, h);
   Stats s;
   EXPECT_EQ(check_mesh(p, m, m.report.domain_area, &s), "");
   EXPECT_GE(s.mean_alpha, 0.92);
-  EXPECT_EQ(count_unexcused_small_angles(p, m), 0u);
+  EXPECT_EQ(count_unexcused_small_angles(p, m, excused_gap(h)), 0u);
 }
 
 TEST(Front2dFiles, MinAngleRuleAtDiagOver100) {
   expect_min_angle_rule(polygon({Vec(0, 0), Vec(1, 0), Vec(1, 1), Vec(0, 1)}));
-  for (const char* name : {"fish.poly", "trivial.poly", "butterfly.edg", "lettre_A.edg", "clusters.poly", "clusters2.edg"}) {
+  for (const char* name : {"fish.poly", "trivial.poly", "butterfly.edg", "lettre_A.edg", "clusters.poly", "clusters2.edg", "img6.edg"}) {
     SCOPED_TRACE(name);
     expect_min_angle_rule(read_pslg(test::test_data(std::string("pslg/") + name)));
   }
@@ -676,7 +721,7 @@ TEST(Front2dFiles, MinAngleRuleAtDiagOver100) {
   }
 }
 
-// Where the rule fails (img6; docs/front2d.md), every unexcused triangle lies
+// Where the rule fails (img5; docs/front2d.md), every unexcused triangle lies
 // where uniform elements of size h cannot fit: within r < h / (2 sin(theta / 2)) of an input
 // vertex with an input angle theta < 60 deg (the two segments there are less than h apart),
 // or within h of two domain boundary segments (input or convex hull) that share no vertex
@@ -744,7 +789,7 @@ std::size_t count_unexplained_small_angles(const Pslg& p, const Mesh2d& m, doubl
 }
 
 TEST(Front2dFiles, MinAngleFailuresAreWhereSizeHCannotFit) {
-  for (const char* name : {"img6.edg"}) {
+  for (const char* name : {"img5.edg"}) {
     SCOPED_TRACE(name);
     const Pslg p = read_pslg(test::test_data(std::string("pslg/") + name));
     const double h = bbox_diagonal(p) / 100;
@@ -757,9 +802,52 @@ TEST(Front2dFiles, MinAngleFailuresAreWhereSizeHCannotFit) {
       hull = o.enclose_convex_hull = true;
       m = mesh_pslg(p, o);
     }
-    EXPECT_EQ(check_mesh(p, m, m.report.domain_area), "");
+    Stats st;
+    EXPECT_EQ(check_mesh(p, m, m.report.domain_area, &st), "");
+    EXPECT_GE(st.mean_alpha, 0.92);
     EXPECT_EQ(count_unexplained_small_angles(p, m, h, hull), 0u);
   }
+}
+
+// A polyline running 1e-5 above a convex hull edge: the strip between them is far narrower
+// than h / 100, so every triangle in it is a sliver whatever is done short of points at the
+// strip's width. Each split point of the hull edge adds one sliver; they are removed
+// (collapsed along the edge), one triangle less per point, the other hull edge keeps its.
+TEST(Front2dFiles, HullEdgeAlongANarrowGapLosesItsSplitPoints) {
+  Pslg p;
+  p.points = {Vec(0, 0), Vec(5, 1e-5), Vec(10, 0), Vec(5, 5)};
+  p.segments = {{0, 1}, {1, 2}, {2, 3}};  // open: the hull closes it (edges 0-2 and 3-0)
+  FrontOptions o = uniform(0.5);
+  o.enclose_convex_hull = true;
+  const Mesh2d m = mesh_pslg(p, o);
+  o.refine_min_angle = false;
+  const Mesh2d plain = mesh_pslg(p, o);
+  EXPECT_EQ(check_mesh(p, m, 25.0), "");
+  EXPECT_EQ(check_mesh(p, plain, 25.0), "");
+  EXPECT_EQ(plain.report.n_gap_hull_points_removed, 0u);
+  const std::size_t removed = m.report.n_gap_hull_points_removed;
+  EXPECT_GT(removed, 0u);
+  auto strip = [](const Mesh2d& x) {
+    std::size_t n = 0;
+    for (const auto& t : x.triangles) {
+      bool all = true;
+      for (int v : t) all = all && x.points[v].y() <= 1e-5;
+      n += all ? 1 : 0;
+    }
+    return n;
+  };
+  ASSERT_EQ(m.hull_chains.size(), 2u);
+  ASSERT_EQ(plain.hull_chains.size(), 2u);
+  for (std::size_t k = 0; k < 2; ++k) {
+    if (m.hull_chains[k].front() == 0 && m.hull_chains[k].back() == 2) {
+      EXPECT_EQ(m.hull_chains[k].size() + removed, plain.hull_chains[k].size());  // the edge along the strip
+    } else {
+      EXPECT_EQ(m.hull_chains[k].size(), plain.hull_chains[k].size());
+    }
+  }
+  EXPECT_EQ(strip(m) + removed, strip(plain));
+  EXPECT_EQ(m.triangles.size() + removed, plain.triangles.size());
+  EXPECT_EQ(m.points.size() + removed, plain.points.size());
 }
 
 // The Delaunay refinement is what gives clusters* the rule (the front and its optimisation
@@ -777,8 +865,9 @@ TEST(Front2dFiles, MinAngleRefinement) {
     EXPECT_EQ(plain.report.n_refinement_points, 0u);
     EXPECT_GT(refined.report.n_refinement_points, 0u);
     EXPECT_EQ(check_mesh(p, refined, refined.report.domain_area), "");
-    const std::size_t before = count_unexcused_small_angles(p, plain);
-    const std::size_t after = count_unexcused_small_angles(p, refined);
+    const double gap = excused_gap(bbox_diagonal(p) / 100);
+    const std::size_t before = count_unexcused_small_angles(p, plain, gap);
+    const std::size_t after = count_unexcused_small_angles(p, refined, gap);
     EXPECT_LT(after, before);
     if (std::string(name).starts_with("clusters")) {
       EXPECT_GT(before, 0u);
