@@ -215,8 +215,9 @@ void add_thin_plate(const std::vector<double>* x, std::size_t nx, std::size_t ny
 // by Jacobi-preconditioned conjugate gradients on the normal equations (matrix-free: B is
 // applied point by point, D by its stencils). mu = smoothing x the mean data weight of a
 // coefficient with data; eps = 1e-9 of it keeps coefficients without data at 0 change.
+// `n_data` (optional) receives the number of coefficients with data.
 Lattice least_squares_polish(const std::vector<LatticePoint>& pts, const std::vector<double>& r, int n_x, int n_y,
-                             double scale, int iterations, double smoothing) {
+                             double scale, int iterations, double smoothing, std::size_t* n_data = nullptr) {
   Lattice delta{n_x, n_y, {}};
   const std::size_t nx = delta.stride(), ny = static_cast<std::size_t>(n_y) + 3, size = nx * ny;
   delta.phi.assign(size, 0.0);
@@ -230,6 +231,7 @@ Lattice least_squares_polish(const std::vector<LatticePoint>& pts, const std::ve
       ++n_with_data;
     }
   }
+  if (n_data != nullptr) *n_data = n_with_data;
   if (n_with_data == 0) return delta;
   data_weight /= static_cast<double>(n_with_data);
   const double mu = smoothing * data_weight, eps = 1e-9 * data_weight;
@@ -352,6 +354,12 @@ void FitOptions::validate() const {
   }
   if (!(least_squares_smoothing >= 0.0) || !std::isfinite(least_squares_smoothing)) {
     throw InvalidInput("FitOptions: least_squares_smoothing must be >= 0 and finite");
+  }
+  if (!(least_squares_fine_smoothing >= 0.0) || !std::isfinite(least_squares_fine_smoothing)) {
+    throw InvalidInput("FitOptions: least_squares_fine_smoothing must be >= 0 and finite");
+  }
+  if (!(least_squares_fine_below >= 0.0) || !std::isfinite(least_squares_fine_below)) {
+    throw InvalidInput("FitOptions: least_squares_fine_below must be >= 0 and finite");
   }
   if (domain) domain->validate();
 }
@@ -524,12 +532,21 @@ FitResult fit_height_field(const std::vector<Eigen::Vector3d>& points, const Fit
       result.final_pass_max_residual.push_back(max_residual);
     }
     if (options.least_squares_iterations > 0 && max_residual > result.tolerance) {
-      const Lattice delta =
-          least_squares_polish(pts, r, n_x, n_y, scale, options.least_squares_iterations, options.least_squares_smoothing);
+      std::size_t n_data = 0;
+      const Lattice delta = least_squares_polish(pts, r, n_x, n_y, scale, options.least_squares_iterations,
+                                                 options.least_squares_smoothing, &n_data);
       max_residual = subtract_level(delta, pts, scale, r).first;
       auto& coefficients = field.mutable_coefficients();
       for (std::size_t k = 0; k < coefficients.size(); ++k) coefficients[k] += delta.phi[k];
       result.final_pass_max_residual.push_back(max_residual);
+      if (options.least_squares_fine_smoothing > 0.0 && max_residual <= options.least_squares_fine_below &&
+          pts.size() >= n_data) {
+        const Lattice fine = least_squares_polish(pts, r, n_x, n_y, scale, options.least_squares_iterations,
+                                                  options.least_squares_fine_smoothing);
+        max_residual = subtract_level(fine, pts, scale, r).first;
+        for (std::size_t k = 0; k < coefficients.size(); ++k) coefficients[k] += fine.phi[k];
+        result.final_pass_max_residual.push_back(max_residual);
+      }
     }
   }
   report_progress(options.progress, "fit", 1.0);

@@ -282,6 +282,10 @@ void fit_patch(const TriMesh& mesh, const Segmentation& seg, int p, const Border
     fit.min_spacing = options.fit.min_spacing_edges * mean_edge;
     fit.max_levels = options.fit.max_levels;
     fit.least_squares_iterations = options.fit.least_squares_iterations;
+    // Not with adaptive sizing: SurfmeshAdaptiveSlow's flat ellipsoid got 750 instead of 791
+    // nodes and 0.0105 instead of 0.0090 max deviation with it (not diagnosed).
+    fit.least_squares_fine_smoothing = options.sizing.adaptive ? 0.0 : options.fit.least_squares_fine_smoothing;
+    fit.least_squares_fine_below = options.fit.fine_below_edges * mean_edge;
     fit.domain = Rectangle{lo - Eigen::Vector2d::Constant(margin), hi + Eigen::Vector2d::Constant(margin)};
     if (!options.cell_grid.enabled && fit.min_spacing > 0.0) fit_lattice_to_spacing(fit);
     result.surface.frame = frame;

@@ -71,6 +71,17 @@ struct PatchFitOptions {
   //! the sphere at 128 cells, all of nurbsfront's Hausdorff there; 25-30 iterations give
   //! nearly all of the gain). 0 = plain MBA. Default 30.
   int least_squares_iterations = 30;
+  //! Smoothing of a second polish for patches whose data the first one fits within
+  //! fine_below_edges (FitOptions::least_squares_fine_smoothing): the first polish's
+  //! smoothing (1e-3) holds the coefficients at the edge of the data near MBA's biased
+  //! values, and the fit sags along the patch borders (level-set sphere at 256 cells: the
+  //! whole Hausdorff, 4 times the quadric decimater's). Not applied with adaptive sizing
+  //! (measured worse there, see docs/surfmesh.md). 0 = off. Default 1e-5.
+  double least_squares_fine_smoothing = 1e-5;
+  //! Largest residual after the first polish, in mean input edges, for the second polish:
+  //! above it (folds, noise, detail under the lattice spacing) the stronger smoothing stays.
+  //! Default 0.2.
+  double fine_below_edges = 0.2;
   void validate() const;
 };
 

@@ -280,6 +280,44 @@ TEST(Mba, LeastSquaresPolishLowersTheErrorOnASteepSphereCap) {
   EXPECT_LT(max_error_at(polished.field, probes), 1e-3 * radius);
 }
 
+TEST(Mba, FinePolishRemovesTheSagAtTheEdgeOfTheData) {
+  // A round sphere cap (slope up to 53 deg at its rim) in a square domain larger than it, as
+  // surfmesh fits a patch: the coefficients beyond the rim carry little data weight, the
+  // first polish's second-difference term holds them near MBA's values, and the fit sags
+  // along the rim. The second polish with a small smoothing removes most of that sag.
+  const double radius = 1.0, rim = 0.8;
+  const Function f = [radius](double x, double y) { return std::sqrt(radius * radius - x * x - y * y); };
+  auto in_disk = [](std::vector<Eigen::Vector3d> pts, double r0, double r1) {
+    std::vector<Eigen::Vector3d> kept;
+    for (const auto& p : pts) {
+      const double r = p.head<2>().norm();
+      if (r >= r0 && r <= r1) kept.push_back(p);
+    }
+    return kept;
+  };
+  const auto pts = in_disk(random_samples(f, 12000, rect(-rim, -rim, rim, rim), 31), 0.0, rim);
+  const auto rim_probes = in_disk(random_samples(f, 20000, rect(-rim, -rim, rim, rim), 32), 0.9 * rim, rim);
+  ASSERT_GT(rim_probes.size(), 500u);
+  FitOptions o;
+  o.tolerance = 1e-12;
+  o.min_spacing = 0.05;
+  o.domain = rect(-0.95, -0.95, 0.95, 0.95);
+  o.least_squares_iterations = 30;
+  const FitResult first = fit_height_field(pts, o);
+  o.least_squares_fine_smoothing = 1e-5;
+  o.least_squares_fine_below = 1.0;  // every residual is below: the second polish runs
+  const FitResult fine = fit_height_field(pts, o);
+  EXPECT_EQ(fine.final_pass_max_residual.size(), first.final_pass_max_residual.size() + 1);
+  const double e_first = max_error_at(first.field, rim_probes), e_fine = max_error_at(fine.field, rim_probes);
+  std::printf("rim max error: first polish %.3g, second polish %.3g\n", e_first, e_fine);
+  EXPECT_LT(e_fine, 0.5 * e_first);
+  // A bound below the first polish's largest residual keeps the first polish's field.
+  o.least_squares_fine_below = 0.5 * first.max_residual();
+  const FitResult kept = fit_height_field(pts, o);
+  EXPECT_EQ(kept.final_pass_max_residual.size(), first.final_pass_max_residual.size());
+  EXPECT_EQ(kept.field.coefficients(), first.field.coefficients());
+}
+
 TEST(Mba, FittedSphereCapHasCurvatureOneOverR) {
   const double radius = 2.0;
   std::vector<Eigen::Vector3d> pts;
@@ -379,6 +417,12 @@ TEST(Mba, BadInputGivesClearErrors) {
   bad = {};
   bad.least_squares_smoothing = -1.0;
   expect_invalid(good, bad, "least_squares_smoothing");
+  bad = {};
+  bad.least_squares_fine_smoothing = -1.0;
+  expect_invalid(good, bad, "least_squares_fine_smoothing");
+  bad = {};
+  bad.least_squares_fine_below = INFINITY;
+  expect_invalid(good, bad, "least_squares_fine_below");
 }
 
 TEST(Mba, ProgressCanCancel) {
