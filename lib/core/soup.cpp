@@ -160,6 +160,13 @@ ManifoldCheck check_manifold(const TriangleSoup& soup) {
 }
 
 TriMesh to_trimesh(const TriangleSoup& soup) {
+  TriMesh mesh;
+  to_trimesh(soup, mesh);
+  return mesh;
+}
+
+void to_trimesh(const TriangleSoup& soup, TriMesh& mesh) {
+  mesh.clear();
   for (const auto& p : soup.points) {
     if (!p.allFinite()) throw InvalidInput("nurbsfront: mesh has non-finite (NaN or infinite) coordinates");
   }
@@ -171,7 +178,6 @@ TriMesh to_trimesh(const TriangleSoup& soup) {
   // its third one; an interior vertex keeps the halfedge leaving it in its last face; a
   // boundary vertex and a boundary halfedge's successor are the vertex's one outgoing
   // boundary halfedge. (Test Soup.DirectBuildMatchesAddFace compares with add_face.)
-  TriMesh mesh;
   const std::size_t n_points = soup.points.size(), n_corners = 3 * soup.triangles.size();
   mesh.reserve(n_points, n_corners / 2 + n_points, soup.triangles.size());
   for (const auto& p : soup.points) mesh.add_vertex(to_openmesh(p));
@@ -226,7 +232,6 @@ TriMesh to_trimesh(const TriangleSoup& soup) {
     const auto h = mesh.opposite_halfedge_handle(halfedge[c]);
     mesh.set_next_halfedge_handle(h, mesh.halfedge_handle(mesh.to_vertex_handle(h)));
   }
-  return mesh;
 }
 
 TriangleSoup to_soup(const TriMesh& mesh) {

@@ -47,7 +47,9 @@ class Optimiser {
   std::size_t flip_sweep() {
     std::size_t n_flips = 0;
     for (auto e : mesh_.edges()) {
-      if (mesh_.is_boundary(e) || is_locked(e) || !mesh_.is_flip_ok(e)) continue;
+      // OpenMesh's is_flip_ok() (it circulates a vertex) is asked last: few edges pass the
+      // quality test. Until then c and d may be one vertex; the area test then refuses.
+      if (mesh_.is_boundary(e) || is_locked(e)) continue;
       const auto h0 = mesh_.halfedge_handle(e, 0);
       const auto h1 = mesh_.halfedge_handle(e, 1);
       const auto va = mesh_.from_vertex_handle(h0);
@@ -64,7 +66,7 @@ class Optimiser {
       if (n2.dot(old_normal) <= 0.0 || n3.dot(old_normal) <= 0.0) continue;
       const double old_min = std::min(triangle_alpha(a, b, c), triangle_alpha(b, a, d));
       const double new_min = std::min(triangle_alpha(a, d, c), triangle_alpha(d, b, c));
-      if (!(new_min > (1.0 + options_.flip_gain) * old_min)) continue;
+      if (!(new_min > (1.0 + options_.flip_gain) * old_min) || !mesh_.is_flip_ok(e)) continue;
       mesh_.flip(e);
       ++n_flips;
     }
@@ -107,7 +109,7 @@ class Optimiser {
                    surface_.surfaces[static_cast<std::size_t>(info.patch1)].project(target));
       }
       if (!q.allFinite()) continue;
-      double old_min = 1.0, new_min = 1.0;
+      double new_min = 1.0;
       bool ok = true;
       for (const auto& [b, c] : ring_) {
         const Vec n_old = area_vector(p, b, c);
@@ -117,10 +119,16 @@ class Optimiser {
           ok = false;
           break;
         }
-        old_min = std::min(old_min, triangle_alpha(p, b, c));
         new_min = std::min(new_min, triangle_alpha(q, b, c));
       }
-      if (ok && new_min >= std::min(old_min, options_.alpha_floor)) {
+      // Accepted when the smallest alpha stays at least min(old smallest, alpha_floor): the
+      // old ring's alphas are needed only below the floor.
+      if (ok && new_min < options_.alpha_floor) {
+        double old_min = 1.0;
+        for (const auto& [b, c] : ring_) old_min = std::min(old_min, triangle_alpha(p, b, c));
+        ok = new_min >= old_min;
+      }
+      if (ok) {
         mesh_.set_point(v, to_openmesh(q));
         ++counts[0];
       } else {
