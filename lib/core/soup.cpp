@@ -160,6 +160,13 @@ ManifoldCheck check_manifold(const TriangleSoup& soup) {
 }
 
 TriMesh to_trimesh(const TriangleSoup& soup) {
+  TriMesh mesh;
+  to_trimesh(soup, mesh);
+  return mesh;
+}
+
+void to_trimesh(const TriangleSoup& soup, TriMesh& mesh) {
+  mesh.clear();
   for (const auto& p : soup.points) {
     if (!p.allFinite()) throw InvalidInput("nurbsfront: mesh has non-finite (NaN or infinite) coordinates");
   }
@@ -171,10 +178,7 @@ TriMesh to_trimesh(const TriangleSoup& soup) {
   // its third one; an interior vertex keeps the halfedge leaving it in its last face; a
   // boundary vertex and a boundary halfedge's successor are the vertex's one outgoing
   // boundary halfedge. (Test Soup.DirectBuildMatchesAddFace compares with add_face.)
-  TriMesh mesh;
   const std::size_t n_points = soup.points.size(), n_corners = 3 * soup.triangles.size();
-  mesh.reserve(n_points, n_corners / 2 + n_points, soup.triangles.size());
-  for (const auto& p : soup.points) mesh.add_vertex(to_openmesh(p));
   // Corners c = 3 f + k (edge t[k] -> t[k + 1]) listed by their start vertex.
   std::vector<std::uint32_t> first(n_points + 1, 0);
   for (const auto& t : soup.triangles) {
@@ -191,6 +195,8 @@ TriMesh to_trimesh(const TriangleSoup& soup) {
   constexpr auto kNoCorner = std::numeric_limits<std::uint32_t>::max();
   std::vector<TriMesh::HalfedgeHandle> halfedge(n_corners);
   std::vector<std::uint32_t> boundary;  // corners whose edge has no other face
+  std::vector<std::uint32_t> edge_corner;  // per edge, the corner of its first use
+  edge_corner.reserve(n_corners / 2 + n_points);
   for (std::size_t c = 0; c < n_corners; ++c) {
     const std::uint32_t a = soup.triangles[c / 3][c % 3], b = corner_end(c);
     std::uint32_t twin = kNoCorner;  // the corner b -> a, if any
@@ -203,13 +209,25 @@ TriMesh to_trimesh(const TriangleSoup& soup) {
     if (twin != kNoCorner && twin < c) {
       halfedge[c] = mesh.opposite_halfedge_handle(halfedge[twin]);
     } else {
-      halfedge[c] = mesh.new_edge(TriMesh::VertexHandle(static_cast<int>(a)),
-                                  TriMesh::VertexHandle(static_cast<int>(b)));
+      // Edge e's halfedges are 2 e (first use, a -> b) and 2 e + 1, as new_edge() numbers them.
+      halfedge[c] = TriMesh::HalfedgeHandle(static_cast<int>(2 * edge_corner.size()));
+      edge_corner.push_back(static_cast<std::uint32_t>(c));
       if (twin == kNoCorner) boundary.push_back(static_cast<std::uint32_t>(c));
     }
   }
+  // All elements at once (add_vertex/new_edge/new_face resize every property per element);
+  // the items and properties are the same as when they are added one by one.
+  mesh.resize(n_points, edge_corner.size(), soup.triangles.size());
+  for (std::size_t v = 0; v < n_points; ++v) {
+    mesh.set_point(TriMesh::VertexHandle(static_cast<int>(v)), to_openmesh(soup.points[v]));
+  }
+  for (const std::uint32_t c : edge_corner) {
+    mesh.set_vertex_handle(halfedge[c], TriMesh::VertexHandle(static_cast<int>(corner_end(c))));
+    mesh.set_vertex_handle(mesh.opposite_halfedge_handle(halfedge[c]),
+                           TriMesh::VertexHandle(static_cast<int>(soup.triangles[c / 3][c % 3])));
+  }
   for (std::size_t f = 0; f < soup.triangles.size(); ++f) {
-    const auto fh = mesh.new_face();
+    const TriMesh::FaceHandle fh(static_cast<int>(f));
     mesh.set_halfedge_handle(fh, halfedge[3 * f + 2]);
     for (std::size_t k = 0; k < 3; ++k) {
       const auto h = halfedge[3 * f + k];
@@ -226,7 +244,6 @@ TriMesh to_trimesh(const TriangleSoup& soup) {
     const auto h = mesh.opposite_halfedge_handle(halfedge[c]);
     mesh.set_next_halfedge_handle(h, mesh.halfedge_handle(mesh.to_vertex_handle(h)));
   }
-  return mesh;
 }
 
 TriangleSoup to_soup(const TriMesh& mesh) {

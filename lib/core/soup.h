@@ -63,6 +63,11 @@ struct ManifoldCheck {
 //! \throw TopologyError if check_manifold() fails; the message names the problems.
 [[nodiscard]] TriMesh to_trimesh(const TriangleSoup& soup);
 
+//! As to_trimesh(soup), built in `mesh` (its content is replaced): OpenMesh meshes have no
+//! move operations, so assigning a returned mesh to one that lives elsewhere copies it.
+//! \throw as to_trimesh(soup); `mesh` is left empty then.
+void to_trimesh(const TriangleSoup& soup, TriMesh& mesh);
+
 //! The mesh's vertices and faces as a soup (deleted elements skipped, garbage ignored).
 [[nodiscard]] TriangleSoup to_soup(const TriMesh& mesh);
 

@@ -228,7 +228,11 @@ AabbTree::Closest AabbTree::closest(const Eigen::Vector3d& p, std::uint32_t hint
     // sibling of every ancestor is searched (usually pruned by its box alone).
     std::uint32_t node = leaf_of_[hint];
     search(p, node, best);
-    for (; node != 0; node = parent_[node]) search(p, node % 2 == 1 ? node + 1 : node - 1, best);
+    for (; node != 0; node = parent_[node]) {
+      // The sibling's box is tested here: search() would only pop it and skip it.
+      const std::uint32_t sibling = node % 2 == 1 ? node + 1 : node - 1;
+      if (nodes_[sibling].box.squared_distance(p) <= best.squared_distance) search(p, sibling, best);
+    }
     return best;
   }
   search(p, 0, best);

@@ -58,7 +58,9 @@ class Optimiser {
   std::size_t flip_sweep() {
     std::size_t n_flips = 0;
     for (auto e : mesh_.edges()) {
-      if (mesh_.is_boundary(e) || is_locked(e) || !mesh_.is_flip_ok(e)) continue;
+      // OpenMesh's is_flip_ok() (it circulates a vertex) is asked last: few edges pass the
+      // quality test. Until then c and d may be one vertex; the area test then refuses.
+      if (mesh_.is_boundary(e) || is_locked(e)) continue;
       const auto h0 = mesh_.halfedge_handle(e, 0);
       const auto h1 = mesh_.halfedge_handle(e, 1);
       const auto va = mesh_.from_vertex_handle(h0);
@@ -75,7 +77,7 @@ class Optimiser {
       if (n2.dot(old_normal) <= 0.0 || n3.dot(old_normal) <= 0.0) continue;
       const double old_min = std::min(triangle_alpha(a, b, c), triangle_alpha(b, a, d));
       const double new_min = std::min(triangle_alpha(a, d, c), triangle_alpha(d, b, c));
-      if (!(new_min > (1.0 + options_.flip_gain) * old_min)) continue;
+      if (!(new_min > (1.0 + options_.flip_gain) * old_min) || !mesh_.is_flip_ok(e)) continue;
       mesh_.flip(e);
       ++n_flips;
     }
@@ -118,8 +120,7 @@ class Optimiser {
                    surface_.surfaces[static_cast<std::size_t>(info.patch1)].project(target));
       }
       if (!q.allFinite()) continue;
-      double old_min = 1.0, new_min = 1.0;
-      double old_sine = 1.0, new_sine = 1.0;  // of the smallest angle
+      double new_min = 1.0, new_sine = 1.0;  // smallest alpha, sine of the smallest angle
       bool ok = true;
       for (const auto& [b, c] : ring_) {
         const Vec n_old = area_vector(p, b, c);
@@ -129,13 +130,23 @@ class Optimiser {
           ok = false;
           break;
         }
-        old_min = std::min(old_min, triangle_alpha(p, b, c));
         new_min = std::min(new_min, triangle_alpha(q, b, c));
-        old_sine = std::min(old_sine, min_angle_sine(p, b, c));
         new_sine = std::min(new_sine, min_angle_sine(q, b, c));
       }
-      if (ok && new_min >= std::min(old_min, options_.alpha_floor) &&
-          new_sine >= std::min(old_sine, sin_angle_floor_)) {
+      // Accepted when the smallest alpha stays at least min(old smallest, alpha_floor) and the
+      // smallest angle at least min(old smallest, angle_floor): the old ring is needed only
+      // below the floors.
+      if (ok && new_min < options_.alpha_floor) {
+        double old_min = 1.0;
+        for (const auto& [b, c] : ring_) old_min = std::min(old_min, triangle_alpha(p, b, c));
+        ok = new_min >= old_min;
+      }
+      if (ok && new_sine < sin_angle_floor_) {
+        double old_sine = 1.0;
+        for (const auto& [b, c] : ring_) old_sine = std::min(old_sine, min_angle_sine(p, b, c));
+        ok = new_sine >= old_sine;
+      }
+      if (ok) {
         mesh_.set_point(v, to_openmesh(q));
         ++counts[0];
       } else {

@@ -198,6 +198,36 @@ void assemble(const std::vector<Eigen::Vector3d>& nodes, const std::vector<std::
   for (const auto& t : triangles) {
     for (int k : t) used[static_cast<std::size_t>(k)] = 1;
   }
+  // The usual case, an oriented 2-manifold: built directly by to_trimesh(), which gives
+  // exactly the mesh that add_face() in triangle order gives (same vertex, edge, halfedge
+  // and face numbering; add_face() never refuses a triangle of such a soup), at about half
+  // the cost. Otherwise face by face below, skipping the triangles add_face() refuses.
+  {
+    TriangleSoup soup;
+    std::vector<std::uint32_t> index(nodes.size(), 0);
+    for (std::size_t i = 0; i < nodes.size(); ++i) {
+      if (!used[i]) continue;
+      index[i] = static_cast<std::uint32_t>(soup.points.size());
+      soup.points.push_back(nodes[i]);
+    }
+    soup.triangles.reserve(triangles.size());
+    for (const auto& t : triangles) {
+      soup.triangles.push_back({index[static_cast<std::size_t>(t[0])], index[static_cast<std::size_t>(t[1])],
+                                index[static_cast<std::size_t>(t[2])]});
+    }
+    if (check_manifold(soup).ok()) {
+      to_trimesh(soup, result.mesh);
+      for (std::size_t i = 0; i < nodes.size(); ++i) {
+        if (used[i]) {
+          result.vertex_node.push_back(static_cast<int>(i));
+        } else {
+          ++report.n_unused_nodes;
+        }
+      }
+      result.face_patch = triangle_patch;
+      return;
+    }
+  }
   TriMesh& mesh = result.mesh;
   std::vector<TriMesh::VertexHandle> handle(nodes.size());
   for (std::size_t i = 0; i < nodes.size(); ++i) {
@@ -246,11 +276,18 @@ void collapse(const SurfaceMesh& surface, const StitchOptions& options, const st
       triangles.push_back(tri);
       triangle_patch.push_back(surface.triangle_patch[t]);
     }
-    StitchResult trial;
+    // The trial is assembled in place (a mesh copy costs more than assembling again);
+    // given up, the merges are undone by assembling the triangles as they were.
+    auto restore = [&] {
+      StitchReport scratch;
+      assemble(surface.nodes, surface.triangles, surface.triangle_patch, result, scratch);
+    };
+    StitchResult& trial = result;
     StitchReport trial_report;
     assemble(nodes, triangles, triangle_patch, trial, trial_report);
     if (trial_report.n_rejected_triangles > 0) {
       report.n_collapses_undone += merges.n_merges;
+      restore();
       return;
     }
     // The faces around the survivors that moved or took a node.
@@ -270,11 +307,7 @@ void collapse(const SurfaceMesh& surface, const StitchOptions& options, const st
     std::vector<FacePair> pairs;
     if (options.check_self_intersections) pairs = intersecting_pairs_of(to_soup(trial.mesh), touched);
     if (pairs.empty()) {
-      const std::size_t n_unused = trial_report.n_unused_nodes;
-      result.mesh = std::move(trial.mesh);
-      result.vertex_node = std::move(trial.vertex_node);
-      result.face_patch = std::move(trial.face_patch);
-      report.n_unused_nodes = n_unused - merges.n_merges;
+      report.n_unused_nodes = trial_report.n_unused_nodes - merges.n_merges;
       report.n_collapses = merges.n_merges;
       return;
     }
@@ -293,6 +326,7 @@ void collapse(const SurfaceMesh& surface, const StitchOptions& options, const st
         }
       }
     }
+    restore();
   }
 }
 
