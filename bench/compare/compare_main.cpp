@@ -201,8 +201,8 @@ struct Criteria {
   bool alpha_mean_above = false;
   bool obtuse_tenth = false;
   bool hausdorff_twice = false;
-  bool no_new_self_intersections = false;
-  [[nodiscard]] bool all() const { return alpha_mean_above && obtuse_tenth && hausdorff_twice && no_new_self_intersections; }
+  bool no_self_intersections = false;
+  [[nodiscard]] bool all() const { return alpha_mean_above && obtuse_tenth && hausdorff_twice && no_self_intersections; }
 };
 
 std::optional<Criteria> criteria(const InputResult& r, std::size_t decimater_row) {
@@ -213,8 +213,9 @@ std::optional<Criteria> criteria(const InputResult& r, std::size_t decimater_row
   c.alpha_mean_above = nf.quality.alpha_mean > dec.quality.alpha_mean;
   c.obtuse_tenth = nf.quality.obtuse_fraction <= 0.1 * dec.quality.obtuse_fraction;
   c.hausdorff_twice = nf.distance->hausdorff <= 2.0 * dec.distance->hausdorff;
-  c.no_new_self_intersections =
-      nf.topology.n_self_intersecting_pairs.value_or(0) == 0 || dec.topology.n_self_intersecting_pairs.value_or(0) > 0;
+  // Issue 6 asks for none where the decimater has some, issue 5 for none at all: counted
+  // as met only when nurbsfront's output has none, whatever the decimater's has.
+  c.no_self_intersections = nf.topology.n_self_intersecting_pairs.value_or(0) == 0;
   return c;
 }
 
@@ -260,9 +261,9 @@ std::string markdown(const std::vector<InputResult>& results, const std::vector<
     for (const auto& n : notes) md << "- " << n << "\n";
   }
   md << "\nThe issue's criteria for nurbsfront against each decimater variant at equal vertex count "
-        "(alpha mean above; obtuse share at most a tenth; Hausdorff at most twice; no self-intersections where the "
-        "decimater has none):\n\n";
-  md << "| input | vs | equal vertex count | alpha mean above | obtuse <= 1/10 | Hausdorff <= 2x | self-int. ok | all |\n"
+        "(alpha mean above; obtuse share at most a tenth; Hausdorff at most twice; no self-intersections, "
+        "which issue 6 asks where the decimater has some and issue 5 everywhere):\n\n";
+  md << "| input | vs | equal vertex count | alpha mean above | obtuse <= 1/10 | Hausdorff <= 2x | no self-int. | all |\n"
         "|---|---|---|---|---|---|---|---|\n";
   auto yn = [](bool b) { return b ? std::string("yes") : std::string("**no**"); };
   std::size_t met = 0, total = 0;
@@ -279,7 +280,7 @@ std::string markdown(const std::vector<InputResult>& results, const std::vector<
       md << "| " << r.name << " | " << (d == 2 ? "quadric" : "roundness") << " | "
          << (r.rows[d].vertices == r.rows[1].vertices ? "yes" : "no (" + std::to_string(r.rows[d].vertices) + ")") << " | "
          << yn(c->alpha_mean_above) << " | "
-         << yn(c->obtuse_tenth) << " | " << yn(c->hausdorff_twice) << " | " << yn(c->no_new_self_intersections) << " | "
+         << yn(c->obtuse_tenth) << " | " << yn(c->hausdorff_twice) << " | " << yn(c->no_self_intersections) << " | "
          << yn(c->all()) << " |\n";
     }
   }
@@ -312,7 +313,7 @@ std::string json_report(const std::vector<InputResult>& results, const std::vect
       o.text("against", d == 2 ? "decimater" : "decimater+roundness");
       if (c) {
         o.flag("alpha_mean_above", c->alpha_mean_above).flag("obtuse_at_most_tenth", c->obtuse_tenth);
-        o.flag("hausdorff_at_most_twice", c->hausdorff_twice).flag("no_new_self_intersections", c->no_new_self_intersections);
+        o.flag("hausdorff_at_most_twice", c->hausdorff_twice).flag("no_self_intersections", c->no_self_intersections);
         o.flag("all", c->all()).flag("equal_vertex_count", r.rows[d].vertices == r.rows[1].vertices);
       } else {
         o.add("all", "null");

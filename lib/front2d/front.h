@@ -29,7 +29,7 @@
 //!  8. Min-angle refinement (without a metric, with split_segments): Delaunay refinement
 //!     (Ruppert; Shewchuk) of the triangles still below 30 deg: circumcentres inserted,
 //!     encroached segment pieces split (concentric shells at small input angles), triangles
-//!     at input angles below 60 deg excused, gaps narrower than h / 100 left; capped. Then
+//!     at input angles below 60 deg excused, gaps narrower than h / 200 left; capped. Then
 //!     smoothing that keeps good triangles good, and the split points of convex hull edges
 //!     that bound only such a gap are removed.
 //!
@@ -97,7 +97,7 @@ struct FrontReport {
   std::size_t n_open_edges = 0;       //!< front edges left open (0 when Ok)
   std::size_t n_swaps = 0;            //!< edge swaps in the optimisation
   std::size_t n_refinement_points = 0;  //!< points inserted by the min-angle refinement (segment splits included)
-  std::size_t n_gap_hull_points_removed = 0;  //!< convex hull split points removed from gaps narrower than h / 100
+  std::size_t n_gap_hull_points_removed = 0;  //!< convex hull split points removed from gaps narrower than h / 200
   std::size_t n_dropped_points = 0;   //!< input points outside the domain (left unreferenced)
   double domain_area = 0.0;           //!< area enclosed by the initial front
   double seconds_front = 0.0;         //!< wall time of the front

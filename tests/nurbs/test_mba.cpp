@@ -275,7 +275,7 @@ TEST(Mba, LeastSquaresPolishLowersTheErrorOnASteepSphereCap) {
   o.least_squares_iterations = 60;
   const FitResult polished = fit_height_field(pts, o);
   const double e_passes = max_error_at(passes.field, probes), e_polished = max_error_at(polished.field, probes);
-  std::printf("inner max error: passes %.3g, polished %.3g\n", e_passes, e_polished);
+  SCOPED_TRACE("inner max error: passes " + std::to_string(e_passes) + ", polished " + std::to_string(e_polished));
   EXPECT_LT(e_polished, 0.6 * e_passes);
   EXPECT_LT(max_error_at(polished.field, probes), 1e-3 * radius);
 }
@@ -309,7 +309,7 @@ TEST(Mba, FinePolishRemovesTheSagAtTheEdgeOfTheData) {
   const FitResult fine = fit_height_field(pts, o);
   EXPECT_EQ(fine.final_pass_max_residual.size(), first.final_pass_max_residual.size() + 1);
   const double e_first = max_error_at(first.field, rim_probes), e_fine = max_error_at(fine.field, rim_probes);
-  std::printf("rim max error: first polish %.3g, second polish %.3g\n", e_first, e_fine);
+  SCOPED_TRACE("rim max error: first polish " + std::to_string(e_first) + ", second polish " + std::to_string(e_fine));
   EXPECT_LT(e_fine, 0.5 * e_first);
   // A bound below the first polish's largest residual keeps the first polish's field.
   o.least_squares_fine_below = 0.5 * first.max_residual();
