@@ -654,6 +654,43 @@ TEST(Stitch, ACollapseThroughANearbySheetIsUndone) {
   EXPECT_EQ(kept.report.n_collapses_undone, 0u);
 }
 
+TEST(Stitch, SettleFlipsAValleyOutOfASmallSheet) {
+  // One grid cell a b c d with b and d raised 0.1: the input splits it along b-d (a ridge),
+  // the patch mesh along a-c (a valley), and a thin sheet at 0.03 above a-c's midpoint,
+  // along b-d, lies under the ridge but crosses the valley. No optimisation: the assembled
+  // crossing is left to the settle, whose flip of a-c removes it.
+  TriangleSoup valley = test::grid_patch(8, 8);
+  const std::uint32_t a = 4 * 9 + 4, b = 4 * 9 + 5, c = 5 * 9 + 5, d = 5 * 9 + 4;
+  valley.points[b].z() = 0.1;
+  valley.points[d].z() = 0.1;
+  const auto offset = static_cast<std::uint32_t>(valley.points.size());
+  const Eigen::Vector3d centre(0.5625, 0.5625, 0.03), along(-0.5, 0.5, 0.0), across(0.5, 0.5, 0.0);
+  valley.points.push_back(centre + 0.06 * along - 0.01 * across);
+  valley.points.push_back(centre - 0.06 * along - 0.01 * across);
+  valley.points.push_back(centre + 0.01 * across);
+  valley.triangles.push_back({offset, offset + 1, offset + 2});
+  std::vector<int> face_patch(valley.triangles.size(), 0);
+  face_patch.back() = 1;
+  TriangleSoup ridge = valley;
+  std::size_t n_replaced = 0;
+  for (auto& t : ridge.triangles) {
+    if (t == std::array<std::uint32_t, 3>{a, b, c}) t = {a, b, d}, ++n_replaced;
+    else if (t == std::array<std::uint32_t, 3>{a, c, d}) t = {b, c, d}, ++n_replaced;
+  }
+  ASSERT_EQ(n_replaced, 2u);
+  ASSERT_EQ(count_self_intersections(ridge), 0u);
+  ASSERT_GT(count_self_intersections(valley), 0u);
+  StitchOptions options;
+  options.optimisation_passes = 0;
+  options.collapse_below_angle_deg = 0.0;
+  const StitchResult r = stitch(make_surface(valley, face_patch, 2), to_trimesh(ridge), options);
+  EXPECT_TRUE(r.report.ok()) << joined(r.report.errors);
+  EXPECT_GE(r.report.n_settled_flips, 1u);
+  EXPECT_EQ(count_self_intersections(to_soup(r.mesh)), 0u);
+  EXPECT_TRUE(r.mesh.find_halfedge(TriMesh::VertexHandle(static_cast<int>(b)), TriMesh::VertexHandle(static_cast<int>(d))).is_valid());
+  EXPECT_EQ(r.report.output.topology.euler_characteristic, 1 + 1);
+}
+
 TEST(Stitch, IntersectionsOfTheInputStayReportedAndKeepTheOptimisation) {
   // A horizontal and a vertical sheet crossing each other: intersecting before any move.
   TriangleSoup sheets = test::grid_patch(8, 8);
