@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "nurbsfront/core/error.h"
+#include "nurbsfront/core/soup_internal.h"
 
 namespace nurbsfront {
 
@@ -159,6 +160,16 @@ ManifoldCheck check_manifold(const TriangleSoup& soup) {
   return check;
 }
 
+namespace {
+
+void require_finite(const TriangleSoup& soup) {
+  for (const auto& p : soup.points) {
+    if (!p.allFinite()) throw InvalidInput("nurbsfront: mesh has non-finite (NaN or infinite) coordinates");
+  }
+}
+
+}  // namespace
+
 TriMesh to_trimesh(const TriangleSoup& soup) {
   TriMesh mesh;
   to_trimesh(soup, mesh);
@@ -167,11 +178,15 @@ TriMesh to_trimesh(const TriangleSoup& soup) {
 
 void to_trimesh(const TriangleSoup& soup, TriMesh& mesh) {
   mesh.clear();
-  for (const auto& p : soup.points) {
-    if (!p.allFinite()) throw InvalidInput("nurbsfront: mesh has non-finite (NaN or infinite) coordinates");
-  }
+  require_finite(soup);
   const ManifoldCheck check = check_manifold(soup);
   if (!check.ok()) throw TopologyError("nurbsfront: mesh is not an oriented 2-manifold: " + check.message());
+  core_detail::to_trimesh_checked(soup, mesh);
+}
+
+void core_detail::to_trimesh_checked(const TriangleSoup& soup, TriMesh& mesh) {
+  mesh.clear();
+  require_finite(soup);
   // The halfedge structure is built directly (the soup is an oriented 2-manifold), exactly
   // as OpenMesh's add_face() would build it face by face: edges numbered in order of first
   // use, each edge's first halfedge in the direction of that use; a face's halfedge is

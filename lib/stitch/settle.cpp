@@ -64,7 +64,9 @@ void settle_intersections(const SurfaceMesh& surface, const StitchOptions& optio
   // The checks run on the triangles near the crossings only (the whole mesh is checked
   // again by the caller): those whose box meets the box of a pair's triangles and their
   // neighbours, grown by twice the longest edge there. A change that would touch a triangle
-  // outside is not made.
+  // outside is not made, nor one that takes a triangle's box out of every grown box (a
+  // triangle inside a grown box can only cross triangles whose box meets it, all local,
+  // and the triangles outside never change).
   const TriangleSoup whole = to_soup(mesh);
   const double diagonal = bounding_box(whole).diagonal();
   const double min_double_area = 2.0 * tolerance::kDegenerateAreaRelative * diagonal * diagonal;
@@ -114,11 +116,21 @@ void settle_intersections(const SurfaceMesh& surface, const StitchOptions& optio
   auto is_local = [&](const std::vector<std::uint32_t>& faces) {
     return std::all_of(faces.begin(), faces.end(), [&](std::uint32_t f) { return local_of[f] >= 0; });
   };
+  auto area_vector = [&](std::uint32_t f) {
+    const auto& t = tri(f);
+    return Vec((soup.points[t[1]] - soup.points[t[0]]).cross(soup.points[t[2]] - soup.points[t[0]]));
+  };
   // Intersecting pairs (face indices of the mesh, sorted) of local faces with local faces.
+  // intersecting_pairs_of() skips the faces degenerate by the local soup's diagonal, a
+  // smaller tolerance than the whole mesh's: the pairs with a face degenerate by the whole
+  // mesh's tolerance (min_double_area, as the caller's recount) are dropped too.
   auto pairs_of = [&](const std::vector<std::uint32_t>& faces) {
     std::vector<std::uint32_t> local;
     for (const std::uint32_t f : faces) local.push_back(static_cast<std::uint32_t>(local_of[f]));
     std::vector<std::array<std::uint32_t, 2>> out = intersecting_pairs_of(soup, local);
+    std::erase_if(out, [&](const auto& p) {
+      return area_vector(global_of[p[0]]).norm() <= min_double_area || area_vector(global_of[p[1]]).norm() <= min_double_area;
+    });
     for (auto& p : out) {
       p = {global_of[p[0]], global_of[p[1]]};
       if (p[0] > p[1]) std::swap(p[0], p[1]);
@@ -126,9 +138,12 @@ void settle_intersections(const SurfaceMesh& surface, const StitchOptions& optio
     std::sort(out.begin(), out.end());
     return out;
   };
-  auto area_vector = [&](std::uint32_t f) {
-    const auto& t = tri(f);
-    return Vec((soup.points[t[1]] - soup.points[t[0]]).cross(soup.points[t[2]] - soup.points[t[0]]));
+  auto inside_grown_box = [&](std::uint32_t f) {
+    BoundingBox box;
+    for (const std::uint32_t v : tri(f)) box.extend(soup.points[v]);
+    return std::any_of(boxes.begin(), boxes.end(), [&](const BoundingBox& b) {
+      return (b.min.array() <= box.min.array()).all() && (box.max.array() <= b.max.array()).all();
+    });
   };
   // The soup's triangles of `faces` read again from the mesh (after flips).
   auto sync_faces = [&](const std::vector<std::uint32_t>& faces) {
@@ -143,6 +158,7 @@ void settle_intersections(const SurfaceMesh& surface, const StitchOptions& optio
   // Applies the moves when they leave fewer pairs among the triangles around the moved
   // nodes and none of these degenerates or turns too far; returns whether it did.
   using Moves = std::vector<std::pair<TriMesh::VertexHandle, Vec>>;
+  std::vector<std::uint8_t> was_moved(mesh.n_vertices(), 0);  // nodes counted in n_settled_nodes
   auto try_moves = [&](const Moves& moves) {
     if (moves.empty()) return false;
     std::vector<std::uint32_t> touched;
@@ -162,7 +178,8 @@ void settle_intersections(const SurfaceMesh& surface, const StitchOptions& optio
     bool ok = true;
     for (std::size_t i = 0; i < touched.size() && ok; ++i) {
       const Vec n = area_vector(touched[i]);
-      ok = n.norm() > min_double_area && n.normalized().dot(old_normal[i].normalized()) >= options.min_normal_dot;
+      ok = n.norm() > min_double_area && n.normalized().dot(old_normal[i].normalized()) >= options.min_normal_dot &&
+           inside_grown_box(touched[i]);
     }
     std::vector<std::array<std::uint32_t, 2>> fresh;
     if (ok) fresh = pairs_of(touched);
@@ -174,12 +191,13 @@ void settle_intersections(const SurfaceMesh& surface, const StitchOptions& optio
       for (std::size_t i = 0; i < moves.size(); ++i) point_of(moves[i].first) = old_point[i];
       return false;
     }
-    for (const auto& m : moves) mesh.set_point(m.first, to_openmesh(m.second));
-    report.n_settled_nodes += moves.size();
-    std::erase_if(pairs, [&](const auto& p) { return is_touched(p[0]) || is_touched(p[1]); });
-    pairs.insert(pairs.end(), fresh.begin(), fresh.end());
-    std::sort(pairs.begin(), pairs.end());
-    pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
+    for (const auto& m : moves) {
+      mesh.set_point(m.first, to_openmesh(m.second));
+      auto& moved = was_moved[static_cast<std::size_t>(m.first.idx())];
+      if (moved == 0) ++report.n_settled_nodes;
+      moved = 1;
+    }
+    replace_pairs(pairs, is_touched, fresh);
     return true;
   };
 
@@ -251,7 +269,7 @@ void settle_intersections(const SurfaceMesh& surface, const StitchOptions& optio
         bool ok = true;
         for (const std::uint32_t g : two) {
           const Vec n = area_vector(g);
-          ok = ok && n.norm() > min_double_area && n.dot(old_normal) > 0.0;
+          ok = ok && n.norm() > min_double_area && n.dot(old_normal) > 0.0 && inside_grown_box(g);
         }
         std::vector<std::array<std::uint32_t, 2>> fresh;
         if (ok) fresh = pairs_of(two);
@@ -266,11 +284,25 @@ void settle_intersections(const SurfaceMesh& surface, const StitchOptions& optio
         } else {
           ++report.n_settled_flips;
           changed = true;
+          // Each new face takes, of the two faces' patches, the one more of its nodes have
+          // another face of (on a tie, the patch of the face whose index it keeps).
+          const std::array<int, 2> two_patches{result.face_patch[two[0]], result.face_patch[two[1]]};
+          std::array<int, 2> new_patch = two_patches;
+          for (std::size_t i = 0; i < 2 && two_patches[0] != two_patches[1]; ++i) {
+            std::array<int, 2> votes{0, 0};
+            for (auto v : mesh.fv_range(TriMesh::FaceHandle(static_cast<int>(two[i])))) {
+              for (std::size_t k = 0; k < 2; ++k) {
+                votes[k] += std::any_of(mesh.vf_begin(v), mesh.vf_end(v), [&](TriMesh::FaceHandle g) {
+                  const auto gi = static_cast<std::uint32_t>(g.idx());
+                  return !is_two(gi) && result.face_patch[gi] == two_patches[k];
+                }) ? 1 : 0;
+              }
+            }
+            if (votes[0] != votes[1]) new_patch[i] = two_patches[votes[0] > votes[1] ? 0 : 1];
+          }
+          for (std::size_t i = 0; i < 2; ++i) result.face_patch[two[i]] = new_patch[i];
         }
-        std::erase_if(pairs, [&](const auto& p) { return is_two(p[0]) || is_two(p[1]); });
-        pairs.insert(pairs.end(), fresh.begin(), fresh.end());
-        std::sort(pairs.begin(), pairs.end());
-        pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
+        replace_pairs(pairs, is_two, fresh);
         if (ok) break;
       }
     }

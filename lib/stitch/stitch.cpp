@@ -11,6 +11,7 @@
 #include <string>
 
 #include "nurbsfront/core/error.h"
+#include "nurbsfront/core/soup_internal.h"
 #include "nurbsfront/core/stopwatch.h"
 #include "nurbsfront/stitch/stitch_internal.h"
 
@@ -216,7 +217,7 @@ void assemble(const std::vector<Eigen::Vector3d>& nodes, const std::vector<std::
                                 index[static_cast<std::size_t>(t[2])]});
     }
     if (check_manifold(soup).ok()) {
-      to_trimesh(soup, result.mesh);
+      core_detail::to_trimesh_checked(soup, result.mesh);
       for (std::size_t i = 0; i < nodes.size(); ++i) {
         if (used[i]) {
           result.vertex_node.push_back(static_cast<int>(i));
@@ -405,10 +406,7 @@ bool repair_intersections(const TriMesh& assembled, TriMesh& mesh, std::vector<F
       touch(mesh.opposite_face_handle(h));
     }
     // Pairs with a changed face are replaced by that face's pairs now.
-    std::erase_if(pairs, [&](const FacePair& p) { return changed[p[0]] != 0 || changed[p[1]] != 0; });
-    const std::vector<FacePair> fresh = intersecting_pairs_of(to_soup(mesh), touched);
-    pairs.insert(pairs.end(), fresh.begin(), fresh.end());
-    std::sort(pairs.begin(), pairs.end());
+    stitch_detail::replace_pairs(pairs, [&](std::uint32_t f) { return changed[f] != 0; }, intersecting_pairs_of(to_soup(mesh), touched));
     for (const std::uint32_t f : touched) changed[f] = 0;
   }
   return offending().empty();

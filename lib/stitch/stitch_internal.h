@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Shared between the stitch sources (not part of the public API).
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <utility>
@@ -35,6 +36,18 @@ struct NodeMerges {
 //! curve_nodes.
 NodeMerges collapse_short_edges(const SurfaceMesh& surface, const StitchOptions& options, const StitchResult& assembled,
                                 const std::vector<std::uint8_t>& is_feature, const std::vector<std::uint8_t>& is_frozen);
+
+//! Replaces the pairs of `pairs` (sorted, each once) that have a face f with
+//! is_changed(f) by `fresh` (the pairs of the changed faces now); `pairs` stays sorted,
+//! each pair once.
+template <class IsChanged>
+void replace_pairs(std::vector<std::array<std::uint32_t, 2>>& pairs, IsChanged is_changed,
+                   const std::vector<std::array<std::uint32_t, 2>>& fresh) {
+  std::erase_if(pairs, [&](const std::array<std::uint32_t, 2>& p) { return is_changed(p[0]) || is_changed(p[1]); });
+  pairs.insert(pairs.end(), fresh.begin(), fresh.end());
+  std::sort(pairs.begin(), pairs.end());
+  pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
+}
 
 //! alpha of every face, in face order.
 std::vector<double> face_alphas(const TriMesh& mesh);

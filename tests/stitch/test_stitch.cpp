@@ -603,6 +603,94 @@ TEST(Stitch, OnlyTheOffendingMovesAreUndone) {
   EXPECT_GT(n_moved, 10u);
 }
 
+TEST(Stitch, ACollapseThroughANearbySheetIsUndone) {
+  // A grid of two patches (x < 0.5, x > 0.5): the border node w = (0.5, 0.5) dips 0.01
+  // below the grid and the inner node v = (0.625, 0.5) sits 0.01 beside it, so the
+  // triangles at v are needles and v merges into w (an inner node into a border node, w
+  // stays). v's fan then slopes down to w and passes through a small sheet 0.004 below the
+  // grid that nothing crosses before: the collapse is undone and the mesh is the one
+  // assembled without collapses.
+  TriangleSoup soup = test::grid_patch(8, 8);
+  const std::uint32_t w = 4 * 9 + 4, v = 4 * 9 + 5;
+  soup.points[w].z() = -0.01;
+  soup.points[v] = Eigen::Vector3d(0.51, 0.5, 0.0);
+  std::vector<int> face_patch(soup.triangles.size(), 0);
+  for (std::size_t t = 0; t < soup.triangles.size(); ++t) {
+    Eigen::Vector3d c = Eigen::Vector3d::Zero();
+    for (const std::uint32_t k : soup.triangles[t]) c += test::grid_patch(8, 8).points[k];
+    face_patch[t] = c.x() / 3.0 > 0.5 ? 1 : 0;
+  }
+  const auto offset = static_cast<std::uint32_t>(soup.points.size());
+  soup.points.emplace_back(0.56, 0.47, -0.004);
+  soup.points.emplace_back(0.74, 0.47, -0.004);
+  soup.points.emplace_back(0.65, 0.53, -0.004);
+  soup.triangles.push_back({offset, offset + 1, offset + 2});
+  face_patch.push_back(2);
+  ASSERT_EQ(count_self_intersections(soup), 0u);
+  const SurfaceMesh surface = make_surface(soup, face_patch, 3);
+  ASSERT_EQ(surface.node_kind[w], NodeKind::Border);
+  ASSERT_EQ(surface.node_kind[v], NodeKind::Inner);
+  const TriMesh input = to_trimesh(soup);
+  StitchOptions off;
+  off.collapse_below_angle_deg = 0.0;
+  const StitchResult plain = stitch(surface, input, off);
+  const StitchResult r = stitch(surface, input);
+  EXPECT_TRUE(r.report.ok()) << joined(r.report.errors);
+  EXPECT_GT(r.report.n_collapses_undone, 0u);
+  EXPECT_EQ(r.report.n_collapses, 0u);
+  ASSERT_EQ(r.mesh.n_vertices(), plain.mesh.n_vertices());
+  ASSERT_EQ(r.mesh.n_faces(), plain.mesh.n_faces());
+  EXPECT_EQ(r.vertex_node, plain.vertex_node);
+  EXPECT_EQ(r.face_patch, plain.face_patch);
+  for (auto u : r.mesh.vertices()) EXPECT_EQ(r.mesh.point(u), plain.mesh.point(u));
+  const TriangleSoup a = to_soup(r.mesh), b = to_soup(plain.mesh);
+  EXPECT_EQ(a.triangles, b.triangles);
+  // The planted defect works: with the small sheet out of the way the collapse is kept.
+  TriangleSoup away = soup;
+  for (std::uint32_t k = offset; k < offset + 3; ++k) away.points[k].y() += 2.0;
+  const StitchResult kept = stitch(make_surface(away, face_patch, 3), to_trimesh(away));
+  EXPECT_TRUE(kept.report.ok()) << joined(kept.report.errors);
+  EXPECT_GE(kept.report.n_collapses, 1u);
+  EXPECT_EQ(kept.report.n_collapses_undone, 0u);
+}
+
+TEST(Stitch, SettleFlipsAValleyOutOfASmallSheet) {
+  // One grid cell a b c d with b and d raised 0.1: the input splits it along b-d (a ridge),
+  // the patch mesh along a-c (a valley), and a thin sheet at 0.03 above a-c's midpoint,
+  // along b-d, lies under the ridge but crosses the valley. No optimisation: the assembled
+  // crossing is left to the settle, whose flip of a-c removes it.
+  TriangleSoup valley = test::grid_patch(8, 8);
+  const std::uint32_t a = 4 * 9 + 4, b = 4 * 9 + 5, c = 5 * 9 + 5, d = 5 * 9 + 4;
+  valley.points[b].z() = 0.1;
+  valley.points[d].z() = 0.1;
+  const auto offset = static_cast<std::uint32_t>(valley.points.size());
+  const Eigen::Vector3d centre(0.5625, 0.5625, 0.03), along(-0.5, 0.5, 0.0), across(0.5, 0.5, 0.0);
+  valley.points.push_back(centre + 0.06 * along - 0.01 * across);
+  valley.points.push_back(centre - 0.06 * along - 0.01 * across);
+  valley.points.push_back(centre + 0.01 * across);
+  valley.triangles.push_back({offset, offset + 1, offset + 2});
+  std::vector<int> face_patch(valley.triangles.size(), 0);
+  face_patch.back() = 1;
+  TriangleSoup ridge = valley;
+  std::size_t n_replaced = 0;
+  for (auto& t : ridge.triangles) {
+    if (t == std::array<std::uint32_t, 3>{a, b, c}) t = {a, b, d}, ++n_replaced;
+    else if (t == std::array<std::uint32_t, 3>{a, c, d}) t = {b, c, d}, ++n_replaced;
+  }
+  ASSERT_EQ(n_replaced, 2u);
+  ASSERT_EQ(count_self_intersections(ridge), 0u);
+  ASSERT_GT(count_self_intersections(valley), 0u);
+  StitchOptions options;
+  options.optimisation_passes = 0;
+  options.collapse_below_angle_deg = 0.0;
+  const StitchResult r = stitch(make_surface(valley, face_patch, 2), to_trimesh(ridge), options);
+  EXPECT_TRUE(r.report.ok()) << joined(r.report.errors);
+  EXPECT_GE(r.report.n_settled_flips, 1u);
+  EXPECT_EQ(count_self_intersections(to_soup(r.mesh)), 0u);
+  EXPECT_TRUE(r.mesh.find_halfedge(TriMesh::VertexHandle(static_cast<int>(b)), TriMesh::VertexHandle(static_cast<int>(d))).is_valid());
+  EXPECT_EQ(r.report.output.topology.euler_characteristic, 1 + 1);
+}
+
 TEST(Stitch, IntersectionsOfTheInputStayReportedAndKeepTheOptimisation) {
   // A horizontal and a vertical sheet crossing each other: intersecting before any move.
   TriangleSoup sheets = test::grid_patch(8, 8);
