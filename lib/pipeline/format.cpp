@@ -66,6 +66,7 @@ std::string to_json(const RemeshReport& r) {
   stitch.count("reverted_flips", s.n_reverted_flips);
   stitch.flag("optimisation_undone", s.optimisation_undone);
   stitch.count("settled_nodes", s.n_settled_nodes).count("settled_flips", s.n_settled_flips);
+  stitch.count("settled_collapses", s.n_settled_collapses);
   stitch.count("triangles_away_from_features", s.n_away_from_features);
   stitch.num("min_angle_away_from_features_deg", s.min_angle_away_from_features_deg);
   stitch.count("small_angle_away_from_features", s.n_small_angle_away_from_features);

@@ -143,14 +143,7 @@ class Collapser {
     if (kb == NodeKind::Border) {
       const int c = curve_of_[b];
       if (c < 0 || c != surface_.node_owner[b]) return 0;
-      const auto& nodes = surface_.curve_nodes[static_cast<std::size_t>(c)];
-      const int i = index_on_curve_[b];
-      const int n = static_cast<int>(nodes.size());
-      const bool is_closed = surface_.node_kind[static_cast<std::size_t>(nodes.front())] == NodeKind::Border;
-      auto at = [&](int k) { return nodes[static_cast<std::size_t>(is_closed ? (k + n) % n : k)]; };
-      const bool adjacent = ((is_closed || i > 0) && at(i - 1) == static_cast<int>(a)) ||
-                            ((is_closed || i + 1 < n) && at(i + 1) == static_cast<int>(a));
-      if (!adjacent) return 0;
+      if (!is_next_on_curve(surface_, c, index_on_curve_[b], static_cast<int>(a))) return 0;
       if (ka == NodeKind::Corner) return 1;
       q[1] = 0.5 * (surface_.surfaces[static_cast<std::size_t>(p0)].project(middle) +
                     surface_.surfaces[static_cast<std::size_t>(p1)].project(middle));
@@ -199,31 +192,12 @@ class Collapser {
     return smallest;
   }
 
-  // True when collapsing h leaves two faces on the same three nodes: faces (a, c, d) and
-  // (b, c, d) exist, c and d the nodes opposite h (a closed component of four nodes, a
-  // tetrahedron, would become two coinciding triangles; ironProt's one-voxel blobs).
-  bool leaves_duplicate_face(TriMesh::HalfedgeHandle h) const {
-    const auto vb = mesh_.from_vertex_handle(h);
-    const auto va = mesh_.to_vertex_handle(h);
-    const auto vc = mesh_.to_vertex_handle(mesh_.next_halfedge_handle(h));
-    const auto vd = mesh_.to_vertex_handle(mesh_.next_halfedge_handle(mesh_.opposite_halfedge_handle(h)));
-    const auto cd = mesh_.find_halfedge(vc, vd);
-    if (!cd.is_valid()) return false;
-    int n_found = 0;
-    for (const auto g : {cd, mesh_.opposite_halfedge_handle(cd)}) {
-      if (mesh_.is_boundary(g)) continue;
-      const auto w = mesh_.to_vertex_handle(mesh_.next_halfedge_handle(g));
-      if (w == va || w == vb) ++n_found;
-    }
-    return n_found == 2;
-  }
-
   // Collapses b = from(h) into a = to(h) at the best candidate position when the smallest
   // angle around them grows; records the merge.
   bool try_collapse(TriMesh::HalfedgeHandle h, NodeMerges& merges) {
     std::array<Vec, 3> q;
     const int n = candidates(h, q);
-    if (n == 0 || !mesh_.is_collapse_ok(h) || leaves_duplicate_face(h)) return false;
+    if (n == 0 || !mesh_.is_collapse_ok(h) || leaves_duplicate_face(mesh_, h)) return false;
     const auto vb = mesh_.from_vertex_handle(h);
     const auto va = mesh_.to_vertex_handle(h);
     double old_min = 180.0;
@@ -265,6 +239,30 @@ class Collapser {
 };
 
 }  // namespace
+
+bool is_next_on_curve(const SurfaceMesh& surface, int c, int i, int a) {
+  const auto& nodes = surface.curve_nodes[static_cast<std::size_t>(c)];
+  const int n = static_cast<int>(nodes.size());
+  const bool is_closed = surface.node_kind[static_cast<std::size_t>(nodes.front())] == NodeKind::Border;
+  auto at = [&](int k) { return nodes[static_cast<std::size_t>(is_closed ? (k + n) % n : k)]; };
+  return ((is_closed || i > 0) && at(i - 1) == a) || ((is_closed || i + 1 < n) && at(i + 1) == a);
+}
+
+bool leaves_duplicate_face(const TriMesh& mesh, TriMesh::HalfedgeHandle h) {
+  const auto vb = mesh.from_vertex_handle(h);
+  const auto va = mesh.to_vertex_handle(h);
+  const auto vc = mesh.to_vertex_handle(mesh.next_halfedge_handle(h));
+  const auto vd = mesh.to_vertex_handle(mesh.next_halfedge_handle(mesh.opposite_halfedge_handle(h)));
+  const auto cd = mesh.find_halfedge(vc, vd);
+  if (!cd.is_valid()) return false;
+  int n_found = 0;
+  for (const auto g : {cd, mesh.opposite_halfedge_handle(cd)}) {
+    if (mesh.is_boundary(g)) continue;
+    const auto w = mesh.to_vertex_handle(mesh.next_halfedge_handle(g));
+    if (w == va || w == vb) ++n_found;
+  }
+  return n_found == 2;
+}
 
 NodeMerges collapse_short_edges(const SurfaceMesh& surface, const StitchOptions& options, const StitchResult& assembled,
                                 const std::vector<std::uint8_t>& is_feature, const std::vector<std::uint8_t>& is_frozen) {

@@ -2,16 +2,20 @@
 // Intersections already in the assembled surface mesh (two patches' triangles crossing on a
 // thin sheet or a sharp fold): the nodes of the crossing triangles are moved onto their
 // patches' own input faces, straight along the patch axes (an inner node keeps its place
-// in its patch's plane), then edges of the triangles still crossing are flipped; each
-// change is kept only if it leaves fewer crossing pairs (docs/stitch.md, "Crossings of the
-// assembly").
+// in its patch's plane), then edges of the triangles still crossing are flipped, then
+// collapsed; each change is kept only if it leaves fewer crossing pairs (docs/stitch.md,
+// "Crossings of the assembly").
 #include <algorithm>
 #include <array>
 #include <cstdint>
+#include <limits>
 
 #include <Eigen/Geometry>
 
+#include <OpenMesh/Core/Utils/Property.hh>
+
 #include "nurbsfront/core/tolerances.h"
+#include "nurbsfront/quality/aabb_tree.h"
 #include "nurbsfront/quality/report.h"
 #include "nurbsfront/stitch/stitch_internal.h"
 
@@ -201,6 +205,81 @@ void settle_intersections(const SurfaceMesh& surface, const StitchOptions& optio
     return true;
   };
 
+  // Node gb may merge into node ga: gb is no feature node, or a node of a feature curve
+  // (not a corner) and ga its neighbour along that curve.
+  const bool has_curves = surface.curve_nodes.size() == surface.curve_is_feature.size();
+  auto is_removable = [&](std::size_t gb, std::size_t ga) {
+    if (is_feature[gb] == 0) return true;
+    if (!has_curves || surface.node_kind[gb] != NodeKind::Border) return false;
+    const int c = surface.node_owner[gb];
+    const auto& nodes = surface.curve_nodes[static_cast<std::size_t>(c)];
+    const auto at = std::find(nodes.begin(), nodes.end(), static_cast<int>(gb));
+    return at != nodes.end() && is_next_on_curve(surface, c, static_cast<int>(at - nodes.begin()), static_cast<int>(ga));
+  };
+  // Collapses from(h) into to(h), which stays where it is, when the removed node may merge
+  // (is_removable) and is not on the input's boundary, the collapse keeps the mesh a
+  // manifold without duplicate faces (link condition), the removed node lies within one
+  // input mean edge of the new triangles, none of these degenerates, folds over (normal
+  // turned by 90 deg or more: the triangles of a crossing often stand on edge already) or
+  // leaves the grown boxes, and the triangles around the removed node then take part in
+  // fewer pairs.
+  bool any_collapse = false;
+  auto try_collapse = [&](TriMesh::HalfedgeHandle h) {
+    const auto vb = mesh.from_vertex_handle(h);
+    const auto va = mesh.to_vertex_handle(h);
+    const auto gb = static_cast<std::size_t>(result.vertex_node[static_cast<std::size_t>(vb.idx())]);
+    if (!is_removable(gb, static_cast<std::size_t>(result.vertex_node[static_cast<std::size_t>(va.idx())])) ||
+        mesh.is_boundary(vb) || !mesh.is_collapse_ok(h) || leaves_duplicate_face(mesh, h)) {
+      return false;
+    }
+    const auto gone0 = static_cast<std::uint32_t>(mesh.face_handle(h).idx());
+    const auto gone1 = static_cast<std::uint32_t>(mesh.opposite_face_handle(h).idx());
+    std::vector<std::uint32_t> around;
+    for (auto f : mesh.vf_range(vb)) around.push_back(static_cast<std::uint32_t>(f.idx()));
+    std::sort(around.begin(), around.end());
+    if (!is_local(around)) return false;
+    std::vector<std::uint32_t> kept;
+    for (const std::uint32_t f : around) {
+      if (f != gone0 && f != gone1) kept.push_back(f);
+    }
+    std::vector<Vec> old_normal;
+    for (const std::uint32_t f : kept) old_normal.push_back(area_vector(f));
+    std::vector<std::array<std::uint32_t, 3>> old_tri;
+    for (const std::uint32_t f : around) old_tri.push_back(tri(f));
+    const auto lb = static_cast<std::uint32_t>(local_point[static_cast<std::size_t>(vb.idx())]);
+    const auto la = static_cast<std::uint32_t>(local_point[static_cast<std::size_t>(va.idx())]);
+    for (const std::uint32_t f : kept) std::replace(tri(f).begin(), tri(f).end(), lb, la);
+    tri(gone0) = {la, la, la};  // repeated corners: skipped by the pair checks
+    tri(gone1) = {la, la, la};
+    bool ok = true;
+    double distance = std::numeric_limits<double>::infinity();
+    for (std::size_t i = 0; i < kept.size() && ok; ++i) {
+      const Vec n = area_vector(kept[i]);
+      ok = n.norm() > min_double_area && n.normalized().dot(old_normal[i].normalized()) > 0.0 &&
+           inside_grown_box(kept[i]);
+      const auto& t = tri(kept[i]);
+      const Vec& p = soup.points[lb];
+      distance = std::min(distance, (quality_detail::closest_point_on_triangle(p, soup.points[t[0]], soup.points[t[1]],
+                                                                               soup.points[t[2]]) - p).norm());
+    }
+    ok = ok && distance <= surface.input_mean_edge;
+    std::vector<std::array<std::uint32_t, 2>> fresh;
+    if (ok) fresh = pairs_of(kept);
+    auto is_around = [&](std::uint32_t f) { return std::binary_search(around.begin(), around.end(), f); };
+    const auto n_before = static_cast<std::size_t>(
+        std::count_if(pairs.begin(), pairs.end(), [&](const auto& p) { return is_around(p[0]) || is_around(p[1]); }));
+    if (!ok || fresh.size() >= n_before) {
+      for (std::size_t i = 0; i < around.size(); ++i) tri(around[i]) = old_tri[i];
+      return false;
+    }
+    mesh.collapse(h);
+    sync_faces(kept);
+    ++report.n_settled_collapses;
+    any_collapse = true;
+    replace_pairs(pairs, is_around, fresh);
+    return true;
+  };
+
   for (int round = 0; round < kSettleRounds && !pairs.empty(); ++round) {
     bool changed = false;
     const std::vector<std::array<std::uint32_t, 2>> todo = pairs;
@@ -306,7 +385,46 @@ void settle_intersections(const SurfaceMesh& surface, const StitchOptions& optio
         if (ok) break;
       }
     }
+    // Then collapses of the edges of the triangles still crossing, shortest first.
+    const std::vector<std::array<std::uint32_t, 2>> remaining = pairs;
+    for (const auto& pair : remaining) {
+      if (!std::binary_search(pairs.begin(), pairs.end(), pair)) continue;
+      std::vector<std::pair<double, TriMesh::HalfedgeHandle>> candidates;
+      for (const std::uint32_t f : pair) {
+        for (auto h : mesh.fh_range(TriMesh::FaceHandle(static_cast<int>(f)))) {
+          const double length = mesh.calc_edge_length(h);
+          candidates.emplace_back(length, h);
+          candidates.emplace_back(length, mesh.opposite_halfedge_handle(h));
+        }
+      }
+      std::stable_sort(candidates.begin(), candidates.end(),
+                       [](const auto& a, const auto& b) { return a.first < b.first; });
+      for (const auto& candidate : candidates) {
+        if (try_collapse(candidate.second)) {
+          changed = true;
+          break;
+        }
+      }
+    }
     if (!changed) break;
+  }
+  if (any_collapse) {
+    // The collapses left deleted elements: removed, with the per-face patch ids and the
+    // per-vertex node ids carried along (the caller counts the pairs again).
+    OpenMesh::FPropHandleT<int> patch_of;
+    OpenMesh::VPropHandleT<int> node_of;
+    mesh.add_property(patch_of);
+    mesh.add_property(node_of);
+    for (auto f : mesh.faces()) mesh.property(patch_of, f) = result.face_patch[static_cast<std::size_t>(f.idx())];
+    for (auto v : mesh.vertices()) mesh.property(node_of, v) = result.vertex_node[static_cast<std::size_t>(v.idx())];
+    mesh.garbage_collection();
+    result.face_patch.resize(mesh.n_faces());
+    result.vertex_node.resize(mesh.n_vertices());
+    for (auto f : mesh.faces()) result.face_patch[static_cast<std::size_t>(f.idx())] = mesh.property(patch_of, f);
+    for (auto v : mesh.vertices()) result.vertex_node[static_cast<std::size_t>(v.idx())] = mesh.property(node_of, v);
+    mesh.remove_property(patch_of);
+    mesh.remove_property(node_of);
+    pairs.clear();
   }
 }
 

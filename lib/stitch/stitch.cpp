@@ -473,7 +473,7 @@ StitchResult stitch_impl(const SurfaceMesh& surface, const TriMesh* input, const
     // What remains was in the assembly (the surface mesh's own crossings). The count is
     // taken again over the whole mesh when settling changed anything.
     stitch_detail::settle_intersections(surface, options, feature, result, pairs, report);
-    if (report.n_settled_nodes + report.n_settled_flips > 0) pairs = self_intersecting_pairs(to_soup(mesh), options.n_threads);
+    if (report.n_settled_nodes + report.n_settled_flips + report.n_settled_collapses > 0) pairs = self_intersecting_pairs(to_soup(mesh), options.n_threads);
   }
   ReportOptions check;
   check.self_intersections = false;  // counted above

@@ -108,6 +108,9 @@ struct StitchReport {
   std::size_t n_settled_nodes = 0;
   //! Edges of such triangles flipped because the flip left fewer intersecting pairs.
   std::size_t n_settled_flips = 0;
+  //! Edges of such triangles collapsed (the removed node merged into the other end, which
+  //! stays) because the collapse left fewer intersecting pairs.
+  std::size_t n_settled_collapses = 0;
   double alpha_mean_before = 0.0;      //!< mean alpha after assembly, before optimisation
   double alpha_min_before = 0.0;       //!< min alpha after assembly, before optimisation
   //! Triangles of the result away from features: none of their vertices is a feature node,

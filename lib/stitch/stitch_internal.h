@@ -37,6 +37,15 @@ struct NodeMerges {
 NodeMerges collapse_short_edges(const SurfaceMesh& surface, const StitchOptions& options, const StitchResult& assembled,
                                 const std::vector<std::uint8_t>& is_feature, const std::vector<std::uint8_t>& is_frozen);
 
+//! True when node a comes just before or after position i of curve c
+//! (SurfaceMesh::curve_nodes; a closed curve wraps around).
+bool is_next_on_curve(const SurfaceMesh& surface, int c, int i, int a);
+
+//! True when collapsing h leaves two faces on the same three nodes: faces (a, c, d) and
+//! (b, c, d) exist, c and d the nodes opposite h (a closed component of four nodes, a
+//! tetrahedron, would become two coinciding triangles; ironProt's one-voxel blobs).
+bool leaves_duplicate_face(const TriMesh& mesh, TriMesh::HalfedgeHandle h);
+
 //! Replaces the pairs of `pairs` (sorted, each once) that have a face f with
 //! is_changed(f) by `fresh` (the pairs of the changed faces now); `pairs` stays sorted,
 //! each pair once.
@@ -67,8 +76,15 @@ void optimise(const SurfaceMesh& surface, const StitchOptions& options, const st
 //! turns its normal by more than acos(min_normal_dot), and those triangles then intersect in
 //! fewer pairs than before (exact check against the whole mesh). Then each edge of a
 //! triangle still crossing (not between two feature nodes, flippable) is flipped when both
-//! new triangles keep the old side and take part in fewer pairs. Up to 3 rounds. Counts in
-//! report.n_settled_nodes and n_settled_flips.
+//! new triangles keep the old side and take part in fewer pairs. Then each edge of a
+//! triangle still crossing (shortest first) is collapsed into one of its ends, which stays,
+//! when the removed node is no feature node (or a feature curve's node merging into its
+//! neighbour along the curve) nor on the input's boundary, the link condition holds, the
+//! removed node lies within one input mean edge of the new triangles, none of these folds
+//! over or degenerates, and they take part in fewer pairs. Up to 3 rounds. Counts in
+//! report.n_settled_nodes, n_settled_flips and n_settled_collapses. After a collapse the
+//! mesh is garbage-collected (face_patch and vertex_node follow) and `pairs` is left empty:
+//! the caller counts again.
 void settle_intersections(const SurfaceMesh& surface, const StitchOptions& options,
                           const std::vector<std::uint8_t>& is_feature, StitchResult& result,
                           std::vector<std::array<std::uint32_t, 2>>& pairs, StitchReport& report);
