@@ -205,9 +205,30 @@ void settle_intersections(const SurfaceMesh& surface, const StitchOptions& optio
     return true;
   };
 
+  // The segments of the feature curves (node pairs, smaller first): never flipped. Without
+  // curves, every edge between two feature nodes counts as one.
+  std::vector<std::pair<int, int>> feature_segments;
+  const bool has_curves = surface.curve_nodes.size() == surface.curve_is_feature.size();
+  if (has_curves) {
+    for (std::size_t c = 0; c < surface.curve_nodes.size(); ++c) {
+      const auto& nodes = surface.curve_nodes[c];
+      if (surface.curve_is_feature[c] == 0 || nodes.size() < 2) continue;
+      const bool is_closed = surface.node_kind[static_cast<std::size_t>(nodes.front())] == NodeKind::Border;
+      for (std::size_t i = 0; i + (is_closed ? 0 : 1) < nodes.size(); ++i) {
+        const int a = nodes[i], b = nodes[(i + 1) % nodes.size()];
+        feature_segments.emplace_back(std::min(a, b), std::max(a, b));
+      }
+    }
+    std::sort(feature_segments.begin(), feature_segments.end());
+  }
+  auto is_feature_segment = [&](std::size_t ga, std::size_t gb) {
+    if (is_feature[ga] == 0 || is_feature[gb] == 0) return false;
+    if (!has_curves) return true;
+    const auto a = static_cast<int>(std::min(ga, gb)), b = static_cast<int>(std::max(ga, gb));
+    return std::binary_search(feature_segments.begin(), feature_segments.end(), std::make_pair(a, b));
+  };
   // Node gb may merge into node ga: gb is no feature node, or a node of a feature curve
   // (not a corner) and ga its neighbour along that curve.
-  const bool has_curves = surface.curve_nodes.size() == surface.curve_is_feature.size();
   auto is_removable = [&](std::size_t gb, std::size_t ga) {
     if (is_feature[gb] == 0) return true;
     if (!has_curves || surface.node_kind[gb] != NodeKind::Border) return false;
@@ -328,7 +349,7 @@ void settle_intersections(const SurfaceMesh& surface, const StitchOptions& optio
         const auto h = mesh.halfedge_handle(e, 0);
         const auto ga = static_cast<std::size_t>(result.vertex_node[static_cast<std::size_t>(mesh.from_vertex_handle(h).idx())]);
         const auto gb = static_cast<std::size_t>(result.vertex_node[static_cast<std::size_t>(mesh.to_vertex_handle(h).idx())]);
-        if (is_feature[ga] != 0 && is_feature[gb] != 0) continue;
+        if (is_feature_segment(ga, gb)) continue;
         const auto f0 = static_cast<std::uint32_t>(mesh.face_handle(h).idx());
         const auto f1 = static_cast<std::uint32_t>(mesh.opposite_face_handle(h).idx());
         if (local_of[f0] < 0 || local_of[f1] < 0) continue;
