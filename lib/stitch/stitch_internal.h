@@ -75,8 +75,9 @@ void optimise(const SurfaceMesh& surface, const StitchOptions& options, const st
 //! heights). The moves are kept when no triangle around the moved nodes degenerates or
 //! turns its normal by more than acos(min_normal_dot), and those triangles then intersect in
 //! fewer pairs than before (exact check against the whole mesh). Then each edge of a
-//! triangle still crossing (not a segment of a feature curve: a chord between two feature corners may flip; flippable) is flipped when both
-//! new triangles keep the old side and take part in fewer pairs. Then each edge of a
+//! triangle still crossing (not a segment of a feature curve: a chord between two feature
+//! corners may flip; flippable) is flipped when both new triangles keep the old side and
+//! take part in fewer pairs. Then each edge of a
 //! triangle still crossing (shortest first) is collapsed into one of its ends, which stays,
 //! when the removed node is no feature node (or a feature curve's node merging into its
 //! neighbour along the curve) nor on the input's boundary, the link condition holds, the
