@@ -105,13 +105,16 @@ RemeshResult remesh(const TriMesh& input, const RemeshOptions& options) {
   stitch_options.progress = chained(options.progress, options.stitch.progress);
 
   Stopwatch watch;
-  const Segmentation segmentation = segment(input, segment_options);
+  const Segmentation first_segmentation = segment(input, segment_options);
   report.seconds_segment = watch.seconds();
+
+  watch.restart();
+  // Patches whose fit leaves their input (sharp bends inside) are split and refitted.
+  const Segmentation segmentation =
+      split_unfitted_patches(input, first_segmentation, surfmesh_options, segment_options, &report.n_patches_split);
   report.n_patches = segmentation.patches.size();
   report.n_curves = segmentation.curves.size();
   report.n_corners = segmentation.corners.size();
-
-  watch.restart();
   const SurfaceMesh surface = mesh_surface(input, segmentation, surfmesh_options);
   report.seconds_surfmesh = watch.seconds();
   report.n_nodes = surface.nodes.size();

@@ -47,6 +47,9 @@ struct RemeshReport {
   std::size_t n_input_vertices = 0;
   std::size_t n_input_faces = 0;
   std::size_t n_patches = 0;
+  //! Patches added by splitting patches whose fit leaves their input (split_unfitted_patches;
+  //! included in n_patches; its time is in seconds_surfmesh).
+  std::size_t n_patches_split = 0;
   std::size_t n_curves = 0;
   std::size_t n_corners = 0;
   std::size_t n_nodes = 0;        //!< nodes of the surface mesh (before stitching)

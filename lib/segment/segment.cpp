@@ -720,18 +720,134 @@ void validate_mesh(const TriMesh& mesh) {
       throw InvalidInput("segment: the mesh has deleted edges; call garbage_collection() first");
 }
 
-}  // namespace
+// split_patches(): 2-means iterations on the smoothed normals of a patch.
+constexpr int kSplitClusterIterations = 10;
 
-Segmentation segment(const TriMesh& mesh, const SegmentOptions& options) {
-  options.validate();
-  validate_mesh(mesh);
-  Segmentation result;
-  if (mesh.n_faces() == 0) return result;
-  constexpr std::string_view kStage = "segment";
-  report_progress(options.progress, kStage, 0.0);
+// Splits one patch (faces, all in patch p of face_patch) in connected parts by its smoothed
+// normals: two clusters (2-means, started from the normal furthest from the axis and the
+// one furthest from that), their connected components, and components smaller than
+// min_part faces merged into the neighbouring component they share most edges with. Each
+// part gets its mean raw normal as axis where every face fits it, else the cluster's mean
+// smoothed normal, else the patch's axis (which bounds every subset of the patch). Returns
+// fewer than two parts when the normals do not separate.
+std::vector<std::pair<std::vector<int>, Eigen::Vector3d>> split_by_normals(const Grouping& grouping,
+                                                                           const std::vector<int>& faces, int p,
+                                                                           const std::vector<int>& face_patch,
+                                                                           const Eigen::Vector3d& axis,
+                                                                           std::size_t min_part, Scratch& scratch) {
+  const FaceGraph& graph = grouping.graph;
+  const FaceNormals& normals = grouping.normals;
+  std::vector<std::pair<std::vector<int>, Eigen::Vector3d>> parts;
+  if (faces.size() < 2) return parts;
+  auto usable = [&](int f) { return normals.degenerate[f] == 0 && normals.exception[f] == 0; };
+  int first = -1;
+  for (const int f : faces)
+    if (usable(f) && (first < 0 || normals.smooth[f].dot(axis) < normals.smooth[first].dot(axis))) first = f;
+  if (first < 0) return parts;
+  std::array<Eigen::Vector3d, 2> centre{normals.smooth[first], normals.smooth[first]};
+  for (const int f : faces)
+    if (usable(f) && normals.smooth[f].dot(centre[0]) < centre[1].dot(centre[0])) centre[1] = normals.smooth[f];
+  std::vector<int> label(faces.size(), 0);
+  auto nearer = [&](int f) { return normals.smooth[f].dot(centre[0]) >= normals.smooth[f].dot(centre[1]) ? 0 : 1; };
+  for (int it = 0; it < kSplitClusterIterations; ++it) {
+    std::array<Eigen::Vector3d, 2> sum{Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()};
+    for (std::size_t i = 0; i < faces.size(); ++i) {
+      if (!usable(faces[i])) continue;
+      label[i] = nearer(faces[i]);
+      sum[label[i]] += normals.area[faces[i]] * normals.smooth[faces[i]];
+    }
+    if (!(sum[0].norm() > 0.0 && sum[1].norm() > 0.0)) return parts;
+    centre = {sum[0].normalized(), sum[1].normalized()};
+  }
+  // Faces without a usable normal take the label of the nearer centre by their raw normal
+  // (degenerate ones 0); the components absorb them anyway when they are few.
+  for (std::size_t i = 0; i < faces.size(); ++i) {
+    const int f = faces[i];
+    if (usable(f)) label[i] = nearer(f);
+    else label[i] = normals.degenerate[f] != 0 ? 0 : (normals.raw[f].dot(centre[0]) >= normals.raw[f].dot(centre[1]) ? 0 : 1);
+  }
+  // Components of equal labels (face_owner: index into faces, face_stamp: this call).
+  const int epoch = ++scratch.face_epoch;
+  for (std::size_t i = 0; i < faces.size(); ++i) {
+    scratch.face_stamp[faces[i]] = epoch;
+    scratch.face_owner[faces[i]] = static_cast<int>(i);
+  }
+  std::vector<int> component(faces.size(), -1);
+  std::vector<std::size_t> size;
+  for (std::size_t seed = 0; seed < faces.size(); ++seed) {
+    if (component[seed] >= 0) continue;
+    const int id = static_cast<int>(size.size());
+    std::vector<std::size_t> queue{seed};
+    component[seed] = id;
+    for (std::size_t head = 0; head < queue.size(); ++head) {
+      const int f = faces[queue[head]];
+      for (const int g : graph.neighbours[f]) {
+        if (g < 0 || face_patch[g] != p || scratch.face_stamp[g] != epoch) continue;
+        const auto j = static_cast<std::size_t>(scratch.face_owner[g]);
+        if (component[j] >= 0 || label[j] != label[queue[head]]) continue;
+        component[j] = id;
+        queue.push_back(j);
+      }
+    }
+    size.push_back(queue.size());
+  }
+  // Small components join the neighbouring component with the longest shared border,
+  // smallest first, until every component has min_part faces or one is left.
+  for (;;) {
+    std::size_t n_alive = 0;
+    int smallest = -1;
+    for (std::size_t c = 0; c < size.size(); ++c) {
+      if (size[c] == 0) continue;
+      ++n_alive;
+      if (smallest < 0 || size[c] < size[static_cast<std::size_t>(smallest)]) smallest = static_cast<int>(c);
+    }
+    if (n_alive < 2 || size[static_cast<std::size_t>(smallest)] >= min_part) break;
+    std::vector<int> shared(size.size(), 0);
+    for (std::size_t i = 0; i < faces.size(); ++i) {
+      if (component[i] != smallest) continue;
+      for (const int g : graph.neighbours[faces[i]]) {
+        if (g < 0 || face_patch[g] != p || scratch.face_stamp[g] != epoch) continue;
+        const int c = component[static_cast<std::size_t>(scratch.face_owner[g])];
+        if (c != smallest) ++shared[static_cast<std::size_t>(c)];
+      }
+    }
+    const auto target = static_cast<int>(std::max_element(shared.begin(), shared.end()) - shared.begin());
+    NURBSFRONT_ASSERT(shared[static_cast<std::size_t>(target)] > 0);  // the patch is connected
+    for (auto& c : component)
+      if (c == smallest) c = target;
+    size[static_cast<std::size_t>(target)] += size[static_cast<std::size_t>(smallest)];
+    size[static_cast<std::size_t>(smallest)] = 0;
+  }
+  for (std::size_t c = 0; c < size.size(); ++c) {
+    if (size[c] == 0) continue;
+    std::vector<int> part;
+    part.reserve(size[c]);
+    std::array<Eigen::Vector3d, 2> sum{Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()};
+    for (std::size_t i = 0; i < faces.size(); ++i) {
+      if (component[i] != static_cast<int>(c)) continue;
+      part.push_back(faces[i]);
+      sum[0] += normals.area[faces[i]] * normals.raw[faces[i]];
+      if (usable(faces[i])) sum[1] += normals.area[faces[i]] * normals.smooth[faces[i]];
+    }
+    Eigen::Vector3d part_axis = axis;
+    for (const Eigen::Vector3d& candidate : sum) {
+      if (!(candidate.norm() > 0.0)) continue;
+      const Eigen::Vector3d unit = candidate.normalized();
+      if (std::all_of(part.begin(), part.end(), [&](int f) { return grouping.fits(f, unit); })) {
+        part_axis = unit;
+        break;
+      }
+    }
+    parts.emplace_back(std::move(part), part_axis);
+  }
+  if (parts.size() < 2) parts.clear();
+  return parts;
+}
 
-  FaceGraph graph = build_graph(mesh);
-  FaceNormals normals = face_normals(graph, bounding_box(mesh).diagonal());
+// Steps 1-2 of segment(): creases (bevel bends counted in result), raw and smoothed
+// normals, and the faces that admit no axis.
+FaceNormals prepare_normals(FaceGraph& graph, const SegmentOptions& options, Segmentation& result) {
+  FaceNormals normals = face_normals(graph, bounding_box(*graph.mesh).diagonal());
   mark_creases(graph, normals, std::cos(radians(options.crease_angle_deg)));
   if (options.bevel_creases) result.n_bevel_crease_edges = mark_bevel_creases(graph, normals);
   normals.smooth = smooth_normals(graph, normals, options.normal_smoothing_rings);
@@ -743,6 +859,48 @@ Segmentation segment(const TriMesh& mesh, const SegmentOptions& options) {
     const double spread = std::acos(std::clamp(normals.raw[f].dot(normals.smooth[f]), -1.0, 1.0));
     normals.exception[f] = spread > max_spread ? 1 : 0;
   }
+  return normals;
+}
+
+// Step 8 of segment(): border curves of the final (renumbered) patches, and the result.
+void finish_segmentation(const TriMesh& mesh, const FaceGraph& graph, const FaceNormals& normals, Patches& patches,
+                         const SegmentOptions& options, Segmentation& result) {
+  segment_detail::Borders borders = segment_detail::extract_borders(mesh, patches.face_patch, options.border_smoothing);
+  result.face_patch = std::move(patches.face_patch);
+  result.patches.assign(patches.faces.size(), Patch{});
+  for (std::size_t p = 0; p < patches.faces.size(); ++p) {
+    result.patches[p].faces = std::move(patches.faces[p]);
+    result.patches[p].axis = patches.axes[p];
+  }
+  for (std::size_t c = 0; c < borders.curves.size(); ++c) {
+    const BorderCurve& curve = borders.curves[c];
+    result.patches[curve.patch_left].curves.push_back(static_cast<int>(c));
+    if (curve.patch_right >= 0) result.patches[curve.patch_right].curves.push_back(static_cast<int>(c));
+  }
+  result.curves = std::move(borders.curves);
+  result.corners = std::move(borders.corners);
+  result.n_crease_edges = result.n_degenerate_faces = result.n_slope_exceptions = 0;
+  for (int f = 0; f < graph.n_faces(); ++f) {
+    for (int i = 0; i < 3; ++i)
+      if (graph.is_crease(f, i) && graph.vertices[f][i] < graph.vertices[f][(i + 1) % 3]) ++result.n_crease_edges;
+    result.n_degenerate_faces += normals.degenerate[f];
+    result.n_slope_exceptions += normals.exception[f];
+  }
+}
+
+}  // namespace
+
+Segmentation segment(const TriMesh& mesh, const SegmentOptions& options) {
+  options.validate();
+  validate_mesh(mesh);
+  Segmentation result;
+  if (mesh.n_faces() == 0) return result;
+  constexpr std::string_view kStage = "segment";
+  report_progress(options.progress, kStage, 0.0);
+
+  FaceGraph graph = build_graph(mesh);
+  const FaceNormals normals = prepare_normals(graph, options, result);
+  const double max_slope = radians(options.max_slope_deg);
   report_progress(options.progress, kStage, 0.3);
 
   const Grouping grouping{graph, normals, std::cos(max_slope), max_slope,
@@ -759,27 +917,76 @@ Segmentation segment(const TriMesh& mesh, const SegmentOptions& options) {
   renumber(patches);
   report_progress(options.progress, kStage, 0.7);
 
-  segment_detail::Borders borders = segment_detail::extract_borders(mesh, patches.face_patch, options.border_smoothing);
-  result.face_patch = std::move(patches.face_patch);
-  result.patches.resize(patches.faces.size());
-  for (std::size_t p = 0; p < patches.faces.size(); ++p) {
-    result.patches[p].faces = std::move(patches.faces[p]);
-    result.patches[p].axis = patches.axes[p];
-  }
-  for (std::size_t c = 0; c < borders.curves.size(); ++c) {
-    const BorderCurve& curve = borders.curves[c];
-    result.patches[curve.patch_left].curves.push_back(static_cast<int>(c));
-    if (curve.patch_right >= 0) result.patches[curve.patch_right].curves.push_back(static_cast<int>(c));
-  }
-  result.curves = std::move(borders.curves);
-  result.corners = std::move(borders.corners);
-  for (int f = 0; f < graph.n_faces(); ++f) {
-    for (int i = 0; i < 3; ++i)
-      if (graph.is_crease(f, i) && graph.vertices[f][i] < graph.vertices[f][(i + 1) % 3]) ++result.n_crease_edges;
-    result.n_degenerate_faces += normals.degenerate[f];
-    result.n_slope_exceptions += normals.exception[f];
-  }
+  finish_segmentation(mesh, graph, normals, patches, options, result);
   report_progress(options.progress, kStage, 1.0);
+  return result;
+}
+
+Segmentation split_patches(const TriMesh& mesh, const Segmentation& segmentation, const std::vector<int>& which,
+                           const SegmentOptions& options) {
+  options.validate();
+  validate_mesh(mesh);
+  const auto n_faces = static_cast<int>(mesh.n_faces());
+  const auto n_patches = static_cast<int>(segmentation.patches.size());
+  if (segmentation.face_patch.size() != mesh.n_faces())
+    throw InvalidInput("split_patches: the segmentation has " + std::to_string(segmentation.face_patch.size()) +
+                       " face labels for " + std::to_string(n_faces) + " faces");
+  for (const int p : which)
+    if (p < 0 || p >= n_patches) throw InvalidInput("split_patches: no patch " + std::to_string(p));
+  Segmentation result;
+  result.n_fold_splits = segmentation.n_fold_splits;
+  if (n_faces == 0 || which.empty()) return segmentation;
+
+  FaceGraph graph = build_graph(mesh);
+  const FaceNormals normals = prepare_normals(graph, options, result);
+  const double max_slope = radians(options.max_slope_deg);
+  const Grouping grouping{graph, normals, std::cos(max_slope), max_slope, std::cos(kGrowthConeFraction * max_slope)};
+  Patches patches;
+  patches.face_patch = segmentation.face_patch;
+  for (const Patch& patch : segmentation.patches) {
+    patches.faces.push_back(patch.faces);
+    patches.axes.push_back(patch.axis);
+  }
+  for (int f = 0; f < n_faces; ++f) {
+    const int p = patches.face_patch[f];
+    if (p < 0 || p >= n_patches) throw InvalidInput("split_patches: face " + std::to_string(f) + " has no valid patch");
+  }
+  Scratch scratch(mesh);
+  std::vector<int> sorted = which;
+  std::sort(sorted.begin(), sorted.end());
+  sorted.erase(std::unique(sorted.begin(), sorted.end()), sorted.end());
+  for (const int p : sorted) {
+    const std::vector<int>& faces = patches.faces[static_cast<std::size_t>(p)];
+    const std::size_t min_part = std::max<std::size_t>(1, std::min(options.min_patch_faces, faces.size() / 4));
+    auto parts = split_by_normals(grouping, faces, p, patches.face_patch, patches.axes[static_cast<std::size_t>(p)],
+                                  min_part, scratch);
+    if (parts.empty()) continue;
+    const Eigen::Vector3d old_axis = patches.axes[static_cast<std::size_t>(p)];
+    for (std::size_t k = 0; k < parts.size(); ++k) {
+      const int q = k == 0 ? p : static_cast<int>(patches.faces.size());
+      if (k > 0) {
+        patches.faces.emplace_back();
+        patches.axes.push_back(old_axis);
+      }
+      for (const int f : parts[k].first) patches.face_patch[f] = q;
+      patches.faces[static_cast<std::size_t>(q)] = std::move(parts[k].first);
+      patches.axes[static_cast<std::size_t>(q)] = parts[k].second;
+    }
+    // A part's own axis may fold its projection where the patch's did not: the patch's axis
+    // then (any subset of a graph is a graph); split_folds handles what is still left.
+    for (std::size_t k = 0; k < parts.size(); ++k) {
+      const int q = k == 0 ? p : static_cast<int>(patches.faces.size() - parts.size() + k);
+      auto& axis = patches.axes[static_cast<std::size_t>(q)];
+      if (axis == old_axis) continue;
+      if (!segment_detail::check_projection(graph, patches.faces[static_cast<std::size_t>(q)], patches.face_patch, axis,
+                                            scratch)
+               .is_simple)
+        axis = old_axis;
+    }
+  }
+  result.n_fold_splits += split_folds(grouping, scratch, patches);
+  renumber(patches);
+  finish_segmentation(mesh, graph, normals, patches, options, result);
   return result;
 }
 

@@ -170,6 +170,26 @@ struct Segmentation {
 //! \throw Cancelled if the progress callback returns false.
 [[nodiscard]] Segmentation segment(const TriMesh& mesh, const SegmentOptions& options = {});
 
+//! Splits each listed patch of a segmentation of `mesh` in connected parts by its face
+//! normals, and rebuilds the border curves and corners (for a patch whose fitted surface
+//! does not represent its faces: it spans bends sharper than its fit can follow).
+//!
+//! Each listed patch: two clusters of its smoothed normals (2-means, started from the normal
+//! furthest from the axis and the one furthest from that), their connected components,
+//! components below min(min_patch_faces, a quarter of the patch) merged into the neighbouring
+//! component they share most edges with. A part's axis is its mean raw normal where every
+//! face fits it, else its mean smoothed normal, else the patch's axis; a part whose
+//! projection folds with its own axis keeps the patch's. Then every patch passes segment()'s
+//! projection check and split (step 7) where it fails; no merging follows (it would join
+//! the parts again). Patches whose normals do not separate stay as they are. Patch ids are
+//! renumbered by smallest face as in segment(); all of segment()'s guarantees hold except
+//! that patches below min_patch_faces may remain.
+//! \param which  patch ids to split (any order, duplicates ignored)
+//! \throw InvalidInput for invalid options, a mesh segment() refuses, a segmentation of
+//!        another mesh or an unknown patch id.
+[[nodiscard]] Segmentation split_patches(const TriMesh& mesh, const Segmentation& segmentation,
+                                         const std::vector<int>& which, const SegmentOptions& options = {});
+
 //! Splits a closed vertex sequence (the last vertex joins the first) that passes some
 //! vertex more than once into simple cycles: where it returns to a vertex, the part since
 //! that vertex's previous visit is one cycle (e.g. a border loop through a corner where

@@ -241,21 +241,43 @@ bool BorderCycles::meshable() const {
   return true;
 }
 
+std::vector<Eigen::Vector3d> patch_vertex_points(const TriMesh& mesh, const Patch& patch) {
+  std::vector<int> vertices;
+  vertices.reserve(3 * patch.faces.size());
+  for (const int f : patch.faces)
+    for (const auto v : mesh.fv_range(TriMesh::FaceHandle(f))) vertices.push_back(v.idx());
+  std::sort(vertices.begin(), vertices.end());
+  vertices.erase(std::unique(vertices.begin(), vertices.end()), vertices.end());
+  std::vector<Eigen::Vector3d> points;
+  points.reserve(vertices.size());
+  for (const int v : vertices) points.push_back(to_eigen(mesh.point(TriMesh::VertexHandle(v))));
+  return points;
+}
+
+FitOptions plain_fit_options(const SurfMeshOptions& options, double mean_edge, const Eigen::Vector2d& lo,
+                             const Eigen::Vector2d& hi) {
+  const double margin = 0.02 * (hi - lo).norm() + mean_edge;
+  FitOptions fit;
+  fit.tolerance = options.fit.relative_tolerance * mean_edge;
+  fit.min_spacing = options.fit.min_spacing_edges * mean_edge;
+  fit.max_levels = options.fit.max_levels;
+  fit.least_squares_iterations = options.fit.least_squares_iterations;
+  // Not with adaptive sizing: SurfmeshAdaptiveSlow's flat ellipsoid got 750 instead of 791
+  // nodes and 0.0105 instead of 0.0090 max deviation with it (not diagnosed).
+  fit.least_squares_fine_smoothing = options.sizing.adaptive ? 0.0 : options.fit.least_squares_fine_smoothing;
+  fit.least_squares_fine_below = options.fit.fine_below_edges * mean_edge;
+  fit.domain = Rectangle{lo - Eigen::Vector2d::Constant(margin), hi + Eigen::Vector2d::Constant(margin)};
+  if (!options.cell_grid.enabled && fit.min_spacing > 0.0) fit_lattice_to_spacing(fit);
+  return fit;
+}
+
 void fit_patch(const TriMesh& mesh, const Segmentation& seg, int p, const BorderNodes& borders,
                const SurfMeshOptions& options, double mean_edge, PatchResult& result) {
   const Stopwatch clock;
   const Patch& patch = seg.patches[static_cast<std::size_t>(p)];
   result.report.n_input_faces = patch.faces.size();
   try {
-    std::vector<int> vertices;
-    vertices.reserve(3 * patch.faces.size());
-    for (const int f : patch.faces)
-      for (const auto v : mesh.fv_range(TriMesh::FaceHandle(f))) vertices.push_back(v.idx());
-    std::sort(vertices.begin(), vertices.end());
-    vertices.erase(std::unique(vertices.begin(), vertices.end()), vertices.end());
-    std::vector<Eigen::Vector3d> points;
-    points.reserve(vertices.size());
-    for (const int v : vertices) points.push_back(to_eigen(mesh.point(TriMesh::VertexHandle(v))));
+    std::vector<Eigen::Vector3d> points = patch_vertex_points(mesh, patch);
     const std::vector<Eigen::Vector3d> normals(points.size(), patch.axis);
     const PatchFrame frame = patch_frame(points, normals);
     // The fit also sees a few rings of the neighbouring patches' faces (those the axis
@@ -276,18 +298,7 @@ void fit_patch(const TriMesh& mesh, const Segmentation& seg, int p, const Border
     for (const int c : patch.curves)
       for (const int g : borders.curve_nodes[static_cast<std::size_t>(c)])
         extend(frame.to_local(borders.positions[static_cast<std::size_t>(g)]));
-    const double margin = 0.02 * (hi - lo).norm() + mean_edge;
-    FitOptions fit;
-    fit.tolerance = options.fit.relative_tolerance * mean_edge;
-    fit.min_spacing = options.fit.min_spacing_edges * mean_edge;
-    fit.max_levels = options.fit.max_levels;
-    fit.least_squares_iterations = options.fit.least_squares_iterations;
-    // Not with adaptive sizing: SurfmeshAdaptiveSlow's flat ellipsoid got 750 instead of 791
-    // nodes and 0.0105 instead of 0.0090 max deviation with it (not diagnosed).
-    fit.least_squares_fine_smoothing = options.sizing.adaptive ? 0.0 : options.fit.least_squares_fine_smoothing;
-    fit.least_squares_fine_below = options.fit.fine_below_edges * mean_edge;
-    fit.domain = Rectangle{lo - Eigen::Vector2d::Constant(margin), hi + Eigen::Vector2d::Constant(margin)};
-    if (!options.cell_grid.enabled && fit.min_spacing > 0.0) fit_lattice_to_spacing(fit);
+    FitOptions fit = plain_fit_options(options, mean_edge, lo, hi);
     result.surface.frame = frame;
     if (options.cell_grid.enabled) {
       // Cell-based input: fit the bands of the vertices (docs/surfmesh.md, "Cell-based inputs").

@@ -82,6 +82,15 @@ struct PatchFitOptions {
   //! above it (folds, noise, detail under the lattice spacing) the stronger smoothing stays.
   //! Default 0.2.
   double fine_below_edges = 0.2;
+  //! split_unfitted_patches(): a patch whose fit leaves one of its own input vertices by
+  //! more than this many mean input edges (along its axis) is split by its normals
+  //! (split_patches) and its parts refitted. 0 = never. Default 4 (level-set DRAM cell at
+  //! 256: one patch over a word line, a bit line's side and a plug's base left its input by
+  //! 23 mean edges; its front then meshed with a metric far from the input's).
+  double split_above_edges = 4.0;
+  //! Rounds of split_unfitted_patches() at most (each splits the parts still above the
+  //! bound again). Default 3.
+  int split_rounds = 3;
   void validate() const;
 };
 
@@ -213,6 +222,21 @@ struct SurfaceMesh {
   //! three border nodes that two patches both had, given a centre node.
   std::size_t n_shared_chords_resolved = 0;
 };
+
+//! Splits the patches whose fitted surface does not represent their input: every patch is
+//! fitted as mesh_surface() would (without the border nodes in its rectangle, as with
+//! adaptive sizing), and those whose fit leaves one of their own input vertices by more than
+//! options.fit.split_above_edges mean input edges along the axis are split by
+//! split_patches(); the new parts are checked again, up to options.fit.split_rounds rounds.
+//! The border curves are rebuilt from the new patches (segment's guarantees hold, see
+//! split_patches). Returns the segmentation unchanged when nothing is above the bound.
+//! \param n_split  if set, receives the number of patches the splits added (over all rounds)
+//! \throw InvalidInput for invalid options or a segmentation that does not match the mesh.
+//! \throw Cancelled if the progress callback returns false.
+[[nodiscard]] Segmentation split_unfitted_patches(const TriMesh& input, const Segmentation& segmentation,
+                                                  const SurfMeshOptions& options,
+                                                  const SegmentOptions& segment_options,
+                                                  std::size_t* n_split = nullptr);
 
 //! Discretises the border curves, fits and meshes every patch.
 //! \throw InvalidInput for invalid options or a segmentation that does not match the mesh.

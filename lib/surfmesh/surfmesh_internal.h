@@ -11,6 +11,7 @@
 #include <Eigen/Core>
 
 #include "nurbsfront/nurbs/band_fit.h"
+#include "nurbsfront/nurbs/mba.h"
 #include "nurbsfront/surfmesh/surfmesh.h"
 
 namespace nurbsfront {
@@ -128,6 +129,16 @@ struct PatchResult {
 //! within one vertex ring of p's border that face its axis, not in p, ascending; none for
 //! a patch of fewer than 40 input faces (it fits its own vertices only).
 [[nodiscard]] std::vector<int> overlap_vertices(const TriMesh& mesh, const Segmentation& segmentation, int p);
+
+//! The positions of a patch's input vertices, in ascending vertex id order.
+[[nodiscard]] std::vector<Eigen::Vector3d> patch_vertex_points(const TriMesh& mesh, const Patch& patch);
+
+//! The plain fit's options (SurfMeshOptions::fit) for points whose (x, y) in the patch
+//! frame span [lo, hi]: the rectangle grown by 2% of its diagonal + one mean edge, then to
+//! whole lattice cells of the finest spacing (not with a cell grid, whose band fit has its
+//! own lattice).
+[[nodiscard]] FitOptions plain_fit_options(const SurfMeshOptions& options, double mean_edge, const Eigen::Vector2d& lo,
+                                           const Eigen::Vector2d& hi);
 
 //! Frame and fit of patch p (fills result.surface, has_surface, report fit fields or
 //! FitFailed). Never throws except Cancelled-free internal errors caught by the caller.

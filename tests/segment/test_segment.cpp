@@ -128,6 +128,53 @@ TEST(Segment, RoofBelowTheCreaseAngleIsOnePatchAboveItTwo) {
   }
 }
 
+TEST(SplitPatches, RoofSplitsAtItsRidgeIntoTwoPlanes) {
+  const SegmentOptions options;
+  const TriMesh mesh = to_trimesh(roof(16, 20.0));  // one patch (40 deg dihedral)
+  const Segmentation seg = run(mesh, options, 0.0);
+  ASSERT_EQ(seg.patches.size(), 1u);
+  const Segmentation split = split_patches(mesh, seg, {0}, options);
+  segment_test::expect_contracts(mesh, split, options, 0.0);
+  ASSERT_EQ(split.patches.size(), 2u);
+  // Each part is one side of the ridge, with that plane's normal as its axis.
+  for (const Patch& patch : split.patches) {
+    const Eigen::Vector3d first = segment_test::raw_normal(mesh, patch.faces.front());
+    EXPECT_NEAR(patch.axis.dot(first), 1.0, 1e-12);
+    for (const int f : patch.faces) {
+      EXPECT_NEAR(segment_test::raw_normal(mesh, f).dot(first), 1.0, 1e-12) << "face " << f;
+      double x = 0.0;
+      for (const auto v : mesh.fv_range(mesh.face_handle(f))) x += mesh.point(v)[0] / 3.0;
+      EXPECT_EQ(x < 0.5, first.x() < 0.0) << "face " << f;  // the x < 0.5 side tilts towards -x
+    }
+  }
+  // The ridge is the one curve between the parts, from corner to corner along x = 0.5.
+  int n_ridge = 0;
+  for (const BorderCurve& c : split.curves) {
+    if (c.patch_right < 0) continue;
+    ++n_ridge;
+    EXPECT_EQ(c.vertices.size(), 17u);
+    for (const int v : c.vertices) EXPECT_NEAR(mesh.point(mesh.vertex_handle(v))[0], 0.5, 1e-12);
+  }
+  EXPECT_EQ(n_ridge, 1);
+  EXPECT_EQ(split.corners.size(), 2u);
+  // Nothing to split: the same segmentation; a bad id throws.
+  const Segmentation same = split_patches(mesh, seg, {}, options);
+  EXPECT_EQ(same.face_patch, seg.face_patch);
+  EXPECT_THROW((void)split_patches(mesh, seg, {1}, options), InvalidInput);
+  EXPECT_THROW((void)split_patches(mesh, split, {-1}, options), InvalidInput);
+}
+
+TEST(SplitPatches, FlatPatchDoesNotSplit) {
+  const SegmentOptions options;
+  const TriMesh mesh = to_trimesh(test::grid_patch(8, 8));
+  const Segmentation seg = run(mesh, options, 0.0);
+  ASSERT_EQ(seg.patches.size(), 1u);
+  // All normals equal: the clusters cannot separate, the patch stays.
+  const Segmentation split = split_patches(mesh, seg, {0}, options);
+  EXPECT_EQ(split.patches.size(), 1u);
+  EXPECT_EQ(split.face_patch, seg.face_patch);
+}
+
 TEST(Segment, SphereGivesFewLargePatches) {
   const TriMesh mesh = to_trimesh(test::icosphere(3));
   SegmentOptions options;

@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <functional>
 #include <map>
+#include <numbers>
 #include <set>
 #include <string>
 #include <variant>
@@ -234,6 +235,41 @@ TriMesh wavy_patch(int n, bool with_hole) {
     grid.triangles = kept;
   }
   return to_trimesh(grid);
+}
+
+TEST(Surfmesh, PatchOverASharpRidgeIsSplitWhereItsFitLeavesTheInput) {
+  // A roof with a 50 deg dihedral at x = 0.5: one patch, whose bicubic fit (lattice 2.5
+  // mean edges) rounds the ridge off.
+  TriangleSoup grid = test::grid_patch(24, 24);
+  for (auto& p : grid.points) p.z() = -std::abs(p.x() - 0.5) * std::tan(25.0 * std::numbers::pi / 180.0);
+  const TriMesh mesh = to_trimesh(grid);
+  const SegmentOptions segment_options;
+  const Segmentation seg = segment(mesh, segment_options);
+  ASSERT_EQ(seg.patches.size(), 1u);
+  SurfMeshOptions options;
+  const SurfaceMesh whole = mesh_surface(mesh, seg, options);
+  const double residual = whole.patches[0].fit_max_residual / whole.input_mean_edge;
+  ASSERT_GT(residual, 0.02);  // the ridge is rounded off
+  // Under the default bound (4 mean edges) nothing changes.
+  std::size_t n_split = 7;
+  EXPECT_EQ(split_unfitted_patches(mesh, seg, options, segment_options, &n_split).face_patch, seg.face_patch);
+  EXPECT_EQ(n_split, 0u);
+  // Below the residual: split at the ridge (each side's faces, SplitPatches.* in test_segment).
+  options.fit.split_above_edges = 0.5 * residual;
+  const Segmentation split = split_unfitted_patches(mesh, seg, options, segment_options, &n_split);
+  ASSERT_EQ(split.patches.size(), 2u);
+  EXPECT_EQ(n_split, 1u);
+  const SurfaceMesh parts = mesh_surface(mesh, split, options);
+  expect_consistent(split, parts);
+  for (const PatchMeshReport& patch : parts.patches) EXPECT_EQ(patch.status, PatchStatus::Ok);
+  // Each part is a plane: checked again, nothing is left to split.
+  EXPECT_EQ(split_unfitted_patches(mesh, split, options, segment_options, &n_split).face_patch, split.face_patch);
+  EXPECT_EQ(n_split, 0u);
+  // Off: the segmentation as it was.
+  options.fit.split_above_edges = 0.0;
+  EXPECT_EQ(split_unfitted_patches(mesh, seg, options, segment_options).face_patch, seg.face_patch);
+  options.fit.split_above_edges = -1.0;
+  EXPECT_THROW((void)split_unfitted_patches(mesh, seg, options, segment_options), InvalidInput);
 }
 
 TEST(Surfmesh, OpenWavyPatch) {

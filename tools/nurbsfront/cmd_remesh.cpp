@@ -38,6 +38,7 @@ struct RemeshArgs {
   bool adaptive = false;
   std::optional<double> chord;
   std::optional<double> max_slope;
+  std::optional<double> split_above;
   std::optional<double> crease;
   bool bevel_creases = false;
   std::optional<unsigned> threads;
@@ -82,6 +83,7 @@ void run_remesh(RemeshArgs& args) {
   options.surfmesh.sizing.adaptive = args.adaptive;
   if (args.chord) options.surfmesh.sizing.chord_error = *args.chord;
   if (args.max_slope) options.segment.max_slope_deg = *args.max_slope;
+  if (args.split_above) options.surfmesh.fit.split_above_edges = *args.split_above;
   if (args.crease) options.segment.crease_angle_deg = *args.crease;
   if (args.bevel_creases) options.segment.bevel_creases = true;
   if (args.threads) options.set_threads(*args.threads);
@@ -160,6 +162,8 @@ void add_remesh_command(CLI::App& app) {
   cmd->add_flag("--adaptive", args->adaptive, "Curvature-adaptive sizing (chord error)");
   cmd->add_option("--chord", args->chord, "Chord error for --adaptive (length units; default 0.05 x size)");
   cmd->add_option("--max-slope", args->max_slope, "Largest angle (deg) between a face normal and its patch axis (default 60)");
+  cmd->add_option("--split-above", args->split_above,
+                  "Split patches whose fit leaves their input by more than this many mean edges (default 4; 0 = never)");
   cmd->add_option("--crease", args->crease, "Dihedral angle (deg) above which an edge is a crease (default 80)");
   cmd->add_flag("--bevel-creases", args->bevel_creases,
                 "Also make creases of the ~45 deg bends of bevelled (marching-cubes) sharp edges: closer to "
