@@ -125,9 +125,9 @@ struct PatchResult {
 };
 
 //! The neighbours' vertices added to patch p's fit: those of the faces of other patches
-//! within one vertex ring of p's border that face its axis, not in p, ascending; none for
-//! a patch of fewer than 40 input faces (it fits its own vertices only).
-[[nodiscard]] std::vector<int> overlap_vertices(const TriMesh& mesh, const Segmentation& segmentation, int p);
+//! within `rings` vertex rings of p's border that face its axis, not in p, ascending; none
+//! for a patch of fewer than 40 input faces (it fits its own vertices only).
+[[nodiscard]] std::vector<int> overlap_vertices(const TriMesh& mesh, const Segmentation& segmentation, int p, int rings = 1);
 
 //! Frame and fit of patch p (fills result.surface, has_surface, report fit fields or
 //! FitFailed). Never throws except Cancelled-free internal errors caught by the caller.
