@@ -75,9 +75,14 @@ void add_data(const Stencil& st, double z, double w, Triplets& a, Eigen::VectorX
   }
 }
 
-// lambda sum over nodes of C(3, a) (Delta_x^a Delta_y^b c / (h_x^a h_y^b))^2 h_x h_y, a + b = 3:
-// the discrete third-derivative energy (rotation invariant in the continuum).
-void add_penalty(int n_x, int n_y, double h_x, double h_y, double lambda, Triplets& a) {
+// Calls visit(ax, ay, i, j, idx, coef, m, scale) for every third difference
+// Delta_x^ax Delta_y^ay (ax + ay = 3) of the coefficients, with the m coefficient indices and
+// signed binomial weights it combines and the weight scale = lambda C(3, ax) h_x h_y /
+// (h_x^(2 ax) h_y^(2 ay)) of its square in the discrete third-derivative energy
+// lambda sum over nodes of C(3, a) (Delta_x^a Delta_y^b c / (h_x^a h_y^b))^2 h_x h_y
+// (rotation invariant in the continuum). (i, j) is the first coefficient of the difference.
+template <typename Visit>
+void for_each_third_difference(int n_x, int n_y, double h_x, double h_y, double lambda, Visit&& visit) {
   const int nx = n_x + 3;
   const int ny = n_y + 3;
   static constexpr std::array<std::array<double, 4>, 4> kBinomialSigned{{
@@ -99,12 +104,63 @@ void add_penalty(int n_x, int n_y, double h_x, double h_y, double lambda, Triple
                                                 kBinomialSigned[static_cast<std::size_t>(ay)][static_cast<std::size_t>(q)];
             ++m;
           }
-        for (int u = 0; u < m; ++u)
-          for (int v = 0; v < m; ++v)
-            a.emplace_back(idx[static_cast<std::size_t>(u)], idx[static_cast<std::size_t>(v)],
-                           scale * coef[static_cast<std::size_t>(u)] * coef[static_cast<std::size_t>(v)]);
+        visit(ax, ay, i, j, idx, coef, m, scale);
       }
   }
+}
+
+// The penalty's matrix: scale (sum_u coef_u c_u)^2 for every third difference.
+void add_penalty(int n_x, int n_y, double h_x, double h_y, double lambda, Triplets& a) {
+  for_each_third_difference(n_x, n_y, h_x, h_y, lambda,
+                            [&](int, int, int, int, const std::array<int, 16>& idx, const std::array<double, 16>& coef, int m,
+                                double scale) {
+                              for (int u = 0; u < m; ++u)
+                                for (int v = 0; v < m; ++v)
+                                  a.emplace_back(idx[static_cast<std::size_t>(u)], idx[static_cast<std::size_t>(v)],
+                                                 scale * coef[static_cast<std::size_t>(u)] * coef[static_cast<std::size_t>(v)]);
+                            });
+}
+
+// The third derivative d^3 f / dx^ax dy^ay that a surface with the second derivatives and
+// slope of `j` and a parallel second fundamental form (nabla II = 0: spheres, cylinders,
+// planes; locally nearly so for any smooth surface of slowly varying curvature) has. For a
+// graph, nabla_k II_ij = (f_ijk - (f_ij a_k + f_ik a_j + f_jk a_i) / W^2) / W with
+// a = Hess f grad f and W^2 = 1 + |grad f|^2, so its target is the bracket's second term.
+double parallel_third_derivative(const HeightJet& j, int ax) {
+  const double w2 = 1.0 + j.zx * j.zx + j.zy * j.zy;
+  const double a_x = j.zxx * j.zx + j.zxy * j.zy;
+  const double a_y = j.zxy * j.zx + j.zyy * j.zy;
+  switch (ax) {
+    case 3: return 3.0 * j.zxx * a_x / w2;
+    case 2: return (j.zxx * a_y + 2.0 * j.zxy * a_x) / w2;
+    case 1: return (j.zyy * a_x + 2.0 * j.zxy * a_y) / w2;
+    default: return 3.0 * j.zyy * a_y / w2;
+  }
+}
+
+// The penalty's right-hand side when every third difference is pulled towards the third
+// derivative a surface of parallel second fundamental form with the first and second
+// derivatives of `field` would have (at the difference's centre), where that centre lies in
+// an occupied lattice cell (elsewhere the target stays 0: the field is extrapolated there).
+void add_penalty_target(const BicubicHeightField& field, const std::vector<std::uint8_t>& occupied, double lambda,
+                        Eigen::VectorXd& rhs) {
+  const int n_x = field.n_cells_x();
+  const int n_y = field.n_cells_y();
+  const double h_x = field.spacing_x();
+  const double h_y = field.spacing_y();
+  const Eigen::Vector2d origin = field.domain().min;
+  for_each_third_difference(
+      n_x, n_y, h_x, h_y, lambda,
+      [&](int ax, int ay, int i, int j, const std::array<int, 16>& idx, const std::array<double, 16>& coef, int m, double scale) {
+        // Coefficient k is the B-spline centred at origin + (k - 1) h.
+        const double u = static_cast<double>(i) - 1.0 + 0.5 * ax;
+        const double v = static_cast<double>(j) - 1.0 + 0.5 * ay;
+        if (u < 0.0 || v < 0.0 || u >= n_x || v >= n_y) return;
+        if (occupied[static_cast<std::size_t>(v) * static_cast<std::size_t>(n_x) + static_cast<std::size_t>(u)] == 0) return;
+        const HeightJet jet = field.jet(origin.x() + u * h_x, origin.y() + v * h_y);
+        const double target = parallel_third_derivative(jet, ax) * std::pow(h_x, ax) * std::pow(h_y, ay);
+        for (int k = 0; k < m; ++k) rhs[idx[static_cast<std::size_t>(k)]] += scale * target * coef[static_cast<std::size_t>(k)];
+      });
 }
 
 Eigen::Vector3d band_end(const BandSample& s, double t) { return s.point + t * s.half_length * s.direction; }
@@ -146,6 +202,8 @@ void BandFitOptions::validate() const {
     throw InvalidInput("BandFitOptions: band_weight must be finite and >= 1, got " + std::to_string(band_weight));
   if (max_iterations < 1 || max_iterations > 1000)
     throw InvalidInput("BandFitOptions: max_iterations must be in [1, 1000], got " + std::to_string(max_iterations));
+  if (curvature_passes < 0 || curvature_passes > 10)
+    throw InvalidInput("BandFitOptions: curvature_passes must be in [0, 10], got " + std::to_string(curvature_passes));
   if (domain) domain->validate();
 }
 
@@ -302,39 +360,49 @@ BandFitResult fit_height_field_to_bands(const std::vector<BandSample>& samples, 
   // Damped active-set Newton on the convex, piecewise quadratic objective: the model with
   // the current missed bands pulled to their nearer ends is solved, and the step halved
   // until the objective decreases (a plain active-set iteration can cycle).
-  for (std::size_t i = 0; i < samples.size(); ++i)
-    if (samples[i].half_length > 0.0) active[i] = missed_end(samples[i]);
-  double current = objective(c);
-  while (result.iterations < options.max_iterations) {
-    const Eigen::VectorXd step = solve(active) - c;
-    ++result.iterations;
-    double alpha = 1.0;
-    Eigen::VectorXd trial;
-    double value = 0.0;
-    for (int k = 0; k < kLineSearchSteps; ++k, alpha *= 0.5) {
-      trial = c + alpha * step;
-      set_coefficients(trial);
-      value = objective(trial);
-      if (value <= current) break;
+  auto descend = [&](int max_solves) {
+    for (std::size_t i = 0; i < samples.size(); ++i)
+      if (samples[i].half_length > 0.0) active[i] = missed_end(samples[i]);
+    double current = objective(c);
+    for (int solves = 0; solves < max_solves; ++solves) {
+      const Eigen::VectorXd step = solve(active) - c;
+      ++result.iterations;
+      double alpha = 1.0;
+      Eigen::VectorXd trial;
+      double value = 0.0;
+      for (int k = 0; k < kLineSearchSteps; ++k, alpha *= 0.5) {
+        trial = c + alpha * step;
+        set_coefficients(trial);
+        value = objective(trial);
+        if (value <= current) break;
+      }
+      if (!(value <= current)) {  // no decrease along the step: stationary to round-off
+        set_coefficients(c);
+        return true;
+      }
+      c = trial;
+      current = value;
+      bool changed = false;
+      for (std::size_t i = 0; i < samples.size(); ++i) {
+        if (samples[i].half_length == 0.0) continue;
+        const int next = missed_end(samples[i]);
+        if (next != active[i]) changed = true;
+        active[i] = next;
+      }
+      if (!changed && alpha == 1.0) return true;  // the full step solved the model of its own active set
     }
-    if (!(value <= current)) {  // no decrease along the step: stationary to round-off
-      set_coefficients(c);
-      result.converged = true;
-      break;
-    }
-    c = trial;
-    current = value;
-    bool changed = false;
-    for (std::size_t i = 0; i < samples.size(); ++i) {
-      if (samples[i].half_length == 0.0) continue;
-      const int next = missed_end(samples[i]);
-      if (next != active[i]) changed = true;
-      active[i] = next;
-    }
-    if (!changed && alpha == 1.0) {  // the full step solved the model of its own active set
-      result.converged = true;
-      break;
-    }
+    return false;
+  };
+  result.converged = descend(options.max_iterations - result.iterations);
+  // Curvature passes: the prior's target third derivatives are those of a surface with the
+  // last fit's slope and curvature and a parallel second fundamental form, so a sphere or a
+  // tube is no longer flattened by the prior (a height field's third derivatives grow with
+  // the slope even where the curvature is constant).
+  const Eigen::VectorXd base_rhs = fixed_rhs;
+  for (int pass = 0; pass < options.curvature_passes; ++pass) {
+    fixed_rhs = base_rhs;
+    add_penalty_target(field, occupied, lambda, fixed_rhs);
+    result.converged = descend(options.max_iterations);
   }
 
   for (std::size_t i = 0; i < samples.size(); ++i) {

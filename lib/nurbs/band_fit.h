@@ -50,8 +50,13 @@ struct BandFitOptions {
   //! the bands act nearly as hard constraints where the smoothness prior is biased (the
   //! steep flanks of a small tube). >= 1. Default 20.
   double band_weight = 20.0;
-  //! Active-set iterations at most (each one is a sparse least-squares solve). Default 20.
+  //! Active-set iterations at most per pass (each one is a sparse least-squares solve). Default 20.
   int max_iterations = 20;
+  //! Refits after the first fit, each with the third-derivative prior pulled towards the
+  //! third derivatives that a surface of the previous fit's slope and curvature with a
+  //! parallel second fundamental form (sphere, cylinder) has, instead of towards 0. In
+  //! [0, 10]. Default 0.
+  int curvature_passes = 0;
   //! The rectangle the field covers. Default: the bounding box of the sample centres.
   std::optional<Rectangle> domain;
 

@@ -52,6 +52,7 @@ BandFitResult fit_cell_bands(const std::vector<Eigen::Vector3d>& world, const Pa
   BandFitOptions options;
   options.spacing = grid.lattice_cells * cell;
   options.smoothing_length = grid.smoothing_cells * cell;
+  options.curvature_passes = grid.curvature_passes;
   options.domain = domain;
   return fit_height_field_to_bands(cell_band_samples(world, frame, grid), options);
 }

@@ -203,6 +203,12 @@ void CellGrid::validate() const {
   if (!finite_positive(lattice_cells)) bad_option("cell_grid.lattice_cells must be finite and > 0, got " + std::to_string(lattice_cells));
   if (!(std::isfinite(smoothing_cells) && smoothing_cells >= 0.0))
     bad_option("cell_grid.smoothing_cells must be finite and >= 0, got " + std::to_string(smoothing_cells));
+  if (curvature_passes < 0 || curvature_passes > 10)
+    bad_option("cell_grid.curvature_passes must be in [0, 10], got " + std::to_string(curvature_passes));
+  if (wide_overlap_rings < 0 || wide_overlap_rings > 20)
+    bad_option("cell_grid.wide_overlap_rings must be in [0, 20], got " + std::to_string(wide_overlap_rings));
+  if (!finite_positive(wide_overlap_max_miss_cells))
+    bad_option("cell_grid.wide_overlap_max_miss_cells must be finite and > 0, got " + std::to_string(wide_overlap_max_miss_cells));
 }
 
 void SurfMeshOptions::validate() const {

@@ -110,6 +110,15 @@ struct CellGrid {
   double lattice_cells = 1.5;
   //! Band-fit smoothing length in cells (BandFitOptions::smoothing_length). Default 2.25.
   double smoothing_cells = 2.25;
+  //! Band-fit curvature passes (BandFitOptions::curvature_passes). Default 1.
+  int curvature_passes = 1;
+  //! A patch whose band fit (with one ring of its neighbours' faces, as every fit) misses
+  //! no band by more than wide_overlap_max_miss_cells is refitted with this many rings of
+  //! its neighbours' faces (those facing its axis), which carry their curvature over a wide
+  //! terrace of the patch. In [0, 20]; 0 or 1 disables. Default 5.
+  int wide_overlap_rings = 5;
+  //! See wide_overlap_rings, in cells (> 0). Default 0.3.
+  double wide_overlap_max_miss_cells = 0.3;
   void validate() const;
 };
 

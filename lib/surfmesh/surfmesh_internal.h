@@ -126,9 +126,9 @@ struct PatchResult {
 };
 
 //! The neighbours' vertices added to patch p's fit: those of the faces of other patches
-//! within one vertex ring of p's border that face its axis, not in p, ascending; none for
-//! a patch of fewer than 40 input faces (it fits its own vertices only).
-[[nodiscard]] std::vector<int> overlap_vertices(const TriMesh& mesh, const Segmentation& segmentation, int p);
+//! within `rings` vertex rings of p's border that face its axis, not in p, ascending; none
+//! for a patch of fewer than 40 input faces (it fits its own vertices only).
+[[nodiscard]] std::vector<int> overlap_vertices(const TriMesh& mesh, const Segmentation& segmentation, int p, int rings = 1);
 
 //! The positions of a patch's input vertices, in ascending vertex id order.
 [[nodiscard]] std::vector<Eigen::Vector3d> patch_vertex_points(const TriMesh& mesh, const Patch& patch);

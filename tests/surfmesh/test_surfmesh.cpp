@@ -790,6 +790,9 @@ TEST(Surfmesh, BadOptionsAndMismatchedSegmentation) {
       [](SurfMeshOptions& o) { o.smoothing_passes = -1; },
       [](SurfMeshOptions& o) { o.threads = -2; },
       [](SurfMeshOptions& o) { o.crease_angle_deg = 0.0; },
+      [](SurfMeshOptions& o) { o.cell_grid = {true, Eigen::Vector3d::Zero(), Eigen::Vector3d::Ones()}; o.cell_grid.curvature_passes = -1; },
+      [](SurfMeshOptions& o) { o.cell_grid = {true, Eigen::Vector3d::Zero(), Eigen::Vector3d::Ones()}; o.cell_grid.wide_overlap_rings = 21; },
+      [](SurfMeshOptions& o) { o.cell_grid = {true, Eigen::Vector3d::Zero(), Eigen::Vector3d::Ones()}; o.cell_grid.wide_overlap_max_miss_cells = 0.0; },
   };
   for (const auto& spoil : bad) {
     SurfMeshOptions options;
