@@ -8,6 +8,7 @@
 #include <functional>
 #include <limits>
 #include <numbers>
+#include <optional>
 #include <queue>
 #include <unordered_map>
 #include <unordered_set>
@@ -83,13 +84,7 @@ double max_cos_in_metric(const Vec& a, const Vec& b, const Vec& c, const Mat& M)
   return m;
 }
 
-// Distance from x to the segment uw.
-double distance_to_segment(const Vec& x, const Vec& u, const Vec& w) {
-  const Vec d = w - u;
-  const double l2 = d.squaredNorm();
-  const double t = l2 > 0 ? std::clamp((x - u).dot(d) / l2, 0.0, 1.0) : 0.0;
-  return (u + t * d - x).norm();
-}
+using detail::distance_to_segment;
 
 // Evaluates a SizingField, gradation-limited.
 class Sizing {
@@ -1612,6 +1607,7 @@ void FrontOptions::validate() const {
   if (!(work_budget_factor >= 1.0) || !std::isfinite(work_budget_factor))
     throw InvalidInput("FrontOptions: work_budget_factor must be >= 1");
   if (smoothing_passes < 0) throw InvalidInput("FrontOptions: smoothing_passes must be >= 0");
+  if (!(hull_gap_fraction >= 0.0 && hull_gap_fraction < 1.0)) throw InvalidInput("FrontOptions: hull_gap_fraction must be in [0, 1)");
 }
 
 double triangle_alpha_2d(const Vec& a, const Vec& b, const Vec& c) { return alpha(a, b, c); }
@@ -1631,17 +1627,25 @@ Mesh2d mesh_pslg(const Pslg& pslg, const FrontOptions& options) {
   if (options.sizing.kind == SizingField::Kind::PerVertex && options.sizing.vertex_sizes.size() != pslg.points.size())
     throw InvalidInput("FrontOptions: per-vertex sizing needs one size per PSLG point (" +
                        std::to_string(options.sizing.vertex_sizes.size()) + " for " + std::to_string(pslg.points.size()) + ")");
-  const detail::Domain dom = detail::build_domain(pslg, options.enclose_convex_hull || pslg.segments.empty());
+  if (pslg.points.empty()) throw InvalidInput("PSLG: empty (no points)");
+  Vec lo = pslg.points[0], hi = pslg.points[0];
+  for (const auto& p : pslg.points) {
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
+  }
+  std::optional<Sizing> sizing;  // built once the input is validated (the hull gap may need it first)
+  const auto sized = [&]() -> const Sizing& {
+    if (!sizing) sizing.emplace(options.sizing, pslg.points, lo, hi);
+    return *sizing;
+  };
+  std::function<double(const Vec&)> hull_gap;
+  if (options.hull_gap_fraction > 0) hull_gap = [&](const Vec& x) { return options.hull_gap_fraction * sized()(x); };
+  const detail::Domain dom = detail::build_domain(pslg, options.enclose_convex_hull || pslg.segments.empty(), hull_gap);
   Stopwatch clock;
   Mesh2d mesh;
   auto& P = mesh.points;
   P = pslg.points;
-  Vec lo = P[0], hi = P[0];
-  for (const auto& p : P) {
-    lo = lo.cwiseMin(p);
-    hi = hi.cwiseMax(p);
-  }
-  const Sizing size(options.sizing, pslg.points, lo, hi);
+  const Sizing& size = sized();
   const Metric* metric = options.metric.get();
 
   // Split segments.
@@ -1703,6 +1707,8 @@ Mesh2d mesh_pslg(const Pslg& pslg, const FrontOptions& options) {
   }
   mesh.report.domain_area = 0.5 * area2;
   mesh.report.n_dropped_points = dom.n_dropped_points;
+  mesh.report.n_hull_edges_followed = dom.n_hull_edges_followed;
+  mesh.report.hull_gap_area = dom.hull_gap_area;
   {
     std::unordered_set<int> nodes;
     for (const auto& e : front0) nodes.insert(e[0]);

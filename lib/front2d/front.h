@@ -62,6 +62,14 @@ struct FrontOptions {
   //! polylines are meshed inside their hull. A PSLG without segments (a .node file) always
   //! gets its hull. Default false.
   bool enclose_convex_hull = false;
+  //! With enclose_convex_hull: a convex hull edge ab is left out when the input segments
+  //! join a to b through points all closer to ab than hull_gap_fraction x h (Euclidean
+  //! distance, h the sizing at the point), every input point that close to ab being on such
+  //! a path. The input is then the boundary there, and the strip between it and the edge,
+  //! which no mesh of size h can fill with good triangles, is not part of the domain (area
+  //! in FrontReport::hull_gap_area). 0 = the exact hull (Triangle's -c). Must be in [0, 1).
+  //! Default 0.005 (h / 200, the refinement's smallest resolved gap).
+  double hull_gap_fraction = 0.005;
   //! Smoothing passes over the new points after the front; 0 also turns off the min-angle
   //! relocation. Default 3.
   int smoothing_passes = 3;
@@ -99,6 +107,8 @@ struct FrontReport {
   std::size_t n_refinement_points = 0;  //!< points inserted by the min-angle refinement (segment splits included)
   std::size_t n_gap_hull_points_removed = 0;  //!< convex hull split points removed from gaps narrower than h / 200
   std::size_t n_dropped_points = 0;   //!< input points outside the domain (left unreferenced)
+  std::size_t n_hull_edges_followed = 0;  //!< convex hull edges left out: the input follows them (hull_gap_fraction)
+  double hull_gap_area = 0.0;         //!< area between those edges and the input (not in domain_area)
   double domain_area = 0.0;           //!< area enclosed by the initial front
   double seconds_front = 0.0;         //!< wall time of the front
   double seconds_optimise = 0.0;      //!< wall time of swaps and smoothing

@@ -557,7 +557,7 @@ Mesh2d mesh_file(const Pslg& p, double h) {
   return mesh_pslg(p, o);
 }
 
-void mesh_cgal_files(double divisor, bool include_img5) {
+void mesh_cgal_files(double divisor) {
   for (const char* name : {"fish.poly", "clusters.poly", "trivial.poly", "butterfly.edg", "clusters2.edg", "img5.edg",
                            "img6.edg", "lettre_A.edg"}) {
     SCOPED_TRACE(name);
@@ -566,9 +566,7 @@ void mesh_cgal_files(double divisor, bool include_img5) {
     Stats s;
     EXPECT_EQ(check_mesh(p, m, m.report.domain_area, &s), "");
     EXPECT_GT(m.report.domain_area, 0);
-    if (include_img5 || std::string(name) != "img5.edg") {
-      EXPECT_GE(s.mean_alpha, 0.92);
-    }
+    EXPECT_GE(s.mean_alpha, 0.92);
   }
 }
 
@@ -668,11 +666,10 @@ std::size_t count_unexcused_small_angles(const Pslg& p, const Mesh2d& m, double 
   return bad;
 }
 
-// img5's slivers between its polyline and its convex hull (2e-5 .. 6e-4 wide) are needles
-// at any h; at this coarse h they are too large a share for a mean alpha >= 0.92 (0.88), so
-// it is checked for the invariants only here (mean alpha at diag / 100 and / 200 below).
+// Mean alpha >= 0.92 at h = diag / 60 on every file, img5 included since the convex hull
+// edges its contour follows are left out (its slivers along them made it 0.88 before).
 TEST(Front2dFiles, CgalDemoDomains) {
-  mesh_cgal_files(60, false);
+  mesh_cgal_files(60);
   // trivial.poly: a quadrilateral of area 8 and a point outside it (dropped); with the
   // convex hull enclosed, the area is 8.2 and the point is a mesh vertex.
   const Pslg t = read_poly(test::test_data("pslg/trivial.poly"));
@@ -809,16 +806,99 @@ TEST(Front2dFiles, MinAngleFailuresAreWhereSizeHCannotFit) {
   }
 }
 
-// A polyline running 1e-5 above a convex hull edge: the strip between them is far narrower
-// than h / 100, so every triangle in it is a sliver whatever is done short of points at the
-// strip's width. Each split point of the hull edge adds one sliver; they are removed
-// (collapsed along the edge), one triangle less per point, the other hull edge keeps its.
-TEST(Front2dFiles, HullEdgeAlongANarrowGapLosesItsSplitPoints) {
+// The open polyline (0, 0), (5, offset), (10, 0), (5, 5): the convex hull closes it with the
+// edges (0, 0) -> (10, 0) and (5, 5) -> (0, 0).
+Pslg polyline_along_hull_edge(double offset) {
   Pslg p;
-  p.points = {Vec(0, 0), Vec(5, 1e-5), Vec(10, 0), Vec(5, 5)};
-  p.segments = {{0, 1}, {1, 2}, {2, 3}};  // open: the hull closes it (edges 0-2 and 3-0)
+  p.points = {Vec(0, 0), Vec(5, offset), Vec(10, 0), Vec(5, 5)};
+  p.segments = {{0, 1}, {1, 2}, {2, 3}};
+  return p;
+}
+
+// A polyline running 1e-5 above a convex hull edge, h = 0.5: the strip between them is
+// narrower than h / 200, so the edge is left out and the polyline bounds the domain there
+// (FrontOptions::hull_gap_fraction): no strip, no sliver. The strip's area (the triangle
+// (0, 0), (5, 1e-5), (10, 0): 5e-5) is reported and is exactly the area the domain loses
+// against the exact hull. No triangle has an angle below 30 deg except at the input angles
+// below 60 deg (45 deg at (0, 0) and at (10, 0)), without the gap excuse.
+TEST(Front2dFiles, HullEdgeFollowedByTheInputIsLeftOut) {
+  const Pslg p = polyline_along_hull_edge(1e-5);
   FrontOptions o = uniform(0.5);
   o.enclose_convex_hull = true;
+  const Mesh2d m = mesh_pslg(p, o);
+  EXPECT_EQ(m.report.n_hull_edges_followed, 1u);
+  EXPECT_NEAR(m.report.hull_gap_area, 5e-5, 1e-17);
+  EXPECT_NEAR(m.report.domain_area, 25.0 - 5e-5, 1e-12);
+  EXPECT_EQ(check_mesh(p, m, 25.0 - 5e-5), "");
+  ASSERT_EQ(m.hull_chains.size(), 1u);  // only 3 -> 0 is added
+  EXPECT_EQ(m.hull_chains[0].front(), 3);
+  EXPECT_EQ(m.hull_chains[0].back(), 0);
+  for (const auto& t : m.triangles) {
+    bool in_strip = true;
+    for (int v : t) in_strip = in_strip && m.points[v].y() <= 1e-5;
+    EXPECT_FALSE(in_strip);
+  }
+  EXPECT_EQ(count_unexcused_small_angles(p, m), 0u);
+  o.hull_gap_fraction = 0;  // the exact hull (Triangle's -c)
+  const Mesh2d exact = mesh_pslg(p, o);
+  EXPECT_EQ(exact.report.n_hull_edges_followed, 0u);
+  EXPECT_NEAR(exact.report.domain_area, 25.0, 1e-12);
+  EXPECT_NEAR(exact.report.domain_area - m.report.domain_area, m.report.hull_gap_area, 1e-12);
+
+  // Kept: the polyline 0.01 from the edge (beyond h / 200 = 0.0025) ...
+  const Pslg far = polyline_along_hull_edge(0.01);
+  o.hull_gap_fraction = FrontOptions{}.hull_gap_fraction;
+  const Mesh2d mf = mesh_pslg(far, o);
+  EXPECT_EQ(mf.report.n_hull_edges_followed, 0u);
+  EXPECT_NEAR(mf.report.domain_area, 25.0, 1e-12);
+  EXPECT_EQ(mf.hull_chains.size(), 2u);
+  // ... and an input point inside the strip (it would be left outside the domain).
+  Pslg inside = p;
+  inside.points.push_back(Vec(2, 1e-6));  // the polyline is at y = 4e-6 there
+  const Mesh2d mi = mesh_pslg(inside, o);
+  EXPECT_EQ(mi.report.n_hull_edges_followed, 0u);
+  EXPECT_EQ(mi.report.n_dropped_points, 0u);
+  EXPECT_NEAR(mi.report.domain_area, 25.0, 1e-12);
+  EXPECT_EQ(check_mesh(inside, mi, 25.0), "");
+  // Bad fraction.
+  o.hull_gap_fraction = 1.0;
+  EXPECT_THROW((void)mesh_pslg(p, o), InvalidInput);
+  o.hull_gap_fraction = -0.1;
+  EXPECT_THROW((void)mesh_pslg(p, o), InvalidInput);
+}
+
+// img5's traced contour runs 2e-5 .. 6e-4 inside 7 of its convex hull's 11 edges (one more is
+// an input segment): all 7 are left out at h = diag / 100 (h / 200 = 0.036), and the domain
+// loses exactly the strips' area, which is less than h / 200 times the hull edges' length.
+TEST(Front2dFiles, Img5HullEdgesFollowedByItsContour) {
+  const Pslg p = read_pslg(test::test_data("pslg/img5.edg"));
+  const double h = bbox_diagonal(p) / 100;
+  FrontOptions o = uniform(h);
+  o.enclose_convex_hull = true;
+  const Mesh2d m = mesh_pslg(p, o);
+  o.hull_gap_fraction = 0;
+  const Mesh2d exact = mesh_pslg(p, o);
+  ASSERT_EQ(exact.hull_chains.size(), 10u);
+  EXPECT_EQ(m.report.n_hull_edges_followed, 7u);
+  EXPECT_EQ(m.hull_chains.size(), 3u);
+  double perimeter = 0;
+  for (const auto& ch : exact.hull_chains) perimeter += (exact.points[ch.front()] - exact.points[ch.back()]).norm();
+  EXPECT_GT(m.report.hull_gap_area, 0);
+  EXPECT_LT(m.report.hull_gap_area, h / 200 * perimeter);
+  EXPECT_NEAR(exact.report.domain_area - m.report.domain_area, m.report.hull_gap_area, 1e-9 * exact.report.domain_area);
+  EXPECT_EQ(check_mesh(p, m, m.report.domain_area), "");
+}
+
+// With the exact hull (hull_gap_fraction = 0), the strip between a polyline running 1e-5
+// above a convex hull edge and that edge is far narrower than h / 100, so every triangle in
+// it is a sliver whatever is done short of points at the strip's width. Each split point of
+// the hull edge adds one sliver; they are removed (collapsed along the edge), one triangle
+// less per point, the other hull edge keeps its.
+TEST(Front2dFiles, HullEdgeAlongANarrowGapLosesItsSplitPoints) {
+  const Pslg p = polyline_along_hull_edge(1e-5);
+  FrontOptions o = uniform(0.5);
+  o.enclose_convex_hull = true;
+  o.hull_gap_fraction = 0;
   const Mesh2d m = mesh_pslg(p, o);
   o.refine_min_angle = false;
   const Mesh2d plain = mesh_pslg(p, o);
@@ -876,7 +956,7 @@ TEST(Front2dFiles, MinAngleRefinement) {
   }
 }
 
-TEST(Front2dFilesSlow, CgalDemoDomainsFine) { mesh_cgal_files(200, true); }
+TEST(Front2dFilesSlow, CgalDemoDomainsFine) { mesh_cgal_files(200); }
 
 TEST(Front2dFiles, TriangleExamples) {
   const auto dir = test::shared_data("pslg/triangle_examples");
