@@ -6,7 +6,8 @@
 //! Algorithm (Lo 1985; Peraire et al. 1987), as used by the source method in each patch:
 //!  1. Validate the PSLG (finite, distinct points, no crossing segments, holes inside).
 //!  2. Find the domain: the faces of the segment arrangement (optionally closed by the
-//!     convex hull) minus the faces that contain a hole point.
+//!     convex hull, whose edges that the input follows closer than h / 200 are left out)
+//!     minus the faces that contain a hole point.
 //!  3. Split every segment by the sizing field (unless split_segments is false: then the
 //!     segments are final mesh edges, as the surface mesher hands in its borders).
 //!  4. The front: every segment side facing the domain is a directed edge with the domain on
@@ -29,9 +30,8 @@
 //!  8. Min-angle refinement (without a metric, with split_segments): Delaunay refinement
 //!     (Ruppert; Shewchuk) of the triangles still below 30 deg: circumcentres inserted,
 //!     encroached segment pieces split (concentric shells at small input angles), triangles
-//!     at input angles below 60 deg excused, gaps narrower than h / 200 left; capped. Then
-//!     smoothing that keeps good triangles good, and the split points of convex hull edges
-//!     that bound only such a gap are removed.
+//!     at input angles below 60 deg excused; capped. Then smoothing that keeps good
+//!     triangles good.
 //!
 //! Output: counter-clockwise triangles, every input segment a chain of mesh edges, every
 //! input point kept at its input index.
@@ -105,7 +105,6 @@ struct FrontReport {
   std::size_t n_open_edges = 0;       //!< front edges left open (0 when Ok)
   std::size_t n_swaps = 0;            //!< edge swaps in the optimisation
   std::size_t n_refinement_points = 0;  //!< points inserted by the min-angle refinement (segment splits included)
-  std::size_t n_gap_hull_points_removed = 0;  //!< convex hull split points removed from gaps narrower than h / 200
   std::size_t n_dropped_points = 0;   //!< input points outside the domain (left unreferenced)
   std::size_t n_hull_edges_followed = 0;  //!< convex hull edges left out: the input follows them (hull_gap_fraction)
   double hull_gap_area = 0.0;         //!< area between those edges and the input (not in domain_area)

@@ -109,8 +109,7 @@ void add_mesh2d_command(CLI::App& app) {
       std::cout << to_json(report) << "\n";
     } else {
       std::cout << "triangles " << mesh.triangles.size() << ", points " << mesh.points.size() << " (new "
-                << mesh.report.n_new_points << ", refinement " << mesh.report.n_refinement_points << ", hull points removed from gaps "
-                << mesh.report.n_gap_hull_points_removed << "), hull edges followed by the input " << mesh.report.n_hull_edges_followed
+                << mesh.report.n_new_points << ", refinement " << mesh.report.n_refinement_points << "), hull edges followed by the input " << mesh.report.n_hull_edges_followed
                 << " (area left out " << mesh.report.hull_gap_area << "), repairs " << mesh.report.n_repairs << ", swaps " << mesh.report.n_swaps
                 << ", domain area " << mesh.report.domain_area << ", front " << mesh.report.seconds_front << " s, optimise "
                 << mesh.report.seconds_optimise << " s\n"
