@@ -426,6 +426,9 @@ Domain build_domain(const Pslg& pslg, bool enclose_convex_hull, const std::funct
     d.side_marker.push_back({f0 >= 0 ? marker[static_cast<std::size_t>(f0)] : 0, f1 >= 0 ? marker[static_cast<std::size_t>(f1)] : 0});
     any = any || in_domain(f0) || in_domain(f1);
   }
+  // Hull edges left out can leave no bounded face (an open polyline within the gap of its
+  // whole hull): then the exact hull is the domain, however thin.
+  if (!any && d.n_hull_edges_followed > 0) return build_domain(pslg, enclose_convex_hull, {});
   if (!any) throw InvalidInput("PSLG: the domain is empty (no bounded face, or every face is a hole)");
   for (int i : lone) {
     if (in_domain(arr.locate(P[static_cast<std::size_t>(i)])))

@@ -744,6 +744,15 @@ TEST(Front2dFiles, HullEdgeFollowedByTheInputIsLeftOut) {
   EXPECT_EQ(mi.report.n_dropped_points, 0u);
   EXPECT_NEAR(mi.report.domain_area, 25.0, 1e-12);
   EXPECT_EQ(check_mesh(inside, mi, 25.0), "");
+  // The polyline alone (no segment to (5, 5)): leaving the edge out would leave no domain,
+  // so the exact hull, the strip itself, is meshed.
+  Pslg alone;
+  alone.points = {Vec(0, 0), Vec(5, 1e-5), Vec(10, 0)};
+  alone.segments = {{0, 1}, {1, 2}};
+  const Mesh2d ma = mesh_pslg(alone, o);
+  EXPECT_EQ(ma.report.n_hull_edges_followed, 0u);
+  EXPECT_NEAR(ma.report.domain_area, 5e-5, 1e-15);
+  EXPECT_EQ(check_mesh(alone, ma, 5e-5), "");
   // Bad fraction.
   o.hull_gap_fraction = 1.0;
   EXPECT_THROW((void)mesh_pslg(p, o), InvalidInput);
