@@ -3,12 +3,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <numeric>
 #include <set>
 #include <sstream>
 #include <string>
 #include <unordered_map>
+#include <unordered_set>
 
 #include "nurbsfront/core/error.h"
 #include "nurbsfront/front2d/predicates.h"
@@ -34,8 +36,70 @@ std::uint64_t undirected_key(int a, int b) {
   return (lo << 32) | hi;
 }
 
-// Convex hull edges (counter-clockwise), split at every point lying exactly on them.
-std::vector<std::array<int, 2>> hull_edges(const std::vector<Vec>& P) {
+// Whether q lies inside or on the closed polygon `poly` (winding number, exact orientations).
+bool in_closed_polygon(const std::vector<Vec>& P, const std::vector<int>& poly, const Vec& q) {
+  int winding = 0;
+  for (std::size_t i = 0; i < poly.size(); ++i) {
+    const Vec& u = P[static_cast<std::size_t>(poly[i])];
+    const Vec& w = P[static_cast<std::size_t>(poly[(i + 1) % poly.size()])];
+    if (front2d::segments_intersect(u, w, q, q)) return true;
+    const int side = orient2d(u, w, q);
+    if (u.y() <= q.y()) {
+      if (w.y() > q.y() && side > 0) ++winding;
+    } else if (w.y() <= q.y() && side < 0) {
+      --winding;
+    }
+  }
+  return winding != 0;
+}
+
+// Whether the input segments join hull vertex a to hull vertex b (along the hull edge ab)
+// through points that all lie closer to the edge than gap(point), with no other input point
+// in the strip between the edge and that path. Then the edge is left out and the path bounds
+// the domain there; `area` gets the strip's area.
+bool hull_edge_follows_input(const std::vector<Vec>& P, const std::vector<std::vector<int>>& adjacent, int a, int b,
+                             const std::function<double(const Vec&)>& gap, double& area) {
+  const Vec& A = P[static_cast<std::size_t>(a)];
+  const Vec& B = P[static_cast<std::size_t>(b)];
+  std::unordered_map<int, int> parent;  // near point -> the point it was reached from (a: -1, not reached: -2)
+  parent[a] = -1;
+  std::vector<int> stack = {a};
+  while (!stack.empty() && !parent.count(b)) {
+    const int u = stack.back();
+    stack.pop_back();
+    for (int w : adjacent[static_cast<std::size_t>(u)]) {
+      if (parent.count(w)) continue;
+      const Vec& x = P[static_cast<std::size_t>(w)];
+      if (w != b && !(distance_to_segment(x, A, B) < gap(x))) continue;
+      parent[w] = u;
+      stack.push_back(w);
+    }
+  }
+  if (!parent.count(b)) return false;
+  std::vector<int> strip = {a};  // a, b, then the path back to a
+  for (int v = b; v != a; v = parent[v]) strip.push_back(v);
+  double depth = 0;
+  area = 0;  // shoelace relative to A (the edge a -> b adds nothing)
+  for (std::size_t i = 1; i < strip.size(); ++i) {
+    const Vec p = P[static_cast<std::size_t>(strip[i])] - A;
+    const Vec q = P[static_cast<std::size_t>(strip[(i + 1) % strip.size()])] - A;
+    area += 0.5 * (p.x() * q.y() - p.y() * q.x());
+    depth = std::max(depth, distance_to_segment(P[static_cast<std::size_t>(strip[i])], A, B));
+  }
+  area = std::abs(area);
+  std::unordered_set<int> on_path(strip.begin(), strip.end());
+  for (std::size_t i = 0; i < P.size(); ++i)
+    if (!on_path.count(static_cast<int>(i)) && distance_to_segment(P[i], A, B) <= depth && in_closed_polygon(P, strip, P[i]))
+      return false;
+  return true;
+}
+
+// Convex hull edges (counter-clockwise), split at every point lying exactly on them. With a
+// gap function, an edge that the input follows within the gap (hull_edge_follows_input) is
+// left out; `removed` counts those edges and `removed_area` adds their strips' areas.
+std::vector<std::array<int, 2>> hull_edges(const std::vector<Vec>& P, const std::vector<std::array<int, 2>>& input,
+                                           const std::function<double(const Vec&)>& gap, std::size_t& removed,
+                                           double& removed_area) {
   std::vector<int> order(P.size());
   std::iota(order.begin(), order.end(), 0);
   std::sort(order.begin(), order.end(), [&](int i, int j) {
@@ -53,10 +117,26 @@ std::vector<std::array<int, 2>> hull_edges(const std::vector<Vec>& P) {
     h[k++] = i;
   }
   h.resize(k - 1);
+  std::vector<std::vector<int>> adjacent;
+  if (gap) {
+    adjacent.resize(P.size());
+    for (const auto& s : input) {
+      adjacent[static_cast<std::size_t>(s[0])].push_back(s[1]);
+      adjacent[static_cast<std::size_t>(s[1])].push_back(s[0]);
+    }
+  }
   std::vector<std::array<int, 2>> edges;
   for (std::size_t e = 0; e < h.size(); ++e) {
     const int a = h[e];
     const int b = h[(e + 1) % h.size()];
+    double area = 0;
+    const bool is_input = gap && std::find(adjacent[static_cast<std::size_t>(a)].begin(),
+                                           adjacent[static_cast<std::size_t>(a)].end(), b) != adjacent[static_cast<std::size_t>(a)].end();
+    if (gap && !is_input && hull_edge_follows_input(P, adjacent, a, b, gap, area)) {
+      ++removed;
+      removed_area += area;
+      continue;
+    }
     std::vector<std::pair<double, int>> on;
     const Vec d = P[b] - P[a];
     for (std::size_t i = 0; i < P.size(); ++i) {
@@ -266,7 +346,7 @@ class Arrangement {
 
 }  // namespace
 
-Domain build_domain(const Pslg& pslg, bool enclose_convex_hull) {
+Domain build_domain(const Pslg& pslg, bool enclose_convex_hull, const std::function<double(const Vec&)>& hull_gap) {
   const auto& P = pslg.points;
   if (P.empty()) throw InvalidInput("PSLG: empty (no points)");
   for (std::size_t i = 0; i < P.size(); ++i)
@@ -314,7 +394,7 @@ Domain build_domain(const Pslg& pslg, bool enclose_convex_hull) {
     check_crossings(P, d.segments, off_input);
   }
   if (enclose_convex_hull) {
-    for (const auto& e : hull_edges(P))
+    for (const auto& e : hull_edges(P, d.segments, hull_gap, d.n_hull_edges_followed, d.hull_gap_area))
       if (seen.try_emplace(undirected_key(e[0], e[1]), static_cast<int>(d.segments.size())).second) d.segments.push_back(e);
   }
   std::vector<bool> on_segment(P.size(), false);
@@ -346,6 +426,9 @@ Domain build_domain(const Pslg& pslg, bool enclose_convex_hull) {
     d.side_marker.push_back({f0 >= 0 ? marker[static_cast<std::size_t>(f0)] : 0, f1 >= 0 ? marker[static_cast<std::size_t>(f1)] : 0});
     any = any || in_domain(f0) || in_domain(f1);
   }
+  // Hull edges left out can leave no bounded face (an open polyline within the gap of its
+  // whole hull): then the exact hull is the domain, however thin.
+  if (!any && d.n_hull_edges_followed > 0) return build_domain(pslg, enclose_convex_hull, {});
   if (!any) throw InvalidInput("PSLG: the domain is empty (no bounded face, or every face is a hole)");
   for (int i : lone) {
     if (in_domain(arr.locate(P[static_cast<std::size_t>(i)])))

@@ -8,6 +8,7 @@
 #include <functional>
 #include <limits>
 #include <numbers>
+#include <optional>
 #include <queue>
 #include <unordered_map>
 #include <unordered_set>
@@ -43,7 +44,6 @@ constexpr int kRelocateRounds = 2;          // relocation + swaps rounds
 // Delaunay refinement (Optimiser::refine).
 constexpr std::size_t kMaxCavity = 4096;          // triangles examined for encroachment per circumcentre
 constexpr double kRefineMinLengthRelative = 1e-9;  // no piece shorter than twice this times the bbox diagonal is split
-constexpr double kRefineMinGapFraction = 0.005;    // a vertex closer than this times h to a piece does not encroach it
 constexpr double kRefineMaxPointsFactor = 2.0;     // at most this times the triangles (+1000) new points
 constexpr double kAutoSizeDivisor = 40.0;  // automatic uniform size: bbox diagonal / this
 constexpr int kSizingGridCells = 128;      // background grid of callback sizing fields, per side
@@ -83,13 +83,7 @@ double max_cos_in_metric(const Vec& a, const Vec& b, const Vec& c, const Mat& M)
   return m;
 }
 
-// Distance from x to the segment uw.
-double distance_to_segment(const Vec& x, const Vec& u, const Vec& w) {
-  const Vec d = w - u;
-  const double l2 = d.squaredNorm();
-  const double t = l2 > 0 ? std::clamp((x - u).dot(d) / l2, 0.0, 1.0) : 0.0;
-  return (u + t * d - x).norm();
-}
+using detail::distance_to_segment;
 
 // Evaluates a SizingField, gradation-limited.
 class Sizing {
@@ -708,7 +702,6 @@ struct RefineContext {
   int n_input = 0;           // input points precede every other point
   double min_length = 0;     // pieces shorter than twice this are not split
   const Sizing* size = nullptr;  // the sizing field h
-  double min_gap_fraction = 0;   // a vertex closer than this times h to a piece does not encroach it
   std::size_t max_points = 0;  // cap on the points the refinement inserts
 };
 
@@ -964,9 +957,7 @@ class Optimiser {
   // that encroach pieces make them split too. Triangles are excused (never split) when their
   // smallest angle is at an input vertex with an input angle below 60 deg, or when their
   // shortest edge joins two segments meeting at such an angle (Shewchuk's rule: the narrow
-  // wedge near the apex). A vertex closer to a piece than kRefineMinGapFraction h does not
-  // encroach it: gaps that narrow are left as they are (resolving them takes points all along
-  // the gap at its width). Every insertion or split keeps every triangle exactly
+  // wedge near the apex). Every insertion or split keeps every triangle exactly
   // counter-clockwise (checked; a split that would not is skipped) and the inserted points
   // are capped, so the loop ends. Returns the number of points inserted. A mesh without bad
   // triangles costs one scan.
@@ -1009,8 +1000,7 @@ class Optimiser {
       // the triangle stays.
       if (loc.kind != Located::Inside && loc.kind != Located::OnEdge) continue;
       touched.clear();
-      const int s = encroached_piece(loc, c, rc);
-      if (s == -2) continue;  // encroaches a piece in a gap too narrow to resolve: the triangle stays
+      const int s = encroached_piece(loc, c);
       if (s >= 0) {
         if (!split_piece(s, rc, touched)) continue;
         queue.push(item);                           // retried after the split
@@ -1093,19 +1083,9 @@ class Optimiser {
     return false;
   }
 
-  // Whether the vertex x encroaches the piece of slot s: x in its diametral circle, but not
-  // closer to it than the smallest gap resolved (a gap of width g between two boundary
-  // pieces needs points all along it at spacing about g: far too many when g << h).
-  [[nodiscard]] bool encroached_by(int s, int x, const RefineContext& rc) const {
-    const int u = v(s), w = v(nxt(s));
-    if (!encroaches(pt(u), pt(w), pt(x))) return false;
-    return !too_close(pt(u), pt(w), pt(x), rc);
-  }
+  // Whether the vertex x encroaches the piece of slot s: x in its diametral circle.
+  [[nodiscard]] bool encroached_by(int s, int x) const { return encroaches(pt(v(s)), pt(v(nxt(s))), pt(x)); }
 
-  // Whether x is closer to the piece uw than the smallest gap the refinement resolves.
-  [[nodiscard]] static bool too_close(const Vec& u, const Vec& w, const Vec& x, const RefineContext& rc) {
-    return distance_to_segment(x, u, w) < rc.min_gap_fraction * (*rc.size)(0.5 * (u + w));
-  }
   // Whether x lies in the diametral circle of the piece uw.
   [[nodiscard]] static bool encroaches(const Vec& u, const Vec& w, const Vec& x) { return (u - x).dot(w - x) < 0.0; }
 
@@ -1121,7 +1101,7 @@ class Optimiser {
       for (int t : ts)
         for (int k = 0; k < 3; ++k) {
           const int s = 3 * t + k;
-          if (C_[static_cast<std::size_t>(s)] && encroached_by(s, v(prv(s)), rc)) stack.push_back(s);
+          if (C_[static_cast<std::size_t>(s)] && encroached_by(s, v(prv(s)))) stack.push_back(s);
         }
     };
     scan(tris);
@@ -1129,7 +1109,7 @@ class Optimiser {
     while (!stack.empty() && inserted < rc.max_points) {
       const int s = stack.back();
       stack.pop_back();
-      if (!C_[static_cast<std::size_t>(s)] || !encroached_by(s, v(prv(s)), rc)) continue;
+      if (!C_[static_cast<std::size_t>(s)] || !encroached_by(s, v(prv(s)))) continue;
       touched.clear();
       if (!split_piece(s, rc, touched)) continue;
       ++inserted;
@@ -1182,9 +1162,8 @@ class Optimiser {
 
   // A constrained edge of the cavity of x (the triangles whose circumcircle contains x,
   // reached from the located triangle without crossing a constrained edge) whose diametral
-  // circle contains x; -1 if none; -2 if x is in such a circle but closer to the piece than
-  // the smallest gap resolved. On a constrained edge, x encroaches that edge.
-  [[nodiscard]] int encroached_piece(const Located& loc, const Vec& x, const RefineContext& rc) {
+  // circle contains x; -1 if none. On a constrained edge, x encroaches that edge.
+  [[nodiscard]] int encroached_piece(const Located& loc, const Vec& x) {
     if (loc.kind == Located::OnEdge && C_[static_cast<std::size_t>(loc.slot)]) return loc.slot;
     cavity_.clear();
     cavity_.push_back(loc.tri);
@@ -1196,7 +1175,7 @@ class Optimiser {
         const Vec& a = pt(v(s));
         const Vec& b = pt(v(nxt(s)));
         if (C_[static_cast<std::size_t>(s)]) {
-          if (encroaches(a, b, x)) return too_close(a, b, x, rc) ? -2 : s;
+          if (encroaches(a, b, x)) return s;
           continue;
         }
         const int u = N_[static_cast<std::size_t>(s)] / 3;
@@ -1495,116 +1474,6 @@ class Optimiser {
   std::vector<int> seg_stack_;    // refinement scratch
 };
 
-// Convex hull pieces along gaps the refinement leaves unresolved (docs step 11). A split point of
-// a convex hull edge whose every neighbour lies closer to that edge than the smallest gap the
-// refinement resolves bounds only such a gap: every triangle there is a sliver, and each split
-// point of the hull edge adds one. The point is removed by collapsing it into its neighbour
-// along the edge (kept only if the triangles stay exactly counter-clockwise and the link
-// condition holds), so the gap keeps the fewest slivers: one per node on its other side.
-// The triangles, their regions, the points and the chains are compacted; only split points
-// are removed, so input points keep their indices.
-// Returns the number of points removed.
-std::size_t collapse_hull_points_in_gaps(std::vector<Vec>& P, std::vector<std::array<int, 3>>& T, std::vector<int>& regions,
-                                         std::vector<std::vector<int>>& chains, const std::vector<bool>& is_hull,
-                                         const Sizing& size, double gap_fraction) {
-  bool any = false;
-  for (std::size_t k = 0; k < chains.size(); ++k) any = any || (is_hull[k] && chains[k].size() > 2);
-  if (!any) return 0;
-  std::vector<std::vector<int>> inc(P.size());
-  for (std::size_t t = 0; t < T.size(); ++t)
-    for (int x : T[t]) inc[static_cast<std::size_t>(x)].push_back(static_cast<int>(t));
-  std::vector<bool> dead(T.size(), false);
-  std::vector<int> nb_p, nb_q;
-  auto neighbours = [&](int v, std::vector<int>& out) {
-    out.clear();
-    for (int t : inc[static_cast<std::size_t>(v)])
-      if (!dead[static_cast<std::size_t>(t)])
-        for (int x : T[static_cast<std::size_t>(t)])
-          if (x != v) out.push_back(x);
-    std::sort(out.begin(), out.end());
-    out.erase(std::unique(out.begin(), out.end()), out.end());
-  };
-  // Collapses p into q (p q a boundary edge); false (nothing changed) if not valid.
-  auto collapse = [&](int p, int q) {
-    int t_pq = -1;
-    for (int t : inc[static_cast<std::size_t>(p)]) {
-      if (dead[static_cast<std::size_t>(t)]) continue;
-      const auto& tr = T[static_cast<std::size_t>(t)];
-      if (tr[0] == q || tr[1] == q || tr[2] == q) {
-        if (t_pq >= 0) return false;  // pq is not a boundary edge
-        t_pq = t;
-      }
-    }
-    if (t_pq < 0) return false;
-    const auto& tr = T[static_cast<std::size_t>(t_pq)];
-    const int r = tr[0] != p && tr[0] != q ? tr[0] : (tr[1] != p && tr[1] != q ? tr[1] : tr[2]);
-    neighbours(p, nb_p);
-    neighbours(q, nb_q);
-    std::size_t common = 0;
-    for (int x : nb_p) common += std::binary_search(nb_q.begin(), nb_q.end(), x) ? 1 : 0;
-    if (common != 1 || !std::binary_search(nb_p.begin(), nb_p.end(), r)) return false;  // link condition
-    for (int t : inc[static_cast<std::size_t>(p)]) {
-      if (dead[static_cast<std::size_t>(t)] || t == t_pq) continue;
-      std::array<int, 3> u = T[static_cast<std::size_t>(t)];
-      for (int& x : u) x = x == p ? q : x;
-      if (orient2d(P[static_cast<std::size_t>(u[0])], P[static_cast<std::size_t>(u[1])], P[static_cast<std::size_t>(u[2])]) <= 0) return false;
-    }
-    dead[static_cast<std::size_t>(t_pq)] = true;
-    for (int t : inc[static_cast<std::size_t>(p)]) {
-      if (dead[static_cast<std::size_t>(t)]) continue;
-      for (int& x : T[static_cast<std::size_t>(t)]) x = x == p ? q : x;
-      inc[static_cast<std::size_t>(q)].push_back(t);
-    }
-    inc[static_cast<std::size_t>(p)].clear();
-    return true;
-  };
-  std::vector<bool> removed(P.size(), false);
-  std::size_t n_removed = 0;
-  for (std::size_t k = 0; k < chains.size(); ++k) {
-    auto& ch = chains[k];
-    if (!is_hull[k] || ch.size() <= 2) continue;
-    const Vec& A = P[static_cast<std::size_t>(ch.front())];
-    const Vec& B = P[static_cast<std::size_t>(ch.back())];
-    std::vector<int> kept{ch.front()};
-    for (std::size_t i = 1; i + 1 < ch.size(); ++i) {
-      const int p = ch[i];
-      const double gap = gap_fraction * size(P[static_cast<std::size_t>(p)]);
-      neighbours(p, nb_p);
-      bool thin = true;
-      for (int x : nb_p) thin = thin && distance_to_segment(P[static_cast<std::size_t>(x)], A, B) < gap;
-      if (thin && (collapse(p, kept.back()) || collapse(p, ch[i + 1]))) {
-        removed[static_cast<std::size_t>(p)] = true;
-        ++n_removed;
-      } else {
-        kept.push_back(p);
-      }
-    }
-    kept.push_back(ch.back());
-    ch = std::move(kept);
-  }
-  if (n_removed == 0) return 0;
-  std::vector<int> index(P.size(), -1);
-  std::size_t n = 0;
-  for (std::size_t i = 0; i < P.size(); ++i)
-    if (!removed[i]) {
-      index[i] = static_cast<int>(n);
-      P[n++] = P[i];
-    }
-  P.resize(n);
-  std::size_t m = 0;
-  for (std::size_t t = 0; t < T.size(); ++t)
-    if (!dead[t]) {
-      for (int& x : T[t]) x = index[static_cast<std::size_t>(x)];
-      T[m] = T[t];
-      regions[m++] = regions[t];
-    }
-  T.resize(m);
-  regions.resize(m);
-  for (auto& ch : chains)
-    for (int& x : ch) x = index[static_cast<std::size_t>(x)];
-  return n_removed;
-}
-
 }  // namespace
 
 void FrontOptions::validate() const {
@@ -1612,6 +1481,7 @@ void FrontOptions::validate() const {
   if (!(work_budget_factor >= 1.0) || !std::isfinite(work_budget_factor))
     throw InvalidInput("FrontOptions: work_budget_factor must be >= 1");
   if (smoothing_passes < 0) throw InvalidInput("FrontOptions: smoothing_passes must be >= 0");
+  if (!(hull_gap_fraction >= 0.0 && hull_gap_fraction < 1.0)) throw InvalidInput("FrontOptions: hull_gap_fraction must be in [0, 1)");
 }
 
 double triangle_alpha_2d(const Vec& a, const Vec& b, const Vec& c) { return alpha(a, b, c); }
@@ -1631,17 +1501,25 @@ Mesh2d mesh_pslg(const Pslg& pslg, const FrontOptions& options) {
   if (options.sizing.kind == SizingField::Kind::PerVertex && options.sizing.vertex_sizes.size() != pslg.points.size())
     throw InvalidInput("FrontOptions: per-vertex sizing needs one size per PSLG point (" +
                        std::to_string(options.sizing.vertex_sizes.size()) + " for " + std::to_string(pslg.points.size()) + ")");
-  const detail::Domain dom = detail::build_domain(pslg, options.enclose_convex_hull || pslg.segments.empty());
+  if (pslg.points.empty()) throw InvalidInput("PSLG: empty (no points)");
+  Vec lo = pslg.points[0], hi = pslg.points[0];
+  for (const auto& p : pslg.points) {
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
+  }
+  std::optional<Sizing> sizing;  // built once the input is validated (the hull gap may need it first)
+  const auto sized = [&]() -> const Sizing& {
+    if (!sizing) sizing.emplace(options.sizing, pslg.points, lo, hi);
+    return *sizing;
+  };
+  std::function<double(const Vec&)> hull_gap;
+  if (options.hull_gap_fraction > 0) hull_gap = [&](const Vec& x) { return options.hull_gap_fraction * sized()(x); };
+  const detail::Domain dom = detail::build_domain(pslg, options.enclose_convex_hull || pslg.segments.empty(), hull_gap);
   Stopwatch clock;
   Mesh2d mesh;
   auto& P = mesh.points;
   P = pslg.points;
-  Vec lo = P[0], hi = P[0];
-  for (const auto& p : P) {
-    lo = lo.cwiseMin(p);
-    hi = hi.cwiseMax(p);
-  }
-  const Sizing size(options.sizing, pslg.points, lo, hi);
+  const Sizing& size = sized();
   const Metric* metric = options.metric.get();
 
   // Split segments.
@@ -1703,6 +1581,8 @@ Mesh2d mesh_pslg(const Pslg& pslg, const FrontOptions& options) {
   }
   mesh.report.domain_area = 0.5 * area2;
   mesh.report.n_dropped_points = dom.n_dropped_points;
+  mesh.report.n_hull_edges_followed = dom.n_hull_edges_followed;
+  mesh.report.hull_gap_area = dom.hull_gap_area;
   {
     std::unordered_set<int> nodes;
     for (const auto& e : front0) nodes.insert(e[0]);
@@ -1771,7 +1651,6 @@ Mesh2d mesh_pslg(const Pslg& pslg, const FrontOptions& options) {
     rc.n_input = static_cast<int>(pslg.points.size());
     rc.min_length = kRefineMinLengthRelative * (hi - lo).norm();
     rc.size = &size;
-    rc.min_gap_fraction = kRefineMinGapFraction;
     rc.max_points = static_cast<std::size_t>(kRefineMaxPointsFactor * static_cast<double>(mesh.triangles.size())) + 1000;
     const auto relocate = [&]() {
       for (int round = 0; round < kRelocateRounds; ++round) {
@@ -1791,10 +1670,6 @@ Mesh2d mesh_pslg(const Pslg& pslg, const FrontOptions& options) {
   mesh.triangle_regions = opt.regions(side_marker);
   std::vector<bool> is_hull(dom.segments.size(), true);  // the convex hull edges added (enclose_convex_hull)
   for (int k : dom.input_segment) is_hull[static_cast<std::size_t>(k)] = false;
-  if (options.refine_min_angle && options.split_segments && !metric) {
-    mesh.report.n_gap_hull_points_removed =
-        collapse_hull_points_in_gaps(P, mesh.triangles, mesh.triangle_regions, chains, is_hull, size, kRefineMinGapFraction);
-  }
   mesh.report.seconds_optimise = clock.seconds();
   report_progress(options.progress, "front2d: optimise", 1.0);
 

@@ -6,7 +6,8 @@
 //! Algorithm (Lo 1985; Peraire et al. 1987), as used by the source method in each patch:
 //!  1. Validate the PSLG (finite, distinct points, no crossing segments, holes inside).
 //!  2. Find the domain: the faces of the segment arrangement (optionally closed by the
-//!     convex hull) minus the faces that contain a hole point.
+//!     convex hull, whose edges that the input follows closer than h / 200 are left out)
+//!     minus the faces that contain a hole point.
 //!  3. Split every segment by the sizing field (unless split_segments is false: then the
 //!     segments are final mesh edges, as the surface mesher hands in its borders).
 //!  4. The front: every segment side facing the domain is a directed edge with the domain on
@@ -29,9 +30,8 @@
 //!  8. Min-angle refinement (without a metric, with split_segments): Delaunay refinement
 //!     (Ruppert; Shewchuk) of the triangles still below 30 deg: circumcentres inserted,
 //!     encroached segment pieces split (concentric shells at small input angles), triangles
-//!     at input angles below 60 deg excused, gaps narrower than h / 200 left; capped. Then
-//!     smoothing that keeps good triangles good, and the split points of convex hull edges
-//!     that bound only such a gap are removed.
+//!     at input angles below 60 deg excused; capped. Then smoothing that keeps good
+//!     triangles good.
 //!
 //! Output: counter-clockwise triangles, every input segment a chain of mesh edges, every
 //! input point kept at its input index.
@@ -62,6 +62,14 @@ struct FrontOptions {
   //! polylines are meshed inside their hull. A PSLG without segments (a .node file) always
   //! gets its hull. Default false.
   bool enclose_convex_hull = false;
+  //! With enclose_convex_hull: a convex hull edge ab is left out when the input segments
+  //! join a to b through points all closer to ab than hull_gap_fraction x h (Euclidean
+  //! distance, h the sizing at the point), every input point that close to ab being on such
+  //! a path. The input is then the boundary there, and the strip between it and the edge,
+  //! which no mesh of size h can fill with good triangles, is not part of the domain (area
+  //! in FrontReport::hull_gap_area). 0 = the exact hull (Triangle's -c). Must be in [0, 1).
+  //! Default 0.005 (h / 200, the refinement's smallest resolved gap).
+  double hull_gap_fraction = 0.005;
   //! Smoothing passes over the new points after the front; 0 also turns off the min-angle
   //! relocation. Default 3.
   int smoothing_passes = 3;
@@ -97,8 +105,9 @@ struct FrontReport {
   std::size_t n_open_edges = 0;       //!< front edges left open (0 when Ok)
   std::size_t n_swaps = 0;            //!< edge swaps in the optimisation
   std::size_t n_refinement_points = 0;  //!< points inserted by the min-angle refinement (segment splits included)
-  std::size_t n_gap_hull_points_removed = 0;  //!< convex hull split points removed from gaps narrower than h / 200
   std::size_t n_dropped_points = 0;   //!< input points outside the domain (left unreferenced)
+  std::size_t n_hull_edges_followed = 0;  //!< convex hull edges left out: the input follows them (hull_gap_fraction)
+  double hull_gap_area = 0.0;         //!< area between those edges and the input (not in domain_area)
   double domain_area = 0.0;           //!< area enclosed by the initial front
   double seconds_front = 0.0;         //!< wall time of the front
   double seconds_optimise = 0.0;      //!< wall time of swaps and smoothing

@@ -21,8 +21,9 @@ struct Region {
 //! A planar straight-line graph: the input of the 2D mesher.
 //!
 //! The domain is the union of the bounded faces of the arrangement of `segments` (plus
-//! the convex hull edges when FrontOptions::enclose_convex_hull is set), minus every face
-//! containing a hole point. Segments must not cross or overlap, no point may lie inside a
+//! the convex hull edges when FrontOptions::enclose_convex_hull is set, except those the
+//! segments follow within FrontOptions::hull_gap_fraction), minus every face containing a
+//! hole point. Segments must not cross or overlap, no point may lie inside a
 //! segment, and points must be distinct. Points that are on no segment are kept as mesh
 //! vertices when they lie inside the domain.
 struct Pslg {

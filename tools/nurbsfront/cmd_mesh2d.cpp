@@ -26,6 +26,7 @@ struct Mesh2dArgs {
   double gradation = SizingField{}.gradation;
   bool vertex_sizes = false;
   bool convex_hull = false;
+  double hull_gap = FrontOptions{}.hull_gap_fraction;
   bool keep_segments = false;
   int smoothing_passes = FrontOptions{}.smoothing_passes;
   bool no_swaps = false;
@@ -54,6 +55,9 @@ void add_mesh2d_command(CLI::App& app) {
   cmd->add_flag("--vertex-sizes", args->vertex_sizes, "Use the first vertex attribute of the .poly/.node as the size at each vertex");
   cmd->add_option("--gradation", args->gradation, "Maximum size growth: |grad h| <= gradation - 1")->capture_default_str();
   cmd->add_flag("--convex-hull", args->convex_hull, "Enclose the convex hull with segments (as Triangle -c)");
+  cmd->add_option("--hull-gap", args->hull_gap,
+                  "With --convex-hull: a hull edge the input follows closer than this times the size is left out (0 = exact hull)")
+      ->capture_default_str();
   cmd->add_flag("--keep-segments", args->keep_segments, "Do not split the input segments (already discretised)");
   cmd->add_option("--smooth", args->smoothing_passes, "Smoothing passes")->capture_default_str();
   cmd->add_flag("--no-swaps", args->no_swaps, "No edge swaps after the front");
@@ -72,6 +76,7 @@ void add_mesh2d_command(CLI::App& app) {
     }
     options.sizing.gradation = args->gradation;
     options.enclose_convex_hull = args->convex_hull;
+    options.hull_gap_fraction = args->hull_gap;
     options.split_segments = !args->keep_segments;
     options.smoothing_passes = args->smoothing_passes;
     options.swap_edges = !args->no_swaps;
@@ -104,8 +109,8 @@ void add_mesh2d_command(CLI::App& app) {
       std::cout << to_json(report) << "\n";
     } else {
       std::cout << "triangles " << mesh.triangles.size() << ", points " << mesh.points.size() << " (new "
-                << mesh.report.n_new_points << ", refinement " << mesh.report.n_refinement_points << ", hull points removed from gaps "
-                << mesh.report.n_gap_hull_points_removed << "), repairs " << mesh.report.n_repairs << ", swaps " << mesh.report.n_swaps
+                << mesh.report.n_new_points << ", refinement " << mesh.report.n_refinement_points << "), hull edges followed by the input " << mesh.report.n_hull_edges_followed
+                << " (area left out " << mesh.report.hull_gap_area << "), repairs " << mesh.report.n_repairs << ", swaps " << mesh.report.n_swaps
                 << ", domain area " << mesh.report.domain_area << ", front " << mesh.report.seconds_front << " s, optimise "
                 << mesh.report.seconds_optimise << " s\n"
                 << to_text(report);
