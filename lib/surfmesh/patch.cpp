@@ -254,9 +254,16 @@ std::vector<Eigen::Vector3d> patch_vertex_points(const TriMesh& mesh, const Patc
   return points;
 }
 
+namespace {
+// The margin around a fit's rectangle, so every evaluation during meshing is inside.
+double fit_margin(double mean_edge, const Eigen::Vector2d& lo, const Eigen::Vector2d& hi) {
+  return 0.02 * (hi - lo).norm() + mean_edge;
+}
+}  // namespace
+
 FitOptions plain_fit_options(const SurfMeshOptions& options, double mean_edge, const Eigen::Vector2d& lo,
                              const Eigen::Vector2d& hi) {
-  const double margin = 0.02 * (hi - lo).norm() + mean_edge;
+  const double margin = fit_margin(mean_edge, lo, hi);
   FitOptions fit;
   fit.tolerance = options.fit.relative_tolerance * mean_edge;
   fit.min_spacing = options.fit.min_spacing_edges * mean_edge;
@@ -315,6 +322,7 @@ void fit_patch(const TriMesh& mesh, const Segmentation& seg, int p, const Border
         points.resize(n_own);
         for (const int v : overlap_vertices(mesh, seg, p, grid.wide_overlap_rings)) points.push_back(to_eigen(mesh.point(TriMesh::VertexHandle(v))));
         Rectangle domain = *fit.domain;
+        const double margin = fit_margin(mean_edge, lo, hi);
         for (const auto& q : frame.to_local(points)) {
           domain.min = domain.min.cwiseMin(q.head<2>() - Eigen::Vector2d::Constant(margin));
           domain.max = domain.max.cwiseMax(q.head<2>() + Eigen::Vector2d::Constant(margin));
