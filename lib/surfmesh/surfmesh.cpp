@@ -14,6 +14,7 @@
 #include <thread>
 
 #include "nurbsfront/core/error.h"
+#include "nurbsfront/core/soup.h"
 #include "nurbsfront/surfmesh/surfmesh_internal.h"
 
 namespace nurbsfront {
@@ -155,6 +156,8 @@ void PatchFitOptions::validate() const {
     bad_option("fit.least_squares_fine_smoothing must be finite and >= 0, got " + std::to_string(least_squares_fine_smoothing));
   if (!(std::isfinite(fine_below_edges) && fine_below_edges >= 0.0))
     bad_option("fit.fine_below_edges must be finite and >= 0, got " + std::to_string(fine_below_edges));
+  if (!(std::isfinite(large_face_edges) && large_face_edges >= 0.0))
+    bad_option("fit.large_face_edges must be finite and >= 0, got " + std::to_string(large_face_edges));
 }
 
 void CellGrid::validate() const {

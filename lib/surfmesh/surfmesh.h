@@ -82,6 +82,12 @@ struct PatchFitOptions {
   //! above it (folds, noise, detail under the lattice spacing) the stronger smoothing stays.
   //! Default 0.2.
   double fine_below_edges = 0.2;
+  //! Input faces whose longest edge is above this many mean input edges are also sampled
+  //! inside (barycentric grid of about one mean edge), not only at their corners: long fan
+  //! faces (filled holes of scans, CAD meshes) otherwise leave gaps where the fit bulges
+  //! (bunny: up to one mean edge off). Plain fit only (not with cell_grid). 0 = off.
+  //! Default 2 (marching-cubes surfaces have no such faces).
+  double large_face_edges = 2.0;
   void validate() const;
 };
 
