@@ -656,7 +656,8 @@ std::vector<std::vector<int>> carve_components(const FaceGraph& graph, const std
 }
 
 // True when two vertices of the patch form a cliff (see kCliffRunEdges): bucketed in the
-// patch plane on a grid of the run, each vertex is compared with the 3 x 3 buckets around it.
+// patch plane on a grid of the run; only pairs of neighbouring buckets whose height ranges
+// together span more than the rise are compared vertex by vertex.
 bool has_cliff(const FaceGraph& graph, const std::vector<int>& faces, const Eigen::Vector3d& axis, double mean_edge) {
   if (faces.size() < kCliffMinFaces || !(mean_edge > 0.0)) return false;
   const TriMesh& mesh = *graph.mesh;
@@ -670,30 +671,52 @@ bool has_cliff(const FaceGraph& graph, const std::vector<int>& faces, const Eige
   const double run = kCliffRunEdges * mean_edge;
   const double rise = kCliffRiseEdges * mean_edge;
   struct Entry {
-    std::int64_t key;
+    std::int64_t i, j;
     Eigen::Vector3d local;
   };
   std::vector<Entry> entries;
   entries.reserve(vertices.size());
-  auto key_of = [](std::int64_t i, std::int64_t j) { return (i << 32) ^ (j & 0xffffffff); };
+  double z_min = std::numeric_limits<double>::infinity(), z_max = -z_min;
   for (const int v : vertices) {
     const Eigen::Vector3d x = to_eigen(mesh.point(TriMesh::VertexHandle(v)));
     const Eigen::Vector3d local(x.dot(e1), x.dot(e2), x.dot(axis));
-    const auto i = static_cast<std::int64_t>(std::floor(local.x() / run));
-    const auto j = static_cast<std::int64_t>(std::floor(local.y() / run));
-    entries.push_back({key_of(i, j), local});
+    entries.push_back({static_cast<std::int64_t>(std::floor(local.x() / run)),
+                       static_cast<std::int64_t>(std::floor(local.y() / run)), local});
+    z_min = std::min(z_min, local.z());
+    z_max = std::max(z_max, local.z());
   }
-  std::sort(entries.begin(), entries.end(), [](const Entry& a, const Entry& b) { return a.key < b.key; });
-  for (const Entry& a : entries) {
-    const auto i = static_cast<std::int64_t>(std::floor(a.local.x() / run));
-    const auto j = static_cast<std::int64_t>(std::floor(a.local.y() / run));
-    for (std::int64_t di = -1; di <= 1; ++di) {
-      for (std::int64_t dj = -1; dj <= 1; ++dj) {
-        const std::int64_t key = key_of(i + di, j + dj);
-        auto it = std::lower_bound(entries.begin(), entries.end(), key, [](const Entry& e, std::int64_t k) { return e.key < k; });
-        for (; it != entries.end() && it->key == key; ++it) {
-          const double dz = std::abs(it->local.z() - a.local.z());
-          const double dxy = (it->local.head<2>() - a.local.head<2>()).norm();
+  if (!(z_max - z_min > rise)) return false;
+  auto before = [](const Entry& a, const Entry& b) { return a.i != b.i ? a.i < b.i : a.j < b.j; };
+  std::sort(entries.begin(), entries.end(), before);
+  struct Bucket {
+    std::int64_t i, j;
+    std::size_t begin, end;
+    double z_min, z_max;
+  };
+  std::vector<Bucket> buckets;
+  for (std::size_t k = 0; k < entries.size(); ++k) {
+    const Entry& e = entries[k];
+    if (buckets.empty() || buckets.back().i != e.i || buckets.back().j != e.j) buckets.push_back({e.i, e.j, k, k, e.local.z(), e.local.z()});
+    Bucket& b = buckets.back();
+    b.end = k + 1;
+    b.z_min = std::min(b.z_min, e.local.z());
+    b.z_max = std::max(b.z_max, e.local.z());
+  }
+  auto find = [&](std::int64_t i, std::int64_t j) -> const Bucket* {
+    const auto it = std::lower_bound(buckets.begin(), buckets.end(), std::pair(i, j), [](const Bucket& b, const std::pair<std::int64_t, std::int64_t>& k) {
+      return b.i != k.first ? b.i < k.first : b.j < k.second;
+    });
+    return it != buckets.end() && it->i == i && it->j == j ? &*it : nullptr;
+  };
+  for (const Bucket& a : buckets) {
+    // Each unordered pair of buckets once: itself and the neighbours after it in (i, j) order.
+    for (const auto& [di, dj] : {std::pair(0, 0), std::pair(0, 1), std::pair(1, -1), std::pair(1, 0), std::pair(1, 1)}) {
+      const Bucket* b = (di == 0 && dj == 0) ? &a : find(a.i + di, a.j + dj);
+      if (b == nullptr || !(std::max(a.z_max, b->z_max) - std::min(a.z_min, b->z_min) > rise)) continue;
+      for (std::size_t p = a.begin; p < a.end; ++p) {
+        for (std::size_t q = (b == &a ? p + 1 : b->begin); q < b->end; ++q) {
+          const double dz = std::abs(entries[q].local.z() - entries[p].local.z());
+          const double dxy = (entries[q].local.head<2>() - entries[p].local.head<2>()).norm();
           if (dz > rise && dxy < run && dz > kCliffMinRiseOverRun * dxy) return true;
         }
       }
