@@ -8,6 +8,7 @@
 
 #include "nurbsfront/core/error.h"
 #include "nurbsfront/core/soup_internal.h"
+#include "nurbsfront/core/tolerances.h"
 
 namespace nurbsfront {
 
@@ -15,6 +16,20 @@ BoundingBox bounding_box(const TriangleSoup& soup) {
   BoundingBox box;
   for (const auto& p : soup.points) box.extend(p);
   return box;
+}
+
+double mean_edge_length(const TriMesh& mesh) {
+  const double zero = tolerance::kZeroLengthRelative * bounding_box(mesh).diagonal();
+  double sum = 0.0;
+  std::size_t count = 0;
+  for (const auto e : mesh.edges()) {
+    if (mesh.status(e).deleted()) continue;
+    const double length = mesh.calc_edge_length(e);
+    if (!(length > zero)) continue;
+    sum += length;
+    ++count;
+  }
+  return count == 0 ? 0.0 : sum / static_cast<double>(count);
 }
 
 BoundingBox bounding_box(const TriMesh& mesh) {

@@ -38,6 +38,9 @@ struct BoundingBox {
 
 [[nodiscard]] BoundingBox bounding_box(const TriangleSoup& soup);
 [[nodiscard]] BoundingBox bounding_box(const TriMesh& mesh);
+//! Mean length of the mesh's non-deleted edges longer than tolerance::kZeroLengthRelative
+//! x its bbox diagonal (0 when there are none).
+[[nodiscard]] double mean_edge_length(const TriMesh& mesh);
 
 //! Why a soup cannot become a TriMesh; empty when it can.
 struct ManifoldCheck {

@@ -46,6 +46,18 @@ constexpr int kBorderCleanupPasses = 3;
 constexpr int kCarveRings = 2;
 // Keeps a seed axis strictly inside the feasible range instead of on its edge (rad).
 constexpr double kAngleMarginRad = 1e-6;
+// A "cliff" in a patch: two of its vertices closer than kCliffRunEdges mean input edges in
+// its plane (the default fit lattice, PatchFitOptions::min_spacing_edges) and more than
+// kCliffRiseEdges apart along its axis, at a rise over run above kCliffMinRiseOverRun
+// (76 deg). No height field on that lattice holds both: the bunny's patch 0 wrapped around a
+// near-vertical neighbour, its two arms 15 mean edges apart along the axis and 0.3 apart in
+// the plane; its fit was 7.8 mean edges off (docs/segment.md, "Cliffs"). Such a patch is
+// bisected like a folded one. Patches below kCliffMinFaces are not tested (a few steep
+// faces may rise that much; the parts of a bisection get there in a few steps).
+constexpr double kCliffRunEdges = 2.5;
+constexpr double kCliffRiseEdges = 3.0;
+constexpr double kCliffMinRiseOverRun = 4.0;
+constexpr std::size_t kCliffMinFaces = 40;
 
 double radians(double degrees) { return degrees * std::numbers::pi / 180.0; }
 
@@ -643,11 +655,82 @@ std::vector<std::vector<int>> carve_components(const FaceGraph& graph, const std
   return components;
 }
 
-// Splits every patch whose projection is not a set of simple loops; returns the count.
+// True when two vertices of the patch form a cliff (see kCliffRunEdges): bucketed in the
+// patch plane on a grid of the run; only pairs of neighbouring buckets whose height ranges
+// together span more than the rise are compared vertex by vertex.
+bool has_cliff(const FaceGraph& graph, const std::vector<int>& faces, const Eigen::Vector3d& axis, double mean_edge) {
+  if (faces.size() < kCliffMinFaces || !(mean_edge > 0.0)) return false;
+  const TriMesh& mesh = *graph.mesh;
+  std::vector<int> vertices;
+  vertices.reserve(3 * faces.size());
+  for (const int f : faces)
+    for (const int v : graph.vertices[f]) vertices.push_back(v);
+  std::sort(vertices.begin(), vertices.end());
+  vertices.erase(std::unique(vertices.begin(), vertices.end()), vertices.end());
+  const auto [e1, e2] = segment_detail::plane_frame(axis);
+  const double run = kCliffRunEdges * mean_edge;
+  const double rise = kCliffRiseEdges * mean_edge;
+  struct Entry {
+    std::int64_t i, j;
+    Eigen::Vector3d local;
+  };
+  std::vector<Entry> entries;
+  entries.reserve(vertices.size());
+  double z_min = std::numeric_limits<double>::infinity(), z_max = -z_min;
+  for (const int v : vertices) {
+    const Eigen::Vector3d x = to_eigen(mesh.point(TriMesh::VertexHandle(v)));
+    const Eigen::Vector3d local(x.dot(e1), x.dot(e2), x.dot(axis));
+    entries.push_back({static_cast<std::int64_t>(std::floor(local.x() / run)),
+                       static_cast<std::int64_t>(std::floor(local.y() / run)), local});
+    z_min = std::min(z_min, local.z());
+    z_max = std::max(z_max, local.z());
+  }
+  if (!(z_max - z_min > rise)) return false;
+  auto before = [](const Entry& a, const Entry& b) { return a.i != b.i ? a.i < b.i : a.j < b.j; };
+  std::sort(entries.begin(), entries.end(), before);
+  struct Bucket {
+    std::int64_t i, j;
+    std::size_t begin, end;
+    double z_min, z_max;
+  };
+  std::vector<Bucket> buckets;
+  for (std::size_t k = 0; k < entries.size(); ++k) {
+    const Entry& e = entries[k];
+    if (buckets.empty() || buckets.back().i != e.i || buckets.back().j != e.j) buckets.push_back({e.i, e.j, k, k, e.local.z(), e.local.z()});
+    Bucket& b = buckets.back();
+    b.end = k + 1;
+    b.z_min = std::min(b.z_min, e.local.z());
+    b.z_max = std::max(b.z_max, e.local.z());
+  }
+  auto find = [&](std::int64_t i, std::int64_t j) -> const Bucket* {
+    const auto it = std::lower_bound(buckets.begin(), buckets.end(), std::pair(i, j), [](const Bucket& b, const std::pair<std::int64_t, std::int64_t>& k) {
+      return b.i != k.first ? b.i < k.first : b.j < k.second;
+    });
+    return it != buckets.end() && it->i == i && it->j == j ? &*it : nullptr;
+  };
+  for (const Bucket& a : buckets) {
+    // Each unordered pair of buckets once: itself and the neighbours after it in (i, j) order.
+    for (const auto& [di, dj] : {std::pair(0, 0), std::pair(0, 1), std::pair(1, -1), std::pair(1, 0), std::pair(1, 1)}) {
+      const Bucket* b = (di == 0 && dj == 0) ? &a : find(a.i + di, a.j + dj);
+      if (b == nullptr || !(std::max(a.z_max, b->z_max) - std::min(a.z_min, b->z_min) > rise)) continue;
+      for (std::size_t p = a.begin; p < a.end; ++p) {
+        for (std::size_t q = (b == &a ? p + 1 : b->begin); q < b->end; ++q) {
+          const double dz = std::abs(entries[q].local.z() - entries[p].local.z());
+          const double dxy = (entries[q].local.head<2>() - entries[p].local.head<2>()).norm();
+          if (dz > rise && dxy < run && dz > kCliffMinRiseOverRun * dxy) return true;
+        }
+      }
+    }
+  }
+  return false;
+}
+
+// Splits every patch whose projection is not a set of simple loops, or that holds a cliff
+// (has_cliff); returns the count.
 // A local fold (a short extra outer loop around a flipped face, or two crossing border
 // segments at a steep border face, typical of terraced inputs) is cut out with a few rings
 // of faces around it; anything else is bisected. Parts are checked again until every patch passes.
-std::size_t split_folds(const Grouping& grouping, Scratch& scratch, Patches& patches) {
+std::size_t split_folds(const Grouping& grouping, double mean_edge, Scratch& scratch, Patches& patches) {
   const FaceGraph& graph = grouping.graph;
   const TriMesh& mesh = *graph.mesh;
   std::size_t n_splits = 0;
@@ -658,7 +741,7 @@ std::size_t split_folds(const Grouping& grouping, Scratch& scratch, Patches& pat
     work.pop_back();
     const segment_detail::ProjectionCheck check =
         segment_detail::check_projection(graph, patches.faces[p], patches.face_patch, patches.axes[p], scratch);
-    if (check.is_simple) continue;
+    if (check.is_simple && !has_cliff(graph, patches.faces[p], patches.axes[p], mean_edge)) continue;
     ++n_splits;
     std::vector<std::vector<int>> parts;
     if (!check.trouble.empty()) {
@@ -912,7 +995,7 @@ Segmentation segment(const TriMesh& mesh, const SegmentOptions& options) {
   renumber(patches);
   refine_axes(grouping, patches);
   Scratch scratch(mesh);
-  result.n_fold_splits = split_folds(grouping, scratch, patches);
+  result.n_fold_splits = split_folds(grouping, mean_edge_length(mesh), scratch, patches);
   if (result.n_fold_splits > 0) merge_patches(grouping, options.min_patch_faces, patches, &scratch);
   renumber(patches);
   report_progress(options.progress, kStage, 0.7);
@@ -984,7 +1067,7 @@ Segmentation split_patches(const TriMesh& mesh, const Segmentation& segmentation
         axis = old_axis;
     }
   }
-  result.n_fold_splits += split_folds(grouping, scratch, patches);
+  result.n_fold_splits += split_folds(grouping, mean_edge_length(mesh), scratch, patches);
   renumber(patches);
   finish_segmentation(mesh, graph, normals, patches, options, result);
   return result;

@@ -124,20 +124,6 @@ std::vector<Eigen::Vector3d> resample(const std::vector<Eigen::Vector3d>& pts, b
 
 }  // namespace
 
-double mean_edge_length(const TriMesh& mesh) {
-  const double zero = tolerance::kZeroLengthRelative * bounding_box(mesh).diagonal();
-  double sum = 0.0;
-  std::size_t count = 0;
-  for (const auto e : mesh.edges()) {
-    if (mesh.status(e).deleted()) continue;
-    const double length = mesh.calc_edge_length(e);
-    if (!(length > zero)) continue;
-    sum += length;
-    ++count;
-  }
-  return count == 0 ? 0.0 : sum / static_cast<double>(count);
-}
-
 void validate_segmentation(const TriMesh& mesh, const Segmentation& seg) {
   const int n_faces = static_cast<int>(mesh.n_faces());
   const int n_vertices = static_cast<int>(mesh.n_vertices());

@@ -3,6 +3,7 @@
 // the 2D front with the surface metric, and the lift of the new nodes.
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <exception>
 #include <limits>
@@ -74,6 +75,32 @@ void fit_lattice_to_spacing(FitOptions& fit) {
   rect = Rectangle{centre - half, centre + half};
   fit.base_cells = static_cast<int>(std::min(a, b));
   fit.min_spacing = s * (1.0 - 1e-9);  // the last level's spacing is s up to round-off
+}
+
+// Points on a barycentric grid of spacing about one mean edge over every face whose longest
+// edge is above `large_edges` mean edges, without the corners (input vertices, sampled
+// already): the fit sees only points. The Stanford bunny's filled holes are fans of faces up
+// to 7.5 mean edges long (5335 of its faces exceed 2), and its fit bulged up to one mean edge
+// off them between their corners (docs/surfmesh.md, "Large input faces"). Marching-cubes
+// surfaces have none (longest edges 1.6-1.9 mean edges).
+void add_large_face_samples(const TriMesh& mesh, const std::vector<int>& faces, double mean_edge, double large_edges,
+                            std::vector<Eigen::Vector3d>& points) {
+  if (!(mean_edge > 0.0) || !(large_edges > 0.0)) return;
+  for (const int f : faces) {
+    std::array<Eigen::Vector3d, 3> x;
+    int k = 0;
+    for (const auto v : mesh.fv_range(TriMesh::FaceHandle(f))) x[k++] = to_eigen(mesh.point(v));
+    const double longest = std::max({(x[1] - x[0]).norm(), (x[2] - x[1]).norm(), (x[0] - x[2]).norm()});
+    if (!(longest > large_edges * mean_edge)) continue;
+    const int n = static_cast<int>(std::ceil(longest / mean_edge));
+    for (int i = 0; i <= n; ++i) {
+      for (int j = 0; i + j <= n; ++j) {
+        if ((i == n) || (j == n) || (i + j == 0)) continue;  // the corners
+        const double a = static_cast<double>(i) / n, b = static_cast<double>(j) / n;
+        points.push_back((1.0 - a - b) * x[0] + a * x[1] + b * x[2]);
+      }
+    }
+  }
 }
 
 std::string what_of(const std::exception_ptr& error) {
@@ -292,6 +319,8 @@ void fit_patch(const TriMesh& mesh, const Segmentation& seg, int p, const Border
     // weakest and both patches' surfaces must agree.
     const std::size_t n_own = points.size();
     for (const int v : overlap_vertices(mesh, seg, p, kFitOverlapRings)) points.push_back(to_eigen(mesh.point(TriMesh::VertexHandle(v))));
+    // The band fit (cell_grid) takes bands at vertices only; plain points on faces would bias it.
+    if (!options.cell_grid.enabled) add_large_face_samples(mesh, patch.faces, mean_edge, options.fit.large_face_edges, points);
     std::vector<Eigen::Vector3d> local = frame.to_local(points);
 
     // The rectangle covers the vertices and the border nodes, slightly enlarged, so every

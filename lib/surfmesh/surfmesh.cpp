@@ -14,6 +14,7 @@
 #include <thread>
 
 #include "nurbsfront/core/error.h"
+#include "nurbsfront/core/soup.h"
 #include "nurbsfront/surfmesh/surfmesh_internal.h"
 
 namespace nurbsfront {
@@ -194,6 +195,8 @@ void PatchFitOptions::validate() const {
   if (!(std::isfinite(split_above_edges) && split_above_edges >= 0.0))
     bad_option("fit.split_above_edges must be finite and >= 0, got " + std::to_string(split_above_edges));
   if (split_rounds < 0 || split_rounds > 20) bad_option("fit.split_rounds must be in [0, 20], got " + std::to_string(split_rounds));
+  if (!(std::isfinite(large_face_edges) && large_face_edges >= 0.0))
+    bad_option("fit.large_face_edges must be finite and >= 0, got " + std::to_string(large_face_edges));
 }
 
 void CellGrid::validate() const {

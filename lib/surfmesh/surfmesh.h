@@ -91,6 +91,12 @@ struct PatchFitOptions {
   //! Rounds of split_unfitted_patches() at most (each splits the parts still above the
   //! bound again). Default 3.
   int split_rounds = 3;
+  //! Input faces whose longest edge is above this many mean input edges are also sampled
+  //! inside (barycentric grid of about one mean edge), not only at their corners: long fan
+  //! faces (filled holes of scans, CAD meshes) otherwise leave gaps where the fit bulges
+  //! (bunny: up to one mean edge off). Plain fit only (not with cell_grid). 0 = off.
+  //! Default 2 (marching-cubes surfaces have no such faces).
+  double large_face_edges = 2.0;
   void validate() const;
 };
 

@@ -40,8 +40,6 @@ namespace nurbsfront::surfmesh_detail {
 //! Target 3D edge length at a world point.
 using SizeAt = std::function<double(const Eigen::Vector3d&)>;
 
-//! Mean length of the input's non-degenerate edges (0 when there are none).
-[[nodiscard]] double mean_edge_length(const TriMesh& mesh);
 
 //! Throws InvalidInput when the segmentation does not describe `mesh` (sizes, ids, curve
 //! edges that do not join their vertices, curve ends that are not corners).

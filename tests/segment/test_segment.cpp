@@ -31,16 +31,16 @@ TriangleSoup roof(int n, double tilt_deg) {
   return s;
 }
 
-// A helicoidal ramp: r in [1, 2], turning `turns` times at a small pitch. Every normal
-// is near +z, yet its projection overlaps itself after one turn.
-TriangleSoup ramp(double turns, int n_around, int n_radial) {
+// A helicoidal ramp: r in [1, 2], turning `turns` times, rising `pitch` per radian (small
+// by default). Every normal is near +z, yet its projection overlaps itself after one turn.
+TriangleSoup ramp(double turns, int n_around, int n_radial, double pitch = 0.05) {
   TriangleSoup s;
   const int n_theta = static_cast<int>(turns * n_around);
   for (int i = 0; i <= n_theta; ++i) {
     const double theta = 2 * kPi * i / n_around;
     for (int j = 0; j <= n_radial; ++j) {
       const double r = 1.0 + static_cast<double>(j) / n_radial;
-      s.points.emplace_back(r * std::cos(theta), r * std::sin(theta), 0.05 * theta);
+      s.points.emplace_back(r * std::cos(theta), r * std::sin(theta), pitch * theta);
     }
   }
   auto id = [&](int i, int j) { return static_cast<std::uint32_t>(i * (n_radial + 1) + j); };
@@ -214,6 +214,23 @@ TEST(Segment, SelfOverlappingRampIsSplit) {
   EXPECT_GE(seg.n_fold_splits, 1u);
   // Two and a half turns cannot be a height field in fewer than three patches.
   EXPECT_GE(seg.patches.size(), 3u);
+}
+
+// 345 of 360 deg of a steeper ramp (normals within 17 deg of +z): no overlap, but its two
+// ends are 0.26 apart in the plane (about one mean edge) and 1.8 (8 mean edges) apart in
+// height, a cliff no fit lattice of 2.5 mean edges holds. Half a turn has no cliff.
+TEST(Segment, RampShortOfOneTurnIsSplitAtItsCliff) {
+  const SegmentOptions options;
+  const TriMesh half = to_trimesh(ramp(0.5, 48, 4, 0.3));
+  const Segmentation whole = run(half, options, 0.0);
+  EXPECT_EQ(whole.patches.size(), 1u);
+  EXPECT_EQ(whole.n_fold_splits, 0u);
+  const TriMesh mesh = to_trimesh(ramp(345.0 / 360.0, 48, 4, 0.3));
+  const Segmentation seg = run(mesh, options, 0.0);
+  EXPECT_GE(seg.n_fold_splits, 1u);
+  ASSERT_GE(seg.patches.size(), 2u);
+  // The two ends (first and last ring of faces) are in different patches.
+  EXPECT_NE(seg.face_patch.front(), seg.face_patch.back());
 }
 
 TEST(Segment, SmoothedNormalsKeepATerracedRampInOnePiece) {
