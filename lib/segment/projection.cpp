@@ -5,7 +5,6 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <iterator>
 #include <unordered_map>
 
 #include "nurbsfront/core/error.h"
@@ -186,6 +185,27 @@ std::vector<int> nested_ccw_cycle(const std::vector<std::vector<int>>& cycles, c
   return {};
 }
 
+// split_at_repeated_vertices() of a loop, appended to `out`, with a per-vertex position
+// array (all -1 before and after) instead of a sort and a hash map: the same cycles in
+// the same order, in time linear in the loop.
+void split_loop(const std::vector<int>& loop, std::vector<int>& position, std::vector<std::vector<int>>& out) {
+  std::vector<int> stack;
+  for (const int v : loop) {
+    const int at = position[v];
+    if (at < 0) {
+      position[v] = static_cast<int>(stack.size());
+      stack.push_back(v);
+      continue;
+    }
+    // v closes the cycle stack[at ..]: emit it and keep v on the stack.
+    out.emplace_back(stack.begin() + at, stack.end());
+    for (std::size_t i = static_cast<std::size_t>(at) + 1; i < stack.size(); ++i) position[stack[i]] = -1;
+    stack.resize(static_cast<std::size_t>(at) + 1);
+  }
+  for (const int v : stack) position[v] = -1;
+  if (!stack.empty()) out.push_back(std::move(stack));
+}
+
 // Breadth-first search inside the patch from `sources`; every reached face gets the index
 // of the source it was reached from in scratch.face_owner. Returns the last face reached.
 int breadth_first(const FaceGraph& graph, const std::vector<int>& sources, const std::vector<int>& face_patch,
@@ -225,12 +245,12 @@ std::vector<OpenMesh::HalfedgeHandle> patch_border(const FaceGraph& graph, const
                                                    const std::vector<int>& face_patch) {
   std::vector<OpenMesh::HalfedgeHandle> border;
   if (faces.empty()) return border;
-  const TriMesh& mesh = *graph.mesh;
   const int patch = face_patch[faces[0]];
+  // The face graph's arrays hold the mesh's halfedges of each face in its halfedge order.
   for (int f : faces) {
-    for (const auto h : mesh.fh_range(mesh.face_handle(f))) {
-      const auto g = mesh.opposite_face_handle(h);
-      if (!g.is_valid() || face_patch[g.idx()] != patch) border.push_back(h);
+    for (int i = 0; i < 3; ++i) {
+      const int g = graph.neighbours[f][i];
+      if (g < 0 || face_patch[g] != patch) border.emplace_back(graph.halfedges[f][i]);
     }
   }
   return border;
@@ -304,9 +324,7 @@ ProjectionCheck check_projection(const FaceGraph& graph, const std::vector<OpenM
       NURBSFRONT_ASSERT(++steps <= segments.size());
     } while (h != start);
     if (repeats) {
-      std::vector<std::vector<int>> split = split_at_repeated_vertices(loop_vertices);
-      cycles.insert(cycles.end(), std::make_move_iterator(split.begin()),
-                    std::make_move_iterator(split.end()));
+      split_loop(loop_vertices, scratch.cycle_position, cycles);
     } else {
       cycles.push_back(loop_vertices);
     }

@@ -30,6 +30,29 @@ void SegmentOptions::validate() const {
   border_smoothing.validate();
 }
 
+segment_detail::FaceGraph segment_detail::build_graph(const TriMesh& mesh) {
+  FaceGraph graph;
+  graph.mesh = &mesh;
+  const auto n = static_cast<int>(mesh.n_faces());
+  graph.vertices.resize(n);
+  graph.neighbours.resize(n);
+  graph.halfedges.resize(n);
+  graph.crease.assign(n, 0);
+  graph.points.reserve(mesh.n_vertices());
+  for (const auto v : mesh.all_vertices()) graph.points.push_back(to_eigen(mesh.point(v)));
+  for (int f = 0; f < n; ++f) {
+    auto h = mesh.halfedge_handle(mesh.face_handle(f));
+    for (int i = 0; i < 3; ++i) {
+      graph.vertices[f][i] = mesh.from_vertex_handle(h).idx();
+      graph.halfedges[f][i] = h.idx();
+      const auto g = mesh.face_handle(mesh.opposite_halfedge_handle(h));
+      graph.neighbours[f][i] = g.is_valid() ? g.idx() : -1;
+      h = mesh.next_halfedge_handle(h);
+    }
+  }
+  return graph;
+}
+
 namespace {
 
 using segment_detail::FaceGraph;
@@ -66,27 +89,6 @@ struct FaceNormals {
   std::vector<double> area;
   std::vector<std::uint8_t> degenerate, exception;
 };
-
-FaceGraph build_graph(const TriMesh& mesh) {
-  FaceGraph graph;
-  graph.mesh = &mesh;
-  const auto n = static_cast<int>(mesh.n_faces());
-  graph.vertices.resize(n);
-  graph.neighbours.resize(n);
-  graph.crease.assign(n, 0);
-  graph.points.reserve(mesh.n_vertices());
-  for (const auto v : mesh.all_vertices()) graph.points.push_back(to_eigen(mesh.point(v)));
-  for (int f = 0; f < n; ++f) {
-    auto h = mesh.halfedge_handle(mesh.face_handle(f));
-    for (int i = 0; i < 3; ++i) {
-      graph.vertices[f][i] = mesh.from_vertex_handle(h).idx();
-      const auto g = mesh.face_handle(mesh.opposite_halfedge_handle(h));
-      graph.neighbours[f][i] = g.is_valid() ? g.idx() : -1;
-      h = mesh.next_halfedge_handle(h);
-    }
-  }
-  return graph;
-}
 
 FaceNormals face_normals(const FaceGraph& graph, double diagonal) {
   const int n = graph.n_faces();
@@ -981,7 +983,7 @@ Segmentation segment(const TriMesh& mesh, const SegmentOptions& options) {
   constexpr std::string_view kStage = "segment";
   report_progress(options.progress, kStage, 0.0);
 
-  FaceGraph graph = build_graph(mesh);
+  FaceGraph graph = segment_detail::build_graph(mesh);
   const FaceNormals normals = prepare_normals(graph, options, result);
   const double max_slope = radians(options.max_slope_deg);
   report_progress(options.progress, kStage, 0.3);
@@ -1020,7 +1022,7 @@ Segmentation split_patches(const TriMesh& mesh, const Segmentation& segmentation
   result.n_fold_splits = segmentation.n_fold_splits;
   if (n_faces == 0 || which.empty()) return segmentation;
 
-  FaceGraph graph = build_graph(mesh);
+  FaceGraph graph = segment_detail::build_graph(mesh);
   const FaceNormals normals = prepare_normals(graph, options, result);
   const double max_slope = radians(options.max_slope_deg);
   const Grouping grouping{graph, normals, std::cos(max_slope), max_slope, std::cos(kGrowthConeFraction * max_slope)};

@@ -20,12 +20,16 @@ namespace nurbsfront::segment_detail {
 struct FaceGraph {
   std::vector<std::array<int, 3>> vertices;
   std::vector<std::array<int, 3>> neighbours;
+  std::vector<std::array<int, 3>> halfedges;  // halfedges[f][i]: the halfedge of edge i (inside f)
   std::vector<std::uint8_t> crease;  // bit i set: edge i of the face is a crease
   std::vector<Eigen::Vector3d> points;
   const TriMesh* mesh = nullptr;  // the input, for halfedge walks
   [[nodiscard]] bool is_crease(int f, int i) const { return ((crease[f] >> i) & 1U) != 0; }
   [[nodiscard]] int n_faces() const { return static_cast<int>(vertices.size()); }
 };
+
+//! The face graph of a mesh (crease bits all clear).
+[[nodiscard]] FaceGraph build_graph(const TriMesh& mesh);
 
 //! Reusable per-call buffers (sized once per segment() call; no global state).
 struct Scratch {
@@ -37,6 +41,9 @@ struct Scratch {
   //! Per vertex: the last loop (loop_epoch) that passed it.
   std::vector<int> loop_stamp;
   std::vector<int> face_stamp, face_owner;
+  //! Per vertex: its index in the cycle being cut out of a loop, -1 outside that (all -1
+  //! between calls; check_projection's split of loops passing a vertex twice).
+  std::vector<int> cycle_position;
   int vertex_epoch = 0;
   int loop_epoch = 0;
   int face_epoch = 0;
@@ -47,7 +54,8 @@ struct Scratch {
         border_out(mesh.n_vertices(), -1),
         loop_stamp(mesh.n_vertices(), -1),
         face_stamp(mesh.n_faces(), -1),
-        face_owner(mesh.n_faces(), -1) {}
+        face_owner(mesh.n_faces(), -1),
+        cycle_position(mesh.n_vertices(), -1) {}
 };
 
 //! The result of check_projection().

@@ -46,6 +46,22 @@ TEST(QualityPredicates, NearlyDegenerateCasesAreExact) {
   EXPECT_EQ(quality_detail::orient3d(V(big, 0, 0), V(big + 1, 0, 0), V(big, 1, 0), V(big + 0.5, 0.25, -1e-300)), 1);
 }
 
+TEST(QualityPredicates, AxisAlignedPlanesAndLinesAreExactlyDegenerate) {
+  // Points sharing one coordinate (the axis-aligned faces of marching cubes on label
+  // volumes) are coplanar / collinear; one ulp off that coordinate they are not.
+  const double x = 0.617188 * 129.5, big = 1e15;
+  const V a(x, 0.1, 0.3), b(x, big, -7.25), c(x, -3.0, big);
+  EXPECT_EQ(quality_detail::orient3d(a, b, c, V(x, 1e-300, 2.5)), 0);
+  const double next = std::nextafter(x, 2 * x);
+  const int off = quality_detail::orient3d(a, b, c, V(next, 1e-300, 2.5));
+  EXPECT_NE(off, 0);
+  EXPECT_EQ(quality_detail::orient3d(a, b, c, V(std::nextafter(x, 0.0), 1e-300, 2.5)), -off);
+  const V2 p(x, 0.1), q(x, big), r(x, -3.0);
+  EXPECT_EQ(quality_detail::orient2d(p, q, r), 0);
+  EXPECT_EQ(quality_detail::orient2d(V2(0.1, x), V2(big, x), V2(-3.0, x)), 0);
+  EXPECT_NE(quality_detail::orient2d(p, q, V2(next, -3.0)), 0);
+}
+
 TEST(QualityPredicates, SegmentTriangle) {
   const V p(0, 0, 0), q(1, 0, 0), r(0, 1, 0);
   EXPECT_TRUE(quality_detail::segment_meets_triangle(V(0.2, 0.2, -1), V(0.2, 0.2, 1), p, q, r));

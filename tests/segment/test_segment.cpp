@@ -250,9 +250,7 @@ TEST(Segment, SmoothedNormalsKeepATerracedRampInOnePiece) {
 // be that of the full check. The ramp's first and last turns cross in projection.
 TEST(Segment, ProjectionCheckWithAKnownSimplePrefixAgrees) {
   const TriMesh mesh = to_trimesh(ramp(1.5, 24, 3));
-  segment_detail::FaceGraph graph;
-  graph.mesh = &mesh;
-  for (const auto v : mesh.vertices()) graph.points.push_back(to_eigen(mesh.point(v)));
+  const segment_detail::FaceGraph graph = segment_detail::build_graph(mesh);
   segment_detail::Scratch scratch(mesh);
   const Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();
   const int n_faces = static_cast<int>(mesh.n_faces());
