@@ -105,6 +105,15 @@ bool triangles_intersect(const std::array<std::uint32_t, 3>& ids1, const std::ar
   }
   if (n_shared >= 3) return false;
   if (n_shared == 0) {
+    // All corners of one triangle strictly on one side of the other's plane: apart (the
+    // usual case for neighbours on a smooth surface, 3 or 6 predicates instead of 12).
+    for (int side = 0; side < 2; ++side) {
+      const auto& t = side == 0 ? t1 : t2;
+      const auto& plane = side == 0 ? t2 : t1;
+      const int s0 = orient3d(plane[0], plane[1], plane[2], t[0]);
+      if (s0 != 0 && s0 == orient3d(plane[0], plane[1], plane[2], t[1]) && s0 == orient3d(plane[0], plane[1], plane[2], t[2]))
+        return false;
+    }
     // Two closed triangles meet iff an edge of one meets the other: the intersection is
     // convex and its extreme points lie on edges of one of them.
     for (int i = 0; i < 3; ++i) {
