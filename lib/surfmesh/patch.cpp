@@ -365,8 +365,9 @@ bool PatchInputHeights::height(double x, double y, double& z) const {
     const double area = (t[1].x() - t[0].x()) * (t[2].y() - t[0].y()) - (t[1].y() - t[0].y()) * (t[2].x() - t[0].x());
     if (!(std::abs(area) > 0.0)) continue;
     const double b1 = ((x - t[0].x()) * (t[2].y() - t[0].y()) - (y - t[0].y()) * (t[2].x() - t[0].x())) / area;
+    if (b1 < 0.0) continue;  // most candidates: the second division is not needed
     const double b2 = ((t[1].x() - t[0].x()) * (y - t[0].y()) - (t[1].y() - t[0].y()) * (x - t[0].x())) / area;
-    if (b1 < 0.0 || b2 < 0.0 || b1 + b2 > 1.0) continue;
+    if (b2 < 0.0 || b1 + b2 > 1.0) continue;
     z = (1.0 - b1 - b2) * t[0].z() + b1 * t[1].z() + b2 * t[2].z();
     return true;
   }
