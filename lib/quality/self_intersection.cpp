@@ -73,9 +73,12 @@ bool segments_meet_2d(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const 
 
 }  // namespace
 
-bool segment_meets_triangle(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& p,
-                            const Eigen::Vector3d& q, const Eigen::Vector3d& r) {
-  const int sa = orient3d(p, q, r, a), sb = orient3d(p, q, r, b);
+namespace {
+
+// segment_meets_triangle with the sides sa = orient3d(p, q, r, a), sb = orient3d(p, q, r, b)
+// already known.
+bool segment_meets_triangle_sides(const Eigen::Vector3d& a, const Eigen::Vector3d& b, int sa, int sb,
+                                  const Eigen::Vector3d& p, const Eigen::Vector3d& q, const Eigen::Vector3d& r) {
   if (sa * sb > 0) return false;
   if (sa == 0 && sb == 0) {
     const int axis = drop_axis(p, q, r);
@@ -88,6 +91,20 @@ bool segment_meets_triangle(const Eigen::Vector3d& a, const Eigen::Vector3d& b, 
   // The segment meets the plane in exactly one point: it lies in the closed triangle iff
   // the line (a, b) passes on the same side of all three edges (or on them).
   return !mixed(orient3d(a, b, p, q), orient3d(a, b, q, r), orient3d(a, b, r, p));
+}
+
+// True when (p, q, r) is certainly not collinear: the rounded cross product is far above its
+// rounding error (a few ulps of the product of the edge lengths).
+bool surely_not_collinear(const Eigen::Vector3d& p, const Eigen::Vector3d& q, const Eigen::Vector3d& r) {
+  const Eigen::Vector3d u = q - p, v = r - p;
+  return u.cross(v).cwiseAbs().maxCoeff() > 1e-12 * u.cwiseAbs().maxCoeff() * v.cwiseAbs().maxCoeff();
+}
+
+}  // namespace
+
+bool segment_meets_triangle(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& p,
+                            const Eigen::Vector3d& q, const Eigen::Vector3d& r) {
+  return segment_meets_triangle_sides(a, b, orient3d(p, q, r, a), orient3d(p, q, r, b), p, q, r);
 }
 
 bool triangles_intersect(const std::array<std::uint32_t, 3>& ids1, const std::array<Eigen::Vector3d, 3>& t1,
@@ -105,11 +122,20 @@ bool triangles_intersect(const std::array<std::uint32_t, 3>& ids1, const std::ar
   }
   if (n_shared >= 3) return false;
   if (n_shared == 0) {
+    // The side of each corner of one triangle of the other's plane, each predicate once.
+    // All corners of one strictly on one side: apart (the usual case for neighbours on a
+    // smooth surface).
+    int side1[3], side2[3];  // corners of t1 against t2's plane, of t2 against t1's
+    for (int i = 0; i < 3; ++i) side1[i] = orient3d(t2[0], t2[1], t2[2], t1[i]);
+    if (side1[0] != 0 && side1[0] == side1[1] && side1[0] == side1[2]) return false;
+    for (int i = 0; i < 3; ++i) side2[i] = orient3d(t1[0], t1[1], t1[2], t2[i]);
+    if (side2[0] != 0 && side2[0] == side2[1] && side2[0] == side2[2]) return false;
     // Two closed triangles meet iff an edge of one meets the other: the intersection is
     // convex and its extreme points lie on edges of one of them.
     for (int i = 0; i < 3; ++i) {
-      if (segment_meets_triangle(t1[i], t1[(i + 1) % 3], t2[0], t2[1], t2[2])) return true;
-      if (segment_meets_triangle(t2[i], t2[(i + 1) % 3], t1[0], t1[1], t1[2])) return true;
+      const int j = (i + 1) % 3;
+      if (segment_meets_triangle_sides(t1[i], t1[j], side1[i], side1[j], t2[0], t2[1], t2[2])) return true;
+      if (segment_meets_triangle_sides(t2[i], t2[j], side2[i], side2[j], t1[0], t1[1], t1[2])) return true;
     }
     return false;
   }
@@ -119,8 +145,17 @@ bool triangles_intersect(const std::array<std::uint32_t, 3>& ids1, const std::ar
     int i1 = 0;
     while (shared1[i1] < 0) ++i1;
     const int i2 = shared1[i1];
-    return segment_meets_triangle(t1[(i1 + 1) % 3], t1[(i1 + 2) % 3], t2[0], t2[1], t2[2]) ||
-           segment_meets_triangle(t2[(i2 + 1) % 3], t2[(i2 + 2) % 3], t1[0], t1[1], t1[2]);
+    const Eigen::Vector3d& a = t1[(i1 + 1) % 3];
+    const Eigen::Vector3d& b = t1[(i1 + 2) % 3];
+    const int sa = orient3d(t2[0], t2[1], t2[2], a), sb = orient3d(t2[0], t2[1], t2[2], b);
+    if (segment_meets_triangle_sides(a, b, sa, sb, t2[0], t2[1], t2[2])) return true;
+    const Eigen::Vector3d& c = t2[(i2 + 1) % 3];
+    const Eigen::Vector3d& d = t2[(i2 + 2) % 3];
+    // t1 in the plane of a proper triangle t2 (marching cubes' flat regions): the planes
+    // are one, and c and d lie in t1's (the exact predicates are not asked again).
+    if (sa == 0 && sb == 0 && surely_not_collinear(t2[0], t2[1], t2[2]))
+      return segment_meets_triangle_sides(c, d, 0, 0, t1[0], t1[1], t1[2]);
+    return segment_meets_triangle(c, d, t1[0], t1[1], t1[2]);
   }
   // Shared edge (u, w): non-coplanar triangles meet only on it; coplanar ones overlap iff
   // their third corners lie on the same side of it (a fold-over).

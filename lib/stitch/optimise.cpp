@@ -25,12 +25,13 @@ Vec area_vector(const Vec& a, const Vec& b, const Vec& c) { return (b - a).cross
 
 // Sine of the smallest interior angle of (a, b, c): twice the area over the product of the
 // two longest edges (the smallest angle is below 90 deg, so its sine orders it); 0 for a
-// degenerate triangle.
-double min_angle_sine(const Vec& a, const Vec& b, const Vec& c) {
+// degenerate triangle. `twice_area`: |area_vector(a, b, c)| when known.
+double min_angle_sine(const Vec& a, const Vec& b, const Vec& c, double twice_area = -1.0) {
   std::array<double, 3> l2{(b - a).squaredNorm(), (c - b).squaredNorm(), (a - c).squaredNorm()};
   std::sort(l2.begin(), l2.end());
   const double product = std::sqrt(l2[1] * l2[2]);
-  return product > 0.0 ? area_vector(a, b, c).norm() / product : 0.0;
+  if (!(product > 0.0)) return 0.0;
+  return (twice_area >= 0.0 ? twice_area : area_vector(a, b, c).norm()) / product;
 }
 
 // What the optimisation may do with a vertex.
@@ -71,13 +72,17 @@ class Optimiser {
       // Old triangles (a, b, c), (b, a, d); new ones (a, d, c), (d, b, c).
       const Vec n0 = area_vector(a, b, c), n1 = area_vector(b, a, d);
       const Vec n2 = area_vector(a, d, c), n3 = area_vector(d, b, c);
-      if (n2.norm() <= min_double_area_ || n3.norm() <= min_double_area_) continue;
-      if (!within_dihedral(n0, n1) || !within_dihedral(n2, n3)) continue;
-      const Vec old_normal = n0.normalized() + n1.normalized();
+      const double l2 = n2.norm(), l3 = n3.norm();
+      if (l2 <= min_double_area_ || l3 <= min_double_area_) continue;
+      const double l0 = n0.norm(), l1 = n1.norm();
+      if (!within_dihedral(n0, n1, l0, l1) || !within_dihedral(n2, n3, l2, l3)) continue;
+      // n / |n| as Eigen's normalized() (a zero vector stays zero).
+      const Vec old_normal = (l0 > 0.0 ? Vec(n0 / l0) : n0) + (l1 > 0.0 ? Vec(n1 / l1) : n1);
       if (n2.dot(old_normal) <= 0.0 || n3.dot(old_normal) <= 0.0) continue;
-      const double old_min = std::min(triangle_alpha(a, b, c), triangle_alpha(b, a, d));
-      const double new_min = std::min(triangle_alpha(a, d, c), triangle_alpha(d, b, c));
-      if (!(new_min > (1.0 + options_.flip_gain) * old_min) || !mesh_.is_flip_ok(e)) continue;
+      // The smaller new alpha must exceed the bound: the second new triangle is measured
+      // only when the first does.
+      const double bound = (1.0 + options_.flip_gain) * std::min(triangle_alpha(a, b, c), triangle_alpha(b, a, d));
+      if (!(triangle_alpha(a, d, c) > bound) || !(triangle_alpha(d, b, c) > bound) || !mesh_.is_flip_ok(e)) continue;
       mesh_.flip(e);
       ++n_flips;
     }
@@ -131,7 +136,7 @@ class Optimiser {
           break;
         }
         new_min = std::min(new_min, triangle_alpha(q, b, c));
-        new_sine = std::min(new_sine, min_angle_sine(q, b, c));
+        new_sine = std::min(new_sine, min_angle_sine(q, b, c, l_new));
       }
       // Accepted when the smallest alpha stays at least min(old smallest, alpha_floor) and the
       // smallest angle at least min(old smallest, angle_floor): the old ring is needed only
@@ -222,8 +227,9 @@ class Optimiser {
     return !on_curve || curve < 0;
   }
 
-  bool within_dihedral(const Vec& n0, const Vec& n1) const {
-    return n0.dot(n1) >= cos_dihedral_ * n0.norm() * n1.norm();
+  // l0, l1: the norms of n0, n1.
+  bool within_dihedral(const Vec& n0, const Vec& n1, double l0, double l1) const {
+    return n0.dot(n1) >= cos_dihedral_ * l0 * l1;
   }
 
   const SurfaceMesh& surface_;

@@ -398,15 +398,23 @@ PatchInputHeights::PatchInputHeights(const TriMesh& mesh, const std::vector<int>
   const double cell = std::sqrt(extent_.x() * extent_.y() / static_cast<double>(faces.size())) + std::numeric_limits<double>::min();
   nx_ = std::clamp(static_cast<int>(extent_.x() / cell) + 1, 1, 4096);
   ny_ = std::clamp(static_cast<int>(extent_.y() / cell) + 1, 1, 4096);
-  grid_.resize(static_cast<std::size_t>(nx_) * static_cast<std::size_t>(ny_));
+  // Two sweeps over the faces' cell ranges: count per cell, then fill (a counting sort).
+  const std::size_t nx = static_cast<std::size_t>(nx_);
+  std::vector<std::array<std::size_t, 2>> range(local_.size());  // first and last cell
+  cell_start_.assign(nx * static_cast<std::size_t>(ny_) + 1, 0);
   for (std::size_t f = 0; f < local_.size(); ++f) {
     const auto& t = local_[f];
-    const std::size_t c0 = cell_of(std::min({t[0].x(), t[1].x(), t[2].x()}), std::min({t[0].y(), t[1].y(), t[2].y()}));
-    const std::size_t c1 = cell_of(std::max({t[0].x(), t[1].x(), t[2].x()}), std::max({t[0].y(), t[1].y(), t[2].y()}));
-    const std::size_t nx = static_cast<std::size_t>(nx_);
-    for (std::size_t j = c0 / nx; j <= c1 / nx; ++j)
-      for (std::size_t i = c0 % nx; i <= c1 % nx; ++i) grid_[j * nx + i].push_back(static_cast<int>(f));
+    range[f] = {cell_of(std::min({t[0].x(), t[1].x(), t[2].x()}), std::min({t[0].y(), t[1].y(), t[2].y()})),
+                cell_of(std::max({t[0].x(), t[1].x(), t[2].x()}), std::max({t[0].y(), t[1].y(), t[2].y()}))};
+    for (std::size_t j = range[f][0] / nx; j <= range[f][1] / nx; ++j)
+      for (std::size_t i = range[f][0] % nx; i <= range[f][1] % nx; ++i) ++cell_start_[j * nx + i + 1];
   }
+  for (std::size_t k = 1; k < cell_start_.size(); ++k) cell_start_[k] += cell_start_[k - 1];
+  cell_faces_.resize(cell_start_.back());
+  std::vector<std::size_t> fill(cell_start_.begin(), cell_start_.end() - 1);
+  for (std::size_t f = 0; f < local_.size(); ++f)
+    for (std::size_t j = range[f][0] / nx; j <= range[f][1] / nx; ++j)
+      for (std::size_t i = range[f][0] % nx; i <= range[f][1] % nx; ++i) cell_faces_[fill[j * nx + i]++] = static_cast<int>(f);
 }
 
 std::size_t PatchInputHeights::cell_of(double x, double y) const {
@@ -416,14 +424,16 @@ std::size_t PatchInputHeights::cell_of(double x, double y) const {
 }
 
 bool PatchInputHeights::height(double x, double y, double& z) const {
-  if (grid_.empty() || !std::isfinite(x) || !std::isfinite(y)) return false;
-  for (const int f : grid_[cell_of(x, y)]) {
-    const auto& t = local_[static_cast<std::size_t>(f)];
+  if (cell_start_.empty() || !std::isfinite(x) || !std::isfinite(y)) return false;
+  const std::size_t cell = cell_of(x, y);
+  for (std::size_t k = cell_start_[cell]; k < cell_start_[cell + 1]; ++k) {
+    const auto& t = local_[static_cast<std::size_t>(cell_faces_[k])];
     const double area = (t[1].x() - t[0].x()) * (t[2].y() - t[0].y()) - (t[1].y() - t[0].y()) * (t[2].x() - t[0].x());
     if (!(std::abs(area) > 0.0)) continue;
     const double b1 = ((x - t[0].x()) * (t[2].y() - t[0].y()) - (y - t[0].y()) * (t[2].x() - t[0].x())) / area;
+    if (b1 < 0.0) continue;  // most candidates: the second division is not needed
     const double b2 = ((t[1].x() - t[0].x()) * (y - t[0].y()) - (t[1].y() - t[0].y()) * (x - t[0].x())) / area;
-    if (b1 < 0.0 || b2 < 0.0 || b1 + b2 > 1.0) continue;
+    if (b2 < 0.0 || b1 + b2 > 1.0) continue;
     z = (1.0 - b1 - b2) * t[0].z() + b1 * t[1].z() + b2 * t[2].z();
     return true;
   }

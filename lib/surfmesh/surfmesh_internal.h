@@ -26,7 +26,10 @@ struct PatchInputHeights {
  private:
   [[nodiscard]] std::size_t cell_of(double x, double y) const;
   std::vector<std::array<Eigen::Vector3d, 3>> local_;
-  std::vector<std::vector<int>> grid_;
+  // Faces per grid cell, compressed: cell k holds cell_faces_[cell_start_[k] .. cell_start_[k + 1]),
+  // in increasing face order.
+  std::vector<std::size_t> cell_start_;
+  std::vector<int> cell_faces_;
   Eigen::Vector2d lo_ = Eigen::Vector2d::Zero();
   Eigen::Vector2d extent_ = Eigen::Vector2d::Ones();
   int nx_ = 1;
