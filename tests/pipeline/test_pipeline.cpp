@@ -330,6 +330,9 @@ TEST(PipelineSlow, CornerClusterCrossingsCollapsed) {
   const TriMesh mesh = prepare_mesh(read_soup(test::test_data("meshes/cheese.off"))).mesh;
   RemeshOptions options = fast_options();
   options.compute_distances = false;  // the crossings and the topology are the point (ASan time)
+  // Without the samples inside large faces (main df5b51c's fit), where cheese's corner
+  // clusters cross after moves and flips; with them there is nothing left to collapse.
+  options.surfmesh.fit.large_face_edges = 0.0;
   const RemeshResult r = remesh(mesh, options);
   const RemeshReport& rep = r.report;
   EXPECT_TRUE(rep.ok()) << errors_of(rep);
