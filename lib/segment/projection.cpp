@@ -5,7 +5,6 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <unordered_map>
 
 #include "nurbsfront/core/error.h"
 #include "nurbsfront/segment/segment_internal.h"
@@ -381,23 +380,17 @@ std::vector<std::vector<int>> split_at_repeated_vertices(const std::vector<int>&
   std::vector<int> sorted = loop;
   std::sort(sorted.begin(), sorted.end());
   if (std::adjacent_find(sorted.begin(), sorted.end()) == sorted.end()) return {loop};  // the usual case
+  // The loop's vertices renumbered 0 .. k-1, so split_loop's position array is as long as
+  // the loop, whatever the vertex ids.
+  sorted.erase(std::unique(sorted.begin(), sorted.end()), sorted.end());
+  std::vector<int> local(loop.size());
+  for (std::size_t i = 0; i < loop.size(); ++i)
+    local[i] = static_cast<int>(std::lower_bound(sorted.begin(), sorted.end(), loop[i]) - sorted.begin());
+  std::vector<int> position(sorted.size(), -1);
   std::vector<std::vector<int>> out;
-  std::vector<int> stack;
-  std::unordered_map<int, std::size_t> position;  // vertex -> index in stack
-  for (const int v : loop) {
-    const auto it = position.find(v);
-    if (it == position.end()) {
-      position.emplace(v, stack.size());
-      stack.push_back(v);
-      continue;
-    }
-    // v closes the cycle stack[first ..]: emit it and keep v on the stack.
-    const std::size_t first = it->second;
-    out.emplace_back(stack.begin() + static_cast<std::ptrdiff_t>(first), stack.end());
-    for (std::size_t i = first + 1; i < stack.size(); ++i) position.erase(stack[i]);
-    stack.resize(first + 1);
-  }
-  if (!stack.empty()) out.push_back(std::move(stack));
+  segment_detail::split_loop(local, position, out);
+  for (auto& cycle : out)
+    for (int& v : cycle) v = sorted[static_cast<std::size_t>(v)];
   return out;
 }
 
