@@ -43,7 +43,7 @@ std::string to_json(const RemeshReport& r) {
   json::Object counts;
   counts.count("input_vertices", r.n_input_vertices).count("input_faces", r.n_input_faces);
   counts.count("patches", r.n_patches).count("patches_split", r.n_patches_split);
-  counts.count("curves", r.n_curves).count("corners", r.n_corners);
+  counts.count("curves", r.n_curves).count("corners", r.n_corners).count("crease_edges", r.n_crease_edges);
   counts.count("nodes", r.n_nodes).count("triangles", r.n_triangles).count("failed_patches", r.n_failed_patches);
   json::Object seconds;
   seconds.num("segment", r.seconds_segment).num("surfmesh", r.seconds_surfmesh).num("stitch", r.seconds_stitch);

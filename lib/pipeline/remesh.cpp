@@ -107,6 +107,7 @@ RemeshResult remesh(const TriMesh& input, const RemeshOptions& options) {
   Stopwatch watch;
   const Segmentation first_segmentation = segment(input, segment_options);
   report.seconds_segment = watch.seconds();
+  report.n_crease_edges = first_segmentation.n_crease_edges;
 
   watch.restart();
   // Patches whose fit leaves their input (sharp bends inside) are split and refitted.

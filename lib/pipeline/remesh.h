@@ -52,6 +52,8 @@ struct RemeshReport {
   std::size_t n_patches_split = 0;
   std::size_t n_curves = 0;
   std::size_t n_corners = 0;
+  //! Input edges the segmentation made creases (Segmentation::n_crease_edges).
+  std::size_t n_crease_edges = 0;
   std::size_t n_nodes = 0;        //!< nodes of the surface mesh (before stitching)
   std::size_t n_triangles = 0;    //!< triangles of the output
   std::size_t n_failed_patches = 0;  //!< patches whose status is not Ok

@@ -216,6 +216,10 @@ TEST(Pipeline, ReportCountsTimesAndJson) {
   EXPECT_NE(to_summary(rep).find("alpha mean"), std::string::npos);
   EXPECT_NE(json.find("\"min_angle_away_from_features_deg\""), std::string::npos);
   EXPECT_NE(json.find("\"collapses\": " + std::to_string(rep.stitch.n_collapses)), std::string::npos);
+  // A smooth level-set sphere has no creases; a cube has its 12 edges (the diagonals are flat).
+  EXPECT_EQ(rep.n_crease_edges, 0u);
+  EXPECT_NE(json.find("\"crease_edges\": 0"), std::string::npos);
+  EXPECT_EQ(remesh(to_trimesh(test::cube()), options).report.n_crease_edges, 12u);
   EXPECT_NE(to_summary(rep).find("away from features"), std::string::npos);
   // Without distances the report has none and takes no distance time.
   options.compute_distances = false;
