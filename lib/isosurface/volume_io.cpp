@@ -130,6 +130,18 @@ void convert_as(const unsigned char* p, std::size_t n, bool big_endian, std::vec
   for (std::size_t i = 0; i < n; ++i) out[i] = static_cast<float>(load<T>(p + i * sizeof(T), big_endian));
 }
 
+// The raw data must hold exactly the bytes the header's sizes need.
+void check_data_size(const std::filesystem::path& path, std::string_view data, std::uint64_t n_bytes) {
+  if (data.size() < n_bytes) {
+    fail(path, "data is truncated: " + std::to_string(data.size()) + " bytes, the header's sizes need " +
+                   std::to_string(n_bytes));
+  }
+  if (data.size() > n_bytes) {
+    fail(path, "data holds " + std::to_string(data.size()) + " bytes, more than the header's sizes (" +
+                   std::to_string(n_bytes) + ")");
+  }
+}
+
 std::vector<float> convert(const std::filesystem::path& path, std::string_view data, std::uint64_t n, Elem e,
                            bool big_endian) {
   if (data.size() < n * elem_size(e)) fail(path, "data is truncated");
@@ -348,14 +360,7 @@ ScalarGrid read_metaimage(const std::filesystem::path& path) {
         data = data.substr(static_cast<std::size_t>(skip));
       }
     }
-    if (data.size() < n_bytes) {
-      fail(path, "data is truncated: " + std::to_string(data.size()) + " bytes, the header's sizes need " +
-                     std::to_string(n_bytes));
-    }
-    if (data.size() > n_bytes) {
-      fail(path, "data holds " + std::to_string(data.size()) + " bytes, more than the header's sizes (" +
-                     std::to_string(n_bytes) + ")");
-    }
+    check_data_size(path, data, n_bytes);
     grid.values = convert(path, data, n, elem, big_endian);
   }
   return grid;
@@ -528,14 +533,7 @@ ScalarGrid read_inr(const std::filesystem::path& path, bool gz) {
   const std::uint64_t n = count(grid.dims);
   const std::string_view data = std::string_view(bytes).substr(data_start);
   const std::uint64_t n_bytes = n * elem_size(elem);
-  if (data.size() < n_bytes) {
-    fail(path, "data is truncated: " + std::to_string(data.size()) + " bytes, the header's sizes need " +
-                   std::to_string(n_bytes));
-  }
-  if (data.size() > n_bytes) {
-    fail(path, "data holds " + std::to_string(data.size()) + " bytes, more than the header's sizes (" +
-                   std::to_string(n_bytes) + ")");
-  }
+  check_data_size(path, data, n_bytes);
   grid.values = convert(path, data, n, elem, big_endian);
   return grid;
 }
