@@ -2,6 +2,8 @@
 # SPDX-License-Identifier: BSD-3-Clause
 # Installs the Debian 12 packages nurbsfront needs to build, test and benchmark.
 # Idempotent: installs only what is missing. Works as root, or through sudo.
+#   --cgal  also CGAL (libcgal-dev, GPL) for the optional bench_cgal comparison
+#           (cmake -DNURBSFRONT_BUILD_CGAL_BENCH=ON); nothing else needs it.
 set -euo pipefail
 
 packages=(
@@ -9,6 +11,12 @@ packages=(
   libopenmesh-dev libeigen3-dev libcli11-dev zlib1g-dev
   libgtest-dev libgmock-dev libbenchmark-dev
 )
+for arg in "$@"; do
+  case "$arg" in
+    --cgal) packages+=(libcgal-dev) ;;
+    *) echo "install-deps: unknown option $arg (known: --cgal)" >&2; exit 2 ;;
+  esac
+done
 
 missing=()
 for p in "${packages[@]}"; do
