@@ -215,13 +215,20 @@ void core_detail::to_trimesh_checked(const TriangleSoup& soup, TriMesh& mesh) {
     for (const std::uint32_t v : t) ++first[v + 1];
   }
   for (std::size_t i = 1; i < first.size(); ++i) first[i] += first[i - 1];
-  std::vector<std::uint32_t> outgoing(n_corners);
+  // With each listed corner, its end vertex: the twin search below reads one array.
+  std::vector<std::uint32_t> outgoing(n_corners), outgoing_end(n_corners);
+  auto corner_end = [&](std::size_t c) { return soup.triangles[c / 3][(c % 3 + 1) % 3]; };
   {
     std::vector<std::uint32_t> fill(first.begin(), first.end() - 1);
-    for (std::size_t c = 0; c < n_corners; ++c)
-      outgoing[fill[soup.triangles[c / 3][c % 3]]++] = static_cast<std::uint32_t>(c);
+    for (std::size_t f = 0; f < soup.triangles.size(); ++f) {
+      const auto& t = soup.triangles[f];
+      for (std::size_t k = 0; k < 3; ++k) {
+        const std::uint32_t slot = fill[t[k]]++;
+        outgoing[slot] = static_cast<std::uint32_t>(3 * f + k);
+        outgoing_end[slot] = t[(k + 1) % 3];
+      }
+    }
   }
-  auto corner_end = [&](std::size_t c) { return soup.triangles[c / 3][(c % 3 + 1) % 3]; };
   constexpr auto kNoCorner = std::numeric_limits<std::uint32_t>::max();
   std::vector<TriMesh::HalfedgeHandle> halfedge(n_corners);
   std::vector<std::uint32_t> boundary;  // corners whose edge has no other face
@@ -231,7 +238,7 @@ void core_detail::to_trimesh_checked(const TriangleSoup& soup, TriMesh& mesh) {
     const std::uint32_t a = soup.triangles[c / 3][c % 3], b = corner_end(c);
     std::uint32_t twin = kNoCorner;  // the corner b -> a, if any
     for (std::uint32_t i = first[b]; i < first[b + 1]; ++i) {
-      if (corner_end(outgoing[i]) == a) {
+      if (outgoing_end[i] == a) {
         twin = outgoing[i];
         break;
       }

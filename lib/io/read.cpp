@@ -575,8 +575,49 @@ TriangleSoup read_ply(std::string_view data, const fs::path& path) {
       if (iface < 0) fail(path, "PLY face element lacks a 'vertex_indices' list");
       reserve_bounded(soup.triangles, e.count, c.remaining(), binary ? e.min_binary_size() : 2);
     }
+    // Fast paths for the usual binary layouts, item by item (an item they do not take, e.g.
+    // at the end of the data or a face that is not a valid triangle, goes through the
+    // general loop below, which gives the same values and the same errors): a vertex
+    // element of scalars only; a face element of just the index list, with a one-byte
+    // count and 4-byte indices, little-endian.
+    std::size_t vertex_item_bytes = 0;
+    std::array<std::size_t, 3> xyz_offset{};
+    const bool fast_vertex = binary && is_vertex && std::none_of(e.properties.begin(), e.properties.end(), [](const PlyProperty& p) { return p.is_list(); });
+    if (fast_vertex) {
+      for (std::size_t k = 0; k < e.properties.size(); ++k) {
+        if (static_cast<int>(k) == ix) xyz_offset[0] = vertex_item_bytes;
+        if (static_cast<int>(k) == iy) xyz_offset[1] = vertex_item_bytes;
+        if (static_cast<int>(k) == iz) xyz_offset[2] = vertex_item_bytes;
+        vertex_item_bytes += scalar_size(e.properties[k].type);
+      }
+    }
+    const bool fast_face = binary && !big && std::endian::native == std::endian::little && is_face && iface == 0 &&
+                           e.properties.size() == 1 &&
+                           scalar_size(e.properties[0].count_type) == 1 &&
+                           (e.properties[0].type == Scalar::I32 || e.properties[0].type == Scalar::U32);
+    const bool signed_index = fast_face && e.properties[0].type == Scalar::I32;
+    constexpr std::size_t kTriangleItemBytes = 1 + 3 * 4;
     std::array<double, 3> xyz{};
     for (std::uint64_t item = 0; item < e.count; ++item) {
+      if (fast_vertex && c.remaining() >= vertex_item_bytes) {
+        const char* q = c.here();
+        soup.points.emplace_back(load_as_double(e.properties[static_cast<std::size_t>(ix)].type, q + xyz_offset[0], big),
+                                 load_as_double(e.properties[static_cast<std::size_t>(iy)].type, q + xyz_offset[1], big),
+                                 load_as_double(e.properties[static_cast<std::size_t>(iz)].type, q + xyz_offset[2], big));
+        c.advance(vertex_item_bytes);
+        continue;
+      }
+      if (fast_face && c.remaining() >= kTriangleItemBytes && *c.here() == 3) {
+        std::array<std::uint32_t, 3> t{};
+        std::memcpy(t.data(), c.here() + 1, 3 * 4);
+        // Valid indices are below kMaxPoints (2^32 - 1), and non-negative when signed.
+        const std::uint32_t bound = signed_index ? 0x80000000u : static_cast<std::uint32_t>(kMaxPoints);
+        if (t[0] < bound && t[1] < bound && t[2] < bound) {
+          soup.triangles.push_back(t);
+          c.advance(kTriangleItemBytes);
+          continue;
+        }
+      }
       for (std::size_t k = 0; k < e.properties.size(); ++k) {
         const auto& p = e.properties[k];
         const int ik = static_cast<int>(k);

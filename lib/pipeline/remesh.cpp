@@ -2,6 +2,7 @@
 // remesh(): the stages in order, their timings and counts, and the output's report.
 #include "nurbsfront/pipeline/remesh.h"
 
+#include <cstdint>
 #include <string>
 #include <utility>
 
@@ -46,10 +47,19 @@ void check_input(const TriMesh& input) {
       if (input.status(f).deleted()) throw InvalidInput("remesh: the input mesh has deleted elements (call garbage_collection())");
     }
   }
+  // OpenMesh's is_manifold(v) (an outgoing boundary halfedge other than v's own halfedge,
+  // which its circulator visits first) in one pass over the halfedges instead of a
+  // circulation around every vertex.
+  std::vector<std::uint8_t> is_non_manifold(input.n_vertices(), 0);
+  for (auto h : input.halfedges()) {
+    if (!input.is_boundary(h)) continue;
+    const auto v = input.from_vertex_handle(h);
+    if (input.halfedge_handle(v) != h) is_non_manifold[static_cast<std::size_t>(v.idx())] = 1;
+  }
   std::size_t n_non_finite = 0, n_non_manifold = 0;
   for (auto v : input.vertices()) {
     if (!to_eigen(input.point(v)).allFinite()) ++n_non_finite;
-    if (!input.is_manifold(v)) ++n_non_manifold;
+    if (is_non_manifold[static_cast<std::size_t>(v.idx())] != 0) ++n_non_manifold;
   }
   if (n_non_finite > 0) {
     throw InvalidInput("remesh: the input mesh has " + std::to_string(n_non_finite) +

@@ -148,6 +148,10 @@ bool triangles_intersect(const std::array<std::uint32_t, 3>& ids1, const std::ar
     const Eigen::Vector3d& a = t1[(i1 + 1) % 3];
     const Eigen::Vector3d& b = t1[(i1 + 2) % 3];
     const int sa = orient3d(t2[0], t2[1], t2[2], a), sb = orient3d(t2[0], t2[1], t2[2], b);
+    // a and b strictly on one side of t2's plane: t1 meets that plane only at v (the usual
+    // case for neighbours on a smooth surface), so the test below from t2's side would
+    // answer no as well.
+    if (sa * sb > 0) return false;
     if (segment_meets_triangle_sides(a, b, sa, sb, t2[0], t2[1], t2[2])) return true;
     const Eigen::Vector3d& c = t2[(i2 + 1) % 3];
     const Eigen::Vector3d& d = t2[(i2 + 2) % 3];

@@ -8,6 +8,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <numbers>
 #include <numeric>
 
 #include <Eigen/Geometry>
@@ -69,10 +70,12 @@ class Collapser {
     std::iota(out.target.begin(), out.target.end(), 0);
     // The triangles below the angle, worst first.
     std::vector<std::pair<double, int>> bad;
+    const double sin_bound = std::sin(options_.collapse_below_angle_deg * std::numbers::pi / 180.0);
     for (auto f : mesh_.faces()) {
       std::array<Vec, 3> p;
       int k = 0;
       for (auto v : mesh_.fv_range(f)) p[static_cast<std::size_t>(k++)] = point(mesh_, v);
+      if (!may_have_angle_below(p[0], p[1], p[2], sin_bound)) continue;
       const double angle = min_angle_deg(p[0], p[1], p[2]);
       if (angle < options_.collapse_below_angle_deg) bad.emplace_back(angle, f.idx());
     }

@@ -23,15 +23,27 @@ Vec point(const TriMesh& mesh, TriMesh::VertexHandle v) { return to_eigen(mesh.p
 // Twice the area vector (a, b, c counter-clockwise).
 Vec area_vector(const Vec& a, const Vec& b, const Vec& c) { return (b - a).cross(c - a); }
 
-// Sine of the smallest interior angle of (a, b, c): twice the area over the product of the
-// two longest edges (the smallest angle is below 90 deg, so its sine orders it); 0 for a
-// degenerate triangle. `twice_area`: |area_vector(a, b, c)| when known.
-double min_angle_sine(const Vec& a, const Vec& b, const Vec& c, double twice_area = -1.0) {
+// triangle_alpha(a, b, c) with twice_area = |area_vector(a, b, c)| already known: the same
+// operations in the same order (the same cross product), so the same value bit for bit.
+double alpha_with_area(const Vec& a, const Vec& b, const Vec& c, double twice_area) {
+  const double sum_sq = (b - a).squaredNorm() + (c - b).squaredNorm() + (a - c).squaredNorm();
+  if (!(sum_sq > 0.0)) return 0.0;
+  const double area = 0.5 * twice_area;
+  return 4.0 * std::numbers::sqrt3 * area / sum_sq;
+}
+
+// alpha (as alpha_with_area) and the sine of the smallest interior angle of (a, b, c):
+// twice the area over the product of the two longest edges (the smallest angle is below
+// 90 deg, so its sine orders it; 0 for a degenerate triangle), from one set of squared
+// edge lengths. twice_area = |area_vector(a, b, c)|.
+std::array<double, 2> alpha_and_min_angle_sine(const Vec& a, const Vec& b, const Vec& c, double twice_area) {
   std::array<double, 3> l2{(b - a).squaredNorm(), (c - b).squaredNorm(), (a - c).squaredNorm()};
+  const double sum_sq = l2[0] + l2[1] + l2[2];
+  const double area = 0.5 * twice_area;
+  const double alpha = sum_sq > 0.0 ? 4.0 * std::numbers::sqrt3 * area / sum_sq : 0.0;
   std::sort(l2.begin(), l2.end());
   const double product = std::sqrt(l2[1] * l2[2]);
-  if (!(product > 0.0)) return 0.0;
-  return (twice_area >= 0.0 ? twice_area : area_vector(a, b, c).norm()) / product;
+  return {alpha, product > 0.0 ? twice_area / product : 0.0};
 }
 
 // What the optimisation may do with a vertex.
@@ -81,8 +93,9 @@ class Optimiser {
       if (n2.dot(old_normal) <= 0.0 || n3.dot(old_normal) <= 0.0) continue;
       // The smaller new alpha must exceed the bound: the second new triangle is measured
       // only when the first does.
-      const double bound = (1.0 + options_.flip_gain) * std::min(triangle_alpha(a, b, c), triangle_alpha(b, a, d));
-      if (!(triangle_alpha(a, d, c) > bound) || !(triangle_alpha(d, b, c) > bound) || !mesh_.is_flip_ok(e)) continue;
+      const double bound =
+          (1.0 + options_.flip_gain) * std::min(alpha_with_area(a, b, c, l0), alpha_with_area(b, a, d, l1));
+      if (!(alpha_with_area(a, d, c, l2) > bound) || !(alpha_with_area(d, b, c, l3) > bound) || !mesh_.is_flip_ok(e)) continue;
       mesh_.flip(e);
       ++n_flips;
     }
@@ -104,10 +117,11 @@ class Optimiser {
         const auto vb = mesh_.to_vertex_handle(h);
         const auto vc = mesh_.to_vertex_handle(mesh_.next_halfedge_handle(h));
         const Vec b = point(mesh_, vb), c = point(mesh_, vc);
-        const double area = area_vector(p, b, c).norm();
+        const Vec n = area_vector(p, b, c);
+        const double area = n.norm();
         centroid += area * (p + b + c) / 3.0;
         total += area;
-        ring_.push_back({b, c});
+        ring_.push_back({b, c, n, area});
       }
       if (!(total > 0.0) || ring_.empty()) continue;
       centroid /= total;
@@ -127,28 +141,28 @@ class Optimiser {
       if (!q.allFinite()) continue;
       double new_min = 1.0, new_sine = 1.0;  // smallest alpha, sine of the smallest angle
       bool ok = true;
-      for (const auto& [b, c] : ring_) {
-        const Vec n_old = area_vector(p, b, c);
-        const Vec n_new = area_vector(q, b, c);
-        const double l_old = n_old.norm(), l_new = n_new.norm();
-        if (l_new <= min_double_area_ || (l_old > 0.0 && n_new.dot(n_old) <= options_.min_normal_dot * l_old * l_new)) {
+      for (const RingTriangle& t : ring_) {
+        const Vec n_new = area_vector(q, t.b, t.c);
+        const double l_new = n_new.norm();
+        if (l_new <= min_double_area_ || (t.l_old > 0.0 && n_new.dot(t.n_old) <= options_.min_normal_dot * t.l_old * l_new)) {
           ok = false;
           break;
         }
-        new_min = std::min(new_min, triangle_alpha(q, b, c));
-        new_sine = std::min(new_sine, min_angle_sine(q, b, c, l_new));
+        const auto [alpha, sine] = alpha_and_min_angle_sine(q, t.b, t.c, l_new);
+        new_min = std::min(new_min, alpha);
+        new_sine = std::min(new_sine, sine);
       }
       // Accepted when the smallest alpha stays at least min(old smallest, alpha_floor) and the
       // smallest angle at least min(old smallest, angle_floor): the old ring is needed only
       // below the floors.
       if (ok && new_min < options_.alpha_floor) {
         double old_min = 1.0;
-        for (const auto& [b, c] : ring_) old_min = std::min(old_min, triangle_alpha(p, b, c));
+        for (const RingTriangle& t : ring_) old_min = std::min(old_min, alpha_with_area(p, t.b, t.c, t.l_old));
         ok = new_min >= old_min;
       }
       if (ok && new_sine < sin_angle_floor_) {
         double old_sine = 1.0;
-        for (const auto& [b, c] : ring_) old_sine = std::min(old_sine, min_angle_sine(p, b, c));
+        for (const RingTriangle& t : ring_) old_sine = std::min(old_sine, alpha_and_min_angle_sine(p, t.b, t.c, t.l_old)[1]);
         ok = new_sine >= old_sine;
       }
       if (ok) {
@@ -239,7 +253,13 @@ class Optimiser {
   const std::vector<std::uint8_t>& is_feature_;
   std::vector<NodeInfo> nodes_;
   std::vector<std::vector<int>> corner_patches_;
-  std::vector<std::array<Vec, 2>> ring_;
+  // The far corners of a smoothed vertex p's triangles (p, b, c), with their area vector
+  // and its norm at p's old position.
+  struct RingTriangle {
+    Vec b, c, n_old;
+    double l_old;
+  };
+  std::vector<RingTriangle> ring_;
   double min_double_area_ = 0.0;
   double cos_dihedral_ = 1.0;
   double sin_angle_floor_ = 0.0;

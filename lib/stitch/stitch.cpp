@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <numbers>
 #include <numeric>
 #include <string>
 
@@ -166,6 +167,9 @@ std::vector<std::uint8_t> feature_nodes(const SurfaceMesh& s) {
 void measure_away_from_features(const std::vector<std::uint8_t>& feature, const StitchResult& result, StitchReport& report) {
   const TriMesh& mesh = result.mesh;
   double min_angle = 180.0;
+  // Triangles surely above both min_angle and the bound change neither figure: not measured
+  // (from the first triangle on, min_angle <= 60 deg; before it, every triangle is).
+  double sin_bound = 2.0;
   for (auto f : mesh.faces()) {
     std::array<Eigen::Vector3d, 3> p;
     bool is_away = true;
@@ -175,10 +179,14 @@ void measure_away_from_features(const std::vector<std::uint8_t>& feature, const 
       p[static_cast<std::size_t>(k++)] = to_eigen(mesh.point(v));
     }
     if (!is_away) continue;
+    ++report.n_away_from_features;
+    if (!stitch_detail::may_have_angle_below(p[0], p[1], p[2], sin_bound)) continue;
     const std::array<double, 3> angles = triangle_angles_deg(p[0], p[1], p[2]);
     const double smallest = std::min({angles[0], angles[1], angles[2]});
-    ++report.n_away_from_features;
-    min_angle = std::min(min_angle, smallest);
+    if (smallest < min_angle) {
+      min_angle = smallest;
+      sin_bound = std::sin(std::max(min_angle, kAwayFromFeaturesAngleBoundDeg) * std::numbers::pi / 180.0);
+    }
     if (smallest < kAwayFromFeaturesAngleBoundDeg) ++report.n_small_angle_away_from_features;
   }
   report.min_angle_away_from_features_deg = report.n_away_from_features > 0 ? min_angle : 0.0;

@@ -3,11 +3,12 @@
 // Shared between the stitch sources (not part of the public API).
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <utility>
 #include <vector>
 
-#include <Eigen/Core>
+#include <Eigen/Geometry>
 
 #include "nurbsfront/stitch/stitch.h"
 
@@ -56,6 +57,22 @@ void replace_pairs(std::vector<std::array<std::uint32_t, 2>>& pairs, IsChanged i
   pairs.insert(pairs.end(), fresh.begin(), fresh.end());
   std::sort(pairs.begin(), pairs.end());
   pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
+}
+
+//! False only when triangle (a, b, c) surely has no angle below the angle whose sine is
+//! sin_bound (an angle below 60 deg): the sine of its smallest angle (twice the area over the
+//! product of the two longest edges, off by a few ulps of 1 at most, slivers included)
+//! exceeds sin_bound by far more than that rounding and triangle_angles_deg()'s. A cheap
+//! pre-test that spares most triangles triangle_angles_deg()'s three atan2; the triangles
+//! it lets through are measured as before, so the answers do not change.
+inline bool may_have_angle_below(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c,
+                                 double sin_bound) {
+  constexpr double kSineMargin = 1e-9;
+  std::array<double, 3> l2{(b - a).squaredNorm(), (c - b).squaredNorm(), (a - c).squaredNorm()};
+  std::sort(l2.begin(), l2.end());
+  const double product = std::sqrt(l2[1] * l2[2]);
+  if (!(product > 0.0)) return true;
+  return !((b - a).cross(c - a).norm() / product > sin_bound + kSineMargin);
 }
 
 //! alpha of every face, in face order.

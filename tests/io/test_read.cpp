@@ -9,6 +9,7 @@
 #include <limits>
 #include <random>
 #include <string>
+#include <vector>
 
 #include "io/io_test_util.h"
 #include "nurbsfront/core/error.h"
@@ -107,6 +108,49 @@ TEST(ReadPly, AsciiWithVertexIndexName) {
   const TriangleSoup s = read_soup(path);
   ASSERT_EQ(s.triangles.size(), 1u);
   EXPECT_EQ(s.triangles[0], (Tri{0, 1, 2}));
+}
+
+// The little-endian layouts the reader takes item by item without the general property loop
+// (scalar-only vertices; faces of just the index list with 4-byte indices): same values as
+// the general loop, quads and bad items falling back to it, same errors.
+TEST(ReadPly, LittleEndianTrianglesQuadsAndBadFaces) {
+  auto file = [](const std::vector<std::vector<std::int32_t>>& faces, std::size_t cut = 0) {
+    std::string ply = "ply\nformat binary_little_endian 1.0\nelement vertex 5\nproperty float x\nproperty uchar flag\n"
+                      "property float y\nproperty double z\nelement face " +
+                      std::to_string(faces.size()) + "\nproperty list uchar int vertex_indices\nend_header\n";
+    for (int i = 0; i < 5; ++i) {
+      test::pack(ply, static_cast<float>(i), false);
+      test::pack(ply, std::uint8_t{9}, false);
+      test::pack(ply, static_cast<float>(2 * i), false);
+      test::pack(ply, 0.5 * i, false);
+    }
+    for (const auto& f : faces) {
+      test::pack(ply, static_cast<std::uint8_t>(f.size()), false);
+      for (const std::int32_t i : f) test::pack(ply, i, false);
+    }
+    ply.resize(ply.size() - cut);
+    return ply;
+  };
+  const auto dir = test::temp_dir("io_ply_le");
+  const TriangleSoup s = read_soup(test::write_file(dir / "a.ply", file({{0, 1, 2}, {0, 2, 3, 4}, {4, 3, 2}})));
+  ASSERT_EQ(s.points.size(), 5u);
+  EXPECT_EQ(s.points[3], Eigen::Vector3d(3, 6, 1.5));
+  ASSERT_EQ(s.triangles.size(), 4u);
+  EXPECT_EQ(s.triangles[0], (Tri{0, 1, 2}));
+  EXPECT_EQ(s.triangles[1], (Tri{0, 2, 3}));
+  EXPECT_EQ(s.triangles[2], (Tri{0, 3, 4}));
+  EXPECT_EQ(s.triangles[3], (Tri{4, 3, 2}));
+  auto message = [&](const std::string& name, const std::string& content) {
+    try {
+      (void)read_soup(test::write_file(dir / name, content));
+    } catch (const IoError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_NE(message("neg.ply", file({{0, 1, 2}, {0, -1, 2}})).find("vertex index -1 out of range"), std::string::npos);
+  EXPECT_NE(message("cut.ply", file({{0, 1, 2}, {2, 3, 4}}, 2)).find(".ply"), std::string::npos);
+  EXPECT_NE(message("two.ply", file({{0, 1, 2}, {3, 4}})).find("polygon with 2 vertices"), std::string::npos);
 }
 
 TEST(ReadStl, AsciiWithTwoSolidsAndBinaryWithSolidHeader) {
