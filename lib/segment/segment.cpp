@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <memory>
 #include <numbers>
 #include <string>
 
@@ -658,17 +659,13 @@ std::vector<std::vector<int>> carve_components(const FaceGraph& graph, const std
 }
 
 // True when two vertices of the patch form a cliff (see kCliffRunEdges): bucketed in the
-// patch plane on a grid of the run; only pairs of neighbouring buckets whose height ranges
-// together span more than the rise are compared vertex by vertex.
-bool has_cliff(const FaceGraph& graph, const std::vector<int>& faces, const Eigen::Vector3d& axis, double mean_edge) {
+// patch plane on a grid of the run, sorted by height within a bucket; only pairs of
+// neighbouring buckets whose height ranges together span more than the rise are compared,
+// and of those only the vertices more than the rise above (or below) each other: a suffix
+// (prefix) of the other bucket, found by two pointers since the heights are sorted.
+bool has_cliff(const FaceGraph& graph, const std::vector<int>& faces, const Eigen::Vector3d& axis, double mean_edge,
+               Scratch& scratch) {
   if (faces.size() < kCliffMinFaces || !(mean_edge > 0.0)) return false;
-  const TriMesh& mesh = *graph.mesh;
-  std::vector<int> vertices;
-  vertices.reserve(3 * faces.size());
-  for (const int f : faces)
-    for (const int v : graph.vertices[f]) vertices.push_back(v);
-  std::sort(vertices.begin(), vertices.end());
-  vertices.erase(std::unique(vertices.begin(), vertices.end()), vertices.end());
   const auto [e1, e2] = segment_detail::plane_frame(axis);
   const double run = kCliffRunEdges * mean_edge;
   const double rise = kCliffRiseEdges * mean_edge;
@@ -677,32 +674,36 @@ bool has_cliff(const FaceGraph& graph, const std::vector<int>& faces, const Eige
     Eigen::Vector3d local;
   };
   std::vector<Entry> entries;
-  entries.reserve(vertices.size());
+  entries.reserve(faces.size());
   double z_min = std::numeric_limits<double>::infinity(), z_max = -z_min;
-  for (const int v : vertices) {
-    const Eigen::Vector3d x = to_eigen(mesh.point(TriMesh::VertexHandle(v)));
-    const Eigen::Vector3d local(x.dot(e1), x.dot(e2), x.dot(axis));
-    entries.push_back({static_cast<std::int64_t>(std::floor(local.x() / run)),
-                       static_cast<std::int64_t>(std::floor(local.y() / run)), local});
-    z_min = std::min(z_min, local.z());
-    z_max = std::max(z_max, local.z());
+  const int epoch = ++scratch.vertex_epoch;  // each vertex once
+  for (const int f : faces) {
+    for (const int v : graph.vertices[f]) {
+      if (scratch.vertex_stamp[v] == epoch) continue;
+      scratch.vertex_stamp[v] = epoch;
+      const Eigen::Vector3d& x = graph.points[v];
+      const Eigen::Vector3d local(x.dot(e1), x.dot(e2), x.dot(axis));
+      entries.push_back({static_cast<std::int64_t>(std::floor(local.x() / run)),
+                         static_cast<std::int64_t>(std::floor(local.y() / run)), local});
+      z_min = std::min(z_min, local.z());
+      z_max = std::max(z_max, local.z());
+    }
   }
   if (!(z_max - z_min > rise)) return false;
-  auto before = [](const Entry& a, const Entry& b) { return a.i != b.i ? a.i < b.i : a.j < b.j; };
-  std::sort(entries.begin(), entries.end(), before);
+  std::sort(entries.begin(), entries.end(), [](const Entry& a, const Entry& b) {
+    if (a.i != b.i) return a.i < b.i;
+    if (a.j != b.j) return a.j < b.j;
+    return a.local.z() < b.local.z();
+  });
   struct Bucket {
     std::int64_t i, j;
-    std::size_t begin, end;
-    double z_min, z_max;
+    std::size_t begin, end;  // heights ascending
   };
   std::vector<Bucket> buckets;
   for (std::size_t k = 0; k < entries.size(); ++k) {
     const Entry& e = entries[k];
-    if (buckets.empty() || buckets.back().i != e.i || buckets.back().j != e.j) buckets.push_back({e.i, e.j, k, k, e.local.z(), e.local.z()});
-    Bucket& b = buckets.back();
-    b.end = k + 1;
-    b.z_min = std::min(b.z_min, e.local.z());
-    b.z_max = std::max(b.z_max, e.local.z());
+    if (buckets.empty() || buckets.back().i != e.i || buckets.back().j != e.j) buckets.push_back({e.i, e.j, k, k});
+    buckets.back().end = k + 1;
   }
   auto find = [&](std::int64_t i, std::int64_t j) -> const Bucket* {
     const auto it = std::lower_bound(buckets.begin(), buckets.end(), std::pair(i, j), [](const Bucket& b, const std::pair<std::int64_t, std::int64_t>& k) {
@@ -710,17 +711,28 @@ bool has_cliff(const FaceGraph& graph, const std::vector<int>& faces, const Eige
     });
     return it != buckets.end() && it->i == i && it->j == j ? &*it : nullptr;
   };
+  auto z = [&](std::size_t k) { return entries[k].local.z(); };
+  auto is_cliff = [&](std::size_t p, std::size_t q, double dz) {
+    const double dxy = (entries[q].local.head<2>() - entries[p].local.head<2>()).norm();
+    return dxy < run && dz > kCliffMinRiseOverRun * dxy;
+  };
   for (const Bucket& a : buckets) {
     // Each unordered pair of buckets once: itself and the neighbours after it in (i, j) order.
     for (const auto& [di, dj] : {std::pair(0, 0), std::pair(0, 1), std::pair(1, -1), std::pair(1, 0), std::pair(1, 1)}) {
       const Bucket* b = (di == 0 && dj == 0) ? &a : find(a.i + di, a.j + dj);
-      if (b == nullptr || !(std::max(a.z_max, b->z_max) - std::min(a.z_min, b->z_min) > rise)) continue;
+      if (b == nullptr || !(std::max(z(a.end - 1), z(b->end - 1)) - std::min(z(a.begin), z(b->begin)) > rise)) continue;
+      // For p rising through a: b's vertices more than the rise above p start at `above`
+      // (moves up), those more than the rise below p end at `below` (moves up). The
+      // differences are those of the exhaustive test (rounding is monotone).
+      std::size_t above = b->begin, below = b->begin;
       for (std::size_t p = a.begin; p < a.end; ++p) {
-        for (std::size_t q = (b == &a ? p + 1 : b->begin); q < b->end; ++q) {
-          const double dz = std::abs(entries[q].local.z() - entries[p].local.z());
-          const double dxy = (entries[q].local.head<2>() - entries[p].local.head<2>()).norm();
-          if (dz > rise && dxy < run && dz > kCliffMinRiseOverRun * dxy) return true;
-        }
+        while (above < b->end && !(z(above) - z(p) > rise)) ++above;
+        for (std::size_t q = std::max(above, b == &a ? p + 1 : b->begin); q < b->end; ++q)
+          if (is_cliff(p, q, z(q) - z(p))) return true;
+        if (b == &a) continue;  // pairs within a: the higher one is above
+        while (below < b->end && z(p) - z(below) > rise) ++below;
+        for (std::size_t q = b->begin; q < below; ++q)
+          if (is_cliff(p, q, z(p) - z(q))) return true;
       }
     }
   }
@@ -732,18 +744,18 @@ bool has_cliff(const FaceGraph& graph, const std::vector<int>& faces, const Eige
 // A local fold (a short extra outer loop around a flipped face, or two crossing border
 // segments at a steep border face, typical of terraced inputs) is cut out with a few rings
 // of faces around it; anything else is bisected. Parts are checked again until every patch passes.
-std::size_t split_folds(const Grouping& grouping, double mean_edge, Scratch& scratch, Patches& patches) {
+// `work`: the patches to check, taken from the back (every patch unless some are known to pass).
+std::size_t split_folds(const Grouping& grouping, double mean_edge, Scratch& scratch, Patches& patches,
+                        std::vector<int> work) {
   const FaceGraph& graph = grouping.graph;
   const TriMesh& mesh = *graph.mesh;
   std::size_t n_splits = 0;
-  std::vector<int> work;
-  for (int p = static_cast<int>(patches.faces.size()) - 1; p >= 0; --p) work.push_back(p);
   while (!work.empty()) {
     const int p = work.back();
     work.pop_back();
     const segment_detail::ProjectionCheck check =
         segment_detail::check_projection(graph, patches.faces[p], patches.face_patch, patches.axes[p], scratch);
-    if (check.is_simple && !has_cliff(graph, patches.faces[p], patches.axes[p], mean_edge)) continue;
+    if (check.is_simple && !has_cliff(graph, patches.faces[p], patches.axes[p], mean_edge, scratch)) continue;
     ++n_splits;
     std::vector<std::vector<int>> parts;
     if (!check.trouble.empty()) {
@@ -787,6 +799,13 @@ std::size_t split_folds(const Grouping& grouping, double mean_edge, Scratch& scr
     }
   }
   return n_splits;
+}
+
+// split_folds()' work list of every patch (the lowest id checked first).
+std::vector<int> all_patches(const Patches& patches) {
+  std::vector<int> work;
+  for (int p = static_cast<int>(patches.faces.size()) - 1; p >= 0; --p) work.push_back(p);
+  return work;
 }
 
 void validate_mesh(const TriMesh& mesh) {
@@ -997,7 +1016,7 @@ Segmentation segment(const TriMesh& mesh, const SegmentOptions& options) {
   renumber(patches);
   refine_axes(grouping, patches);
   Scratch scratch(mesh);
-  result.n_fold_splits = split_folds(grouping, mean_edge_length(mesh), scratch, patches);
+  result.n_fold_splits = split_folds(grouping, mean_edge_length(mesh), scratch, patches, all_patches(patches));
   if (result.n_fold_splits > 0) merge_patches(grouping, options.min_patch_faces, patches, &scratch);
   renumber(patches);
   report_progress(options.progress, kStage, 0.7);
@@ -1007,13 +1026,43 @@ Segmentation segment(const TriMesh& mesh, const SegmentOptions& options) {
   return result;
 }
 
-Segmentation split_patches(const TriMesh& mesh, const Segmentation& segmentation, const std::vector<int>& which,
-                           const SegmentOptions& options) {
+struct PatchSplitter::Impl {
+  Impl(const TriMesh& m, const SegmentOptions& o) : mesh(m), options(o) {}
+  const TriMesh& mesh;
+  SegmentOptions options;
+  // Computed at the first split (segment()'s steps 1-2).
+  bool prepared = false;
+  FaceGraph graph;
+  FaceNormals normals;
+  std::size_t n_bevel_crease_edges = 0;
+  double mean_edge = 0.0;
+  // The last result: each of its patches passed split_folds' checks with its axis.
+  std::vector<int> last_face_patch;
+  std::vector<Eigen::Vector3d> last_axes;
+
+  void prepare() {
+    if (prepared) return;
+    graph = segment_detail::build_graph(mesh);
+    Segmentation counts;
+    normals = prepare_normals(graph, options, counts);
+    n_bevel_crease_edges = counts.n_bevel_crease_edges;
+    mean_edge = mean_edge_length(mesh);
+    prepared = true;
+  }
+};
+
+PatchSplitter::PatchSplitter(const TriMesh& mesh, const SegmentOptions& options) : impl_(std::make_unique<Impl>(mesh, options)) {
   options.validate();
   validate_mesh(mesh);
-  const auto n_faces = static_cast<int>(mesh.n_faces());
+}
+
+PatchSplitter::~PatchSplitter() = default;
+
+Segmentation PatchSplitter::split(const Segmentation& segmentation, const std::vector<int>& which) {
+  Impl& s = *impl_;
+  const auto n_faces = static_cast<int>(s.mesh.n_faces());
   const auto n_patches = static_cast<int>(segmentation.patches.size());
-  if (segmentation.face_patch.size() != mesh.n_faces())
+  if (segmentation.face_patch.size() != s.mesh.n_faces())
     throw InvalidInput("split_patches: the segmentation has " + std::to_string(segmentation.face_patch.size()) +
                        " face labels for " + std::to_string(n_faces) + " faces");
   for (const int p : which)
@@ -1022,10 +1071,10 @@ Segmentation split_patches(const TriMesh& mesh, const Segmentation& segmentation
   result.n_fold_splits = segmentation.n_fold_splits;
   if (n_faces == 0 || which.empty()) return segmentation;
 
-  FaceGraph graph = segment_detail::build_graph(mesh);
-  const FaceNormals normals = prepare_normals(graph, options, result);
-  const double max_slope = radians(options.max_slope_deg);
-  const Grouping grouping{graph, normals, std::cos(max_slope), max_slope, std::cos(kGrowthConeFraction * max_slope)};
+  s.prepare();
+  result.n_bevel_crease_edges = s.n_bevel_crease_edges;
+  const double max_slope = radians(s.options.max_slope_deg);
+  const Grouping grouping{s.graph, s.normals, std::cos(max_slope), max_slope, std::cos(kGrowthConeFraction * max_slope)};
   Patches patches;
   patches.face_patch = segmentation.face_patch;
   for (const Patch& patch : segmentation.patches) {
@@ -1036,13 +1085,15 @@ Segmentation split_patches(const TriMesh& mesh, const Segmentation& segmentation
     const int p = patches.face_patch[f];
     if (p < 0 || p >= n_patches) throw InvalidInput("split_patches: face " + std::to_string(f) + " has no valid patch");
   }
-  Scratch scratch(mesh);
+  // The last result again: its patches that are not split pass split_folds' checks as they did.
+  const bool checked = segmentation.face_patch == s.last_face_patch && patches.axes == s.last_axes;
+  Scratch scratch(s.mesh);
   std::vector<int> sorted = which;
   std::sort(sorted.begin(), sorted.end());
   sorted.erase(std::unique(sorted.begin(), sorted.end()), sorted.end());
   for (const int p : sorted) {
     const std::vector<int>& faces = patches.faces[static_cast<std::size_t>(p)];
-    const std::size_t min_part = std::max<std::size_t>(1, std::min(options.min_patch_faces, faces.size() / 4));
+    const std::size_t min_part = std::max<std::size_t>(1, std::min(s.options.min_patch_faces, faces.size() / 4));
     auto parts = split_by_normals(grouping, faces, p, patches.face_patch, patches.axes[static_cast<std::size_t>(p)],
                                   min_part, scratch);
     if (parts.empty()) continue;
@@ -1063,16 +1114,27 @@ Segmentation split_patches(const TriMesh& mesh, const Segmentation& segmentation
       const int q = k == 0 ? p : static_cast<int>(patches.faces.size() - parts.size() + k);
       auto& axis = patches.axes[static_cast<std::size_t>(q)];
       if (axis == old_axis) continue;
-      if (!segment_detail::check_projection(graph, patches.faces[static_cast<std::size_t>(q)], patches.face_patch, axis,
+      if (!segment_detail::check_projection(s.graph, patches.faces[static_cast<std::size_t>(q)], patches.face_patch, axis,
                                             scratch)
                .is_simple)
         axis = old_axis;
     }
   }
-  result.n_fold_splits += split_folds(grouping, mean_edge_length(mesh), scratch, patches);
+  std::vector<int> work = all_patches(patches);
+  if (checked)
+    std::erase_if(work, [&](int p) { return p < n_patches && !std::binary_search(sorted.begin(), sorted.end(), p); });
+  result.n_fold_splits += split_folds(grouping, s.mean_edge, scratch, patches, std::move(work));
   renumber(patches);
-  finish_segmentation(mesh, graph, normals, patches, options, result);
+  finish_segmentation(s.mesh, s.graph, s.normals, patches, s.options, result);
+  s.last_face_patch = result.face_patch;
+  s.last_axes.clear();
+  for (const Patch& patch : result.patches) s.last_axes.push_back(patch.axis);
   return result;
+}
+
+Segmentation split_patches(const TriMesh& mesh, const Segmentation& segmentation, const std::vector<int>& which,
+                           const SegmentOptions& options) {
+  return PatchSplitter(mesh, options).split(segmentation, which);
 }
 
 }  // namespace nurbsfront

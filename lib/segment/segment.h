@@ -8,6 +8,7 @@
 //! stages can fit z = f(x, y) per patch and mesh it in 2D.
 
 #include <cstddef>
+#include <memory>
 #include <vector>
 
 #include <Eigen/Core>
@@ -189,6 +190,26 @@ struct Segmentation {
 //!        another mesh or an unknown patch id.
 [[nodiscard]] Segmentation split_patches(const TriMesh& mesh, const Segmentation& segmentation,
                                          const std::vector<int>& which, const SegmentOptions& options = {});
+
+//! split_patches() in rounds on one mesh (surfmesh's split_unfitted_patches): the face
+//! graph, creases and normals are computed once (at the first split), and when a round is
+//! given the previous round's result, only the parts of the patches it splits go through
+//! the projection and cliff checks (the others passed them in that round). Same results as
+//! split_patches(). The mesh must outlive the splitter.
+class PatchSplitter {
+ public:
+  //! \throw InvalidInput for invalid options or a mesh segment() refuses.
+  PatchSplitter(const TriMesh& mesh, const SegmentOptions& options = {});
+  ~PatchSplitter();
+  PatchSplitter(const PatchSplitter&) = delete;
+  PatchSplitter& operator=(const PatchSplitter&) = delete;
+  //! split_patches(mesh, segmentation, which, options).
+  [[nodiscard]] Segmentation split(const Segmentation& segmentation, const std::vector<int>& which);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
 
 //! Splits a closed vertex sequence (the last vertex joins the first) that passes some
 //! vertex more than once into simple cycles: where it returns to a vertex, the part since

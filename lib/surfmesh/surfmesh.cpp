@@ -9,6 +9,7 @@
 #include <cmath>
 #include <condition_variable>
 #include <exception>
+#include <memory>
 #include <mutex>
 #include <string>
 #include <thread>
@@ -397,6 +398,7 @@ Segmentation split_unfitted_patches(const TriMesh& input, const Segmentation& se
   const unsigned threads = options.threads > 0 ? static_cast<unsigned>(options.threads)
                                                : std::max(1U, std::thread::hardware_concurrency());
   Segmentation seg = segmentation;
+  std::unique_ptr<PatchSplitter> splitter;  // made at the first split
   std::vector<int> candidates(seg.patches.size());
   for (std::size_t p = 0; p < candidates.size(); ++p) candidates[p] = static_cast<int>(p);
   for (int round = 0; round < options.fit.split_rounds && !candidates.empty(); ++round) {
@@ -413,7 +415,8 @@ Segmentation split_unfitted_patches(const TriMesh& input, const Segmentation& se
     std::vector<std::uint8_t> was_bad(seg.patches.size(), 0);
     for (const int p : bad) was_bad[static_cast<std::size_t>(p)] = 1;
     const std::size_t n_before = seg.patches.size();
-    Segmentation next = split_patches(input, seg, bad, segment_options);
+    if (!splitter) splitter = std::make_unique<PatchSplitter>(input, segment_options);
+    Segmentation next = splitter->split(seg, bad);
     if (n_split != nullptr) *n_split += next.patches.size() - n_before;
     candidates.clear();
     for (std::size_t q = 0; q < next.patches.size(); ++q) {

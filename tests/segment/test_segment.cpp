@@ -175,6 +175,40 @@ TEST(SplitPatches, FlatPatchDoesNotSplit) {
   EXPECT_EQ(split.face_patch, seg.face_patch);
 }
 
+// PatchSplitter computes the graph and normals once and, given its last result, checks only
+// the new parts: rounds give what split_patches() gives, also for an unrelated segmentation.
+TEST(SplitPatches, SplitterRoundsMatchSplitPatches) {
+  SegmentOptions options;
+  options.min_patch_faces = 20;
+  const TriMesh mesh = to_trimesh(test::torus(48, 24));
+  const Segmentation seg = run(mesh, options, 10.0);
+  ASSERT_GE(seg.patches.size(), 4u);
+  auto expect_same = [](const Segmentation& a, const Segmentation& b) {
+    EXPECT_EQ(a.face_patch, b.face_patch);
+    ASSERT_EQ(a.patches.size(), b.patches.size());
+    for (std::size_t p = 0; p < a.patches.size(); ++p) EXPECT_EQ(a.patches[p].axis, b.patches[p].axis) << "patch " << p;
+    EXPECT_EQ(a.curves.size(), b.curves.size());
+    EXPECT_EQ(a.corners.size(), b.corners.size());
+    EXPECT_EQ(a.n_fold_splits, b.n_fold_splits);
+    EXPECT_EQ(a.n_bevel_crease_edges, b.n_bevel_crease_edges);
+  };
+  PatchSplitter splitter(mesh, options);
+  const Segmentation first = splitter.split(seg, {0, 1});
+  expect_same(first, split_patches(mesh, seg, {0, 1}, options));
+  ASSERT_GT(first.patches.size(), seg.patches.size());
+  // The next round splits every patch again (the previous result: only parts are checked).
+  std::vector<int> all(first.patches.size());
+  for (std::size_t p = 0; p < all.size(); ++p) all[p] = static_cast<int>(p);
+  const Segmentation second = splitter.split(first, {0, 2});
+  expect_same(second, split_patches(mesh, first, {0, 2}, options));
+  const Segmentation third = splitter.split(second, all);
+  expect_same(third, split_patches(mesh, second, all, options));
+  segment_test::expect_contracts(mesh, third, options, 10.0);
+  // Not its last result: every patch is checked.
+  expect_same(splitter.split(seg, {2}), split_patches(mesh, seg, {2}, options));
+  EXPECT_THROW((void)splitter.split(seg, {-1}), InvalidInput);
+}
+
 TEST(Segment, SphereGivesFewLargePatches) {
   const TriMesh mesh = to_trimesh(test::icosphere(3));
   SegmentOptions options;
