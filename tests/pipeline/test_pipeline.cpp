@@ -367,16 +367,21 @@ TEST(Pipeline, ThinDiscLargeFacesSampledNoCrossings) {
   EXPECT_LE(rep.output.distance->hausdorff, rep.input_mean_edge);
 }
 
+// The marching-cubes surface of VTK's head CT at iso 500 (the skin), padded.
+TriMesh headsq_skin() {
+  MarchingCubesOptions mc;
+  mc.iso = 500.0;
+  mc.inside_above = true;
+  mc.pad = true;
+  return prepare_mesh(marching_cubes(read_volume(test::test_data("volumes/headsq.mha")), mc)).mesh;
+}
+
 // VTK's head CT at iso 500 (65k faces; corner clusters where patches of 1-5 faces meet):
 // settling acts (moves or flips), the topology is kept, and the reported number of crossing
 // pairs is the one an independent whole-mesh count finds (settling keeps a pair list by face
 // index across flips that OpenMesh may undo under swapped indices).
 TEST(PipelineSlow, HeadsqSettledCrossingsCountedRight) {
-  MarchingCubesOptions mc;
-  mc.iso = 500.0;
-  mc.inside_above = true;
-  mc.pad = true;
-  const TriMesh mesh = prepare_mesh(marching_cubes(read_volume(test::test_data("volumes/headsq.mha")), mc)).mesh;
+  const TriMesh mesh = headsq_skin();
   const RemeshResult r = remesh(mesh, fast_options());
   const RemeshReport& rep = r.report;
   EXPECT_GT(rep.stitch.n_settled_nodes + rep.stitch.n_settled_flips + rep.stitch.n_settled_collapses, 0u);
@@ -402,11 +407,7 @@ TEST(PipelineSlow, HeadsqSettledCrossingsCountedRight) {
 // leave fewer triangles below 25 deg away from features than no collapse at all, without
 // crossings.
 TEST(PipelineSlow, HeadsqShortEdgeCollapsesKept) {
-  MarchingCubesOptions mc;
-  mc.iso = 500.0;
-  mc.inside_above = true;
-  mc.pad = true;
-  const TriMesh mesh = prepare_mesh(marching_cubes(read_volume(test::test_data("volumes/headsq.mha")), mc)).mesh;
+  const TriMesh mesh = headsq_skin();
   RemeshOptions options = fast_options();
   options.compute_distances = false;
   const RemeshResult with = remesh(mesh, options);
