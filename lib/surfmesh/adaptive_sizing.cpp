@@ -1,7 +1,9 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // Curvature-adaptive sizing (SizingOptions::adaptive): h = min(base h, sqrt(8 e / kappa_max))
 // at the input's vertices from the fitted patch surfaces, limited by the gradation along the
-// input's edges, interpolated on the input's triangles.
+// input's edges, interpolated on the input's triangles. Feature sizing
+// (SizingOptions::feature_size): the same with h = min(base h, factor x width) on the
+// vertices of crease-bounded patches.
 
 #include <algorithm>
 #include <cmath>
@@ -115,10 +117,6 @@ SizeAt adaptive_sizing(const TriMesh& mesh, const Segmentation& segmentation, co
   return graded_sizing(mesh, std::move(sizes), gradation);
 }
 
-}  // namespace nurbsfront::surfmesh_detail
-
-namespace nurbsfront::surfmesh_detail {
-
 FeatureSizing feature_sizing(const TriMesh& mesh, const Segmentation& segmentation,
                              const std::vector<std::uint8_t>& curve_is_feature, const SizeAt& base, double factor,
                              double min_size, double gradation) {
@@ -156,8 +154,18 @@ FeatureSizing feature_sizing(const TriMesh& mesh, const Segmentation& segmentati
     sizes->size[static_cast<std::size_t>(v.idx())] = s;
   }
   if (!limited) return out;
+  out.size_at = graded_sizing(mesh, sizes, gradation);
   out.smallest = *std::min_element(sizes->size.begin(), sizes->size.end());
-  out.size_at = graded_sizing(mesh, std::move(sizes), gradation);
+  // Patches whose graded sizes are all base's keep the uniform front (no sizing grid).
+  out.patch_limited.assign(segmentation.patches.size(), 0);
+  for (std::size_t p = 0; p < segmentation.patches.size(); ++p) {
+    for (const int f : segmentation.patches[p].faces) {
+      for (const auto v : mesh.fv_range(TriMesh::FaceHandle(f))) {
+        if (sizes->size[static_cast<std::size_t>(v.idx())] < base(to_eigen(mesh.point(v)))) out.patch_limited[p] = 1;
+      }
+      if (out.patch_limited[p] != 0) break;
+    }
+  }
   return out;
 }
 

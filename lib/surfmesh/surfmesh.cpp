@@ -275,6 +275,7 @@ SurfaceMesh mesh_surface(const TriMesh& input, const Segmentation& segmentation,
     });
   };
   double sizing_grid = 0.0;  // > 0: the front's sizes are sampled on a grid (adaptive, feature)
+  std::vector<std::uint8_t> feature_limited;  // feature sizing alone: patches not at the uniform h
   out.curve_is_feature = feature_curves(input, segmentation, options.crease_angle_deg);
   if (options.sizing.feature_size > 0.0) {
     FeatureSizing feature = feature_sizing(input, segmentation, out.curve_is_feature, size_at, options.sizing.feature_size,
@@ -282,6 +283,7 @@ SurfaceMesh mesh_surface(const TriMesh& input, const Segmentation& segmentation,
     if (feature.size_at) {
       size_at = std::move(feature.size_at);
       front_size = size_at;
+      feature_limited = std::move(feature.patch_limited);
       // The grid follows the smallest size (a narrow face is narrower than a mean edge).
       sizing_grid = std::min(mean_edge, feature.smallest);
     }
@@ -357,7 +359,11 @@ SurfaceMesh mesh_surface(const TriMesh& input, const Segmentation& segmentation,
   }
 
   run_parallel(n_patches, threads, options.progress, 0.5, 1.0, [&](std::size_t p) {
-    mesh_patch(segmentation, static_cast<int>(p), borders, options, h, front_size, sizing_grid, results[p]);
+    // Under feature sizing alone, a patch whose sizes are all h is meshed with the uniform h.
+    const bool uniform = !options.sizing.adaptive && !options.sizing.callback && !feature_limited.empty() &&
+                         feature_limited[p] == 0;
+    mesh_patch(segmentation, static_cast<int>(p), borders, options, h, uniform ? SizeAt() : front_size, sizing_grid,
+               results[p]);
     if (options.max_node_offset_edges > 0.0)
       results[p].report.n_clamped_nodes =
           clamp_inner_nodes(input, segmentation, static_cast<int>(p), options.max_node_offset_edges * mean_edge, results[p]);

@@ -175,6 +175,8 @@ inline constexpr double kFeatureSizingShare = 0.5;
 struct FeatureSizing {
   SizeAt size_at;
   double smallest = 0.0;  //!< smallest size at a vertex
+  //! Per patch: 1 when a vertex of its faces has a size below base (else its front is uniform).
+  std::vector<std::uint8_t> patch_limited;
 };
 
 //! Sizing from the feature size of crease-bounded patches (SizingOptions::feature_size):
