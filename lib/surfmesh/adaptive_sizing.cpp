@@ -1,7 +1,9 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // Curvature-adaptive sizing (SizingOptions::adaptive): h = min(base h, sqrt(8 e / kappa_max))
 // at the input's vertices from the fitted patch surfaces, limited by the gradation along the
-// input's edges, interpolated on the input's triangles.
+// input's edges, interpolated on the input's triangles. Feature sizing
+// (SizingOptions::feature_size): the same with h = min(base h, factor x width) on the
+// vertices of crease-bounded patches.
 
 #include <algorithm>
 #include <cmath>
@@ -49,6 +51,37 @@ struct VertexSizes {
   }
 };
 
+// Limits the per-vertex sizes along the input's edges (h_v <= h_w + (gradation - 1)
+// |x_v - x_w|) and returns them interpolated on the nearest input triangle.
+SizeAt graded_sizing(const TriMesh& mesh, std::shared_ptr<VertexSizes> sizes, double gradation) {
+  const std::size_t n = mesh.n_vertices();
+  // Gradation: h_v <= h_w + (gradation - 1) |x_v - x_w| along the edges, by a Dijkstra-like
+  // sweep from the smallest sizes (ties by vertex index: the result does not depend on it,
+  // the order of equal keys only fixes the work).
+  using Item = std::pair<double, int>;
+  std::priority_queue<Item, std::vector<Item>, std::greater<>> queue;
+  for (std::size_t v = 0; v < n; ++v) queue.emplace(sizes->size[v], static_cast<int>(v));
+  const double slope = gradation - 1.0;
+  while (!queue.empty()) {
+    const auto [h, v] = queue.top();
+    queue.pop();
+    if (h > sizes->size[static_cast<std::size_t>(v)]) continue;  // stale
+    const TriMesh::VertexHandle vh(v);
+    for (const auto w : mesh.vv_range(vh)) {
+      const double limit = h + slope * (mesh.point(w) - mesh.point(vh)).norm();
+      double& hw = sizes->size[static_cast<std::size_t>(w.idx())];
+      if (limit < hw) {
+        hw = limit;
+        queue.emplace(limit, w.idx());
+      }
+    }
+  }
+  std::vector<std::uint32_t> faces(sizes->soup.triangles.size());
+  std::iota(faces.begin(), faces.end(), 0U);
+  sizes->tree = std::make_unique<quality_detail::AabbTree>(sizes->soup, std::move(faces));
+  return [sizes](const Eigen::Vector3d& x) { return sizes->at(x); };
+}
+
 }  // namespace
 
 double max_abs_curvature(const PatchSurface& surface, const Eigen::Vector3d& world) {
@@ -81,31 +114,59 @@ SizeAt adaptive_sizing(const TriMesh& mesh, const Segmentation& segmentation, co
     if (kappa > 0.0) h = std::min(h, std::sqrt(8.0 * chord_error / kappa));
     sizes->size[static_cast<std::size_t>(v.idx())] = std::max(h, std::min(min_size, base(x)));
   }
-  // Gradation: h_v <= h_w + (gradation - 1) |x_v - x_w| along the edges, by a Dijkstra-like
-  // sweep from the smallest sizes (ties by vertex index: the result does not depend on it,
-  // the order of equal keys only fixes the work).
-  using Item = std::pair<double, int>;
-  std::priority_queue<Item, std::vector<Item>, std::greater<>> queue;
-  for (std::size_t v = 0; v < n; ++v) queue.emplace(sizes->size[v], static_cast<int>(v));
-  const double slope = gradation - 1.0;
-  while (!queue.empty()) {
-    const auto [h, v] = queue.top();
-    queue.pop();
-    if (h > sizes->size[static_cast<std::size_t>(v)]) continue;  // stale
-    const TriMesh::VertexHandle vh(v);
-    for (const auto w : mesh.vv_range(vh)) {
-      const double limit = h + slope * (mesh.point(w) - mesh.point(vh)).norm();
-      double& hw = sizes->size[static_cast<std::size_t>(w.idx())];
-      if (limit < hw) {
-        hw = limit;
-        queue.emplace(limit, w.idx());
+  return graded_sizing(mesh, std::move(sizes), gradation);
+}
+
+FeatureSizing feature_sizing(const TriMesh& mesh, const Segmentation& segmentation,
+                             const std::vector<std::uint8_t>& curve_is_feature, const SizeAt& base, double factor,
+                             double min_size, double gradation) {
+  FeatureSizing out;
+  std::vector<double> curve_length(segmentation.curves.size(), 0.0);
+  for (std::size_t c = 0; c < segmentation.curves.size(); ++c)
+    for (const int e : segmentation.curves[c].edges) curve_length[c] += mesh.calc_edge_length(TriMesh::EdgeHandle(e));
+  // Width of each patch bounded mostly by feature curves: 2 area / perimeter (a strip of
+  // width w: about w; a disk of radius r: r). Elsewhere (no creases) no limit: stitch's
+  // flips and smoothing cross those borders.
+  std::vector<double> width(segmentation.patches.size(), std::numeric_limits<double>::infinity());
+  for (std::size_t p = 0; p < segmentation.patches.size(); ++p) {
+    const Patch& patch = segmentation.patches[p];
+    double perimeter = 0.0, feature = 0.0;
+    for (const int c : patch.curves) {
+      perimeter += curve_length[static_cast<std::size_t>(c)];
+      if (curve_is_feature[static_cast<std::size_t>(c)] != 0) feature += curve_length[static_cast<std::size_t>(c)];
+    }
+    if (!(perimeter > 0.0) || feature < kFeatureSizingShare * perimeter) continue;
+    double area = 0.0;
+    for (const int f : patch.faces) area += mesh.calc_face_area(TriMesh::FaceHandle(f));
+    width[p] = 2.0 * area / perimeter;
+  }
+  auto sizes = std::make_shared<VertexSizes>();
+  sizes->soup = to_soup(mesh);
+  sizes->size.assign(mesh.n_vertices(), 0.0);
+  bool limited = false;
+  for (const auto v : mesh.vertices()) {
+    const Eigen::Vector3d x = to_eigen(mesh.point(v));
+    const double h = base(x);
+    double w = std::numeric_limits<double>::infinity();
+    for (const auto f : mesh.vf_range(v)) w = std::min(w, width[static_cast<std::size_t>(segmentation.face_patch[static_cast<std::size_t>(f.idx())])]);
+    const double s = std::max(std::min(h, factor * w), std::min(min_size, h));
+    limited = limited || s < h;
+    sizes->size[static_cast<std::size_t>(v.idx())] = s;
+  }
+  if (!limited) return out;
+  out.size_at = graded_sizing(mesh, sizes, gradation);
+  out.smallest = *std::min_element(sizes->size.begin(), sizes->size.end());
+  // Patches whose graded sizes are all base's keep the uniform front (no sizing grid).
+  out.patch_limited.assign(segmentation.patches.size(), 0);
+  for (std::size_t p = 0; p < segmentation.patches.size(); ++p) {
+    for (const int f : segmentation.patches[p].faces) {
+      for (const auto v : mesh.fv_range(TriMesh::FaceHandle(f))) {
+        if (sizes->size[static_cast<std::size_t>(v.idx())] < base(to_eigen(mesh.point(v)))) out.patch_limited[p] = 1;
       }
+      if (out.patch_limited[p] != 0) break;
     }
   }
-  std::vector<std::uint32_t> faces(sizes->soup.triangles.size());
-  std::iota(faces.begin(), faces.end(), 0U);
-  sizes->tree = std::make_unique<quality_detail::AabbTree>(sizes->soup, std::move(faces));
-  return [sizes](const Eigen::Vector3d& x) { return sizes->at(x); };
+  return out;
 }
 
 }  // namespace nurbsfront::surfmesh_detail

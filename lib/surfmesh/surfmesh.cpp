@@ -178,6 +178,8 @@ void SizingOptions::validate() const {
     bad_option("sizing.chord_error must be finite and >= 0, got " + std::to_string(chord_error));
   if (!(min_size_fraction > 0.0 && min_size_fraction <= 1.0))
     bad_option("sizing.min_size_fraction must be in (0, 1], got " + std::to_string(min_size_fraction));
+  if (!(std::isfinite(feature_size) && feature_size >= 0.0))
+    bad_option("sizing.feature_size must be finite and >= 0, got " + std::to_string(feature_size));
   if (!(std::isfinite(gradation) && gradation > 1.0)) bad_option("sizing.gradation must be > 1, got " + std::to_string(gradation));
 }
 
@@ -273,7 +275,20 @@ SurfaceMesh mesh_surface(const TriMesh& input, const Segmentation& segmentation,
       fit_patch(input, segmentation, static_cast<int>(p), nodes, options, mean_edge, results[p]);
     });
   };
-  double sizing_grid = 0.0;  // > 0: the front's sizes are sampled on a grid (adaptive)
+  double sizing_grid = 0.0;  // > 0: the front's sizes are sampled on a grid (adaptive, feature)
+  std::vector<std::uint8_t> feature_limited;  // feature sizing alone: patches not at the uniform h
+  out.curve_is_feature = feature_curves(input, segmentation, options.crease_angle_deg);
+  if (options.sizing.feature_size > 0.0) {
+    FeatureSizing feature = feature_sizing(input, segmentation, out.curve_is_feature, size_at, options.sizing.feature_size,
+                                           options.sizing.min_size_fraction * h, options.sizing.gradation);
+    if (feature.size_at) {
+      size_at = std::move(feature.size_at);
+      front_size = size_at;
+      feature_limited = std::move(feature.patch_limited);
+      // The grid follows the smallest size (a narrow face is narrower than a mean edge).
+      sizing_grid = std::min(mean_edge, feature.smallest);
+    }
+  }
   if (options.sizing.adaptive) {
     // The sizes come from the fits' curvature, so the patches are fitted before the borders
     // are discretised (their rectangles then cover the patch's and overlap vertices only).
@@ -286,7 +301,7 @@ SurfaceMesh mesh_surface(const TriMesh& input, const Segmentation& segmentation,
     front_size = size_at;
     // The adaptive sizes are piecewise linear on the input's triangles: a grid of the input's
     // resolution in each patch plane holds them.
-    sizing_grid = mean_edge;
+    sizing_grid = sizing_grid > 0.0 ? std::min(sizing_grid, mean_edge) : mean_edge;
   }
   // Chords of the smoothed curves may cross in a small patch's plane, a small loop
   // resampled into a few nodes may turn the other way round, and the chords and smoothed
@@ -317,7 +332,6 @@ SurfaceMesh mesh_surface(const TriMesh& input, const Segmentation& segmentation,
     }
     if (changed) borders = discretise_borders(input, segmentation, size_at, source);
   }
-  out.curve_is_feature = feature_curves(input, segmentation, options.crease_angle_deg);
   report_progress(options.progress, "surfmesh: borders", 1.0);
 
   if (!options.sizing.adaptive) fit_all(borders);
@@ -346,7 +360,11 @@ SurfaceMesh mesh_surface(const TriMesh& input, const Segmentation& segmentation,
   }
 
   run_parallel(n_patches, threads, options.progress, 0.5, 1.0, [&](std::size_t p) {
-    mesh_patch(segmentation, static_cast<int>(p), borders, options, h, front_size, sizing_grid, results[p]);
+    // Under feature sizing alone, a patch whose sizes are all h is meshed with the uniform h.
+    const bool uniform = !options.sizing.adaptive && !options.sizing.callback && !feature_limited.empty() &&
+                         feature_limited[p] == 0;
+    mesh_patch(segmentation, static_cast<int>(p), borders, options, h, uniform ? SizeAt() : front_size, sizing_grid,
+               results[p]);
     if (options.max_node_offset_edges > 0.0)
       results[p].report.n_clamped_nodes =
           clamp_inner_nodes(input, segmentation, static_cast<int>(p), options.max_node_offset_edges * mean_edge, results[p]);

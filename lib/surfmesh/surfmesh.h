@@ -47,6 +47,14 @@ struct SizingOptions {
   double chord_error = 0.0;
   //! Smallest size adaptive sizing may ask for, as a fraction of the uniform h. Default 0.2.
   double min_size_fraction = 0.2;
+  //! Feature sizing: a patch bounded mostly (>= half its perimeter) by feature curves (a CAD
+  //! face between creases, a hole's wall) gets at most this x its width (2 area / perimeter)
+  //! as its size at its input vertices, at least min_size_fraction x h, graded along the
+  //! input's edges (`gradation`) and used for the borders and the 2D fronts: with the uniform
+  //! h of the input's mean edge, a CAD input's narrow faces and small holes were one row of
+  //! triangles of border nodes (cheese, pinion). 0 = off. Default 0 (off: on by default it
+  //! gave cheese 8 self-intersecting pairs; see docs/surfmesh.md "Feature sizing").
+  double feature_size = 0.0;
   //! Optional user sizing h(x) at world points (length units, finite, > 0); when set it
   //! replaces the uniform size (adaptive still applies on top).
   std::function<double(const Eigen::Vector3d&)> callback;

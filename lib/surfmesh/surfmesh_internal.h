@@ -168,6 +168,26 @@ void mesh_patch(const Segmentation& segmentation, int p, const BorderNodes& bord
                                      const std::vector<PatchResult>& fits, const SizeAt& base, double chord_error,
                                      double min_size, double gradation);
 
+//! Share of a patch's perimeter on feature curves above which feature_sizing limits its size.
+inline constexpr double kFeatureSizingShare = 0.5;
+
+//! Feature sizing's result: size_at empty when no vertex's size is below base.
+struct FeatureSizing {
+  SizeAt size_at;
+  double smallest = 0.0;  //!< smallest size at a vertex
+  //! Per patch: 1 when a vertex of its faces has a size below base (else its front is uniform).
+  std::vector<std::uint8_t> patch_limited;
+};
+
+//! Sizing from the feature size of crease-bounded patches (SizingOptions::feature_size):
+//! a patch with at least kFeatureSizingShare of its perimeter on feature curves has width
+//! w = 2 area / perimeter, and at each vertex of its faces h = max(min(base(x), factor w),
+//! min(min_size, base(x))); graded along the input's edges and interpolated as in
+//! adaptive_sizing. Thread-safe and deterministic.
+[[nodiscard]] FeatureSizing feature_sizing(const TriMesh& mesh, const Segmentation& segmentation,
+                                           const std::vector<std::uint8_t>& curve_is_feature, const SizeAt& base,
+                                           double factor, double min_size, double gradation);
+
 //! Independently meshed patches can join the same two border nodes by an edge that is not
 //! their border segment (a chord): two patches on either side of a thin fin or of a tiny
 //! closed component cut the same ear off their common border (the 3D edge then has four
