@@ -294,6 +294,14 @@ SurfaceMesh mesh_surface(const TriMesh& input, const Segmentation& segmentation,
   // resampled from their input positions, and if that is still wrong, take their input
   // vertices (which the segmentation guarantees not to cross).
   std::vector<CurveSource> source(segmentation.curves.size(), CurveSource::Smoothed);
+  out.curve_is_feature = feature_curves(input, segmentation, options.crease_angle_deg);
+  // Feature curves follow the input's sharp edges and boundary: their input positions.
+  for (std::size_t c = 0; c < source.size() && !options.cell_grid.enabled; ++c) {
+    const bool on_boundary = segmentation.curves[c].patch_right < 0;
+    if (out.curve_is_feature[c] != 0 &&
+        (on_boundary ? options.unsmoothed_boundary_curves : options.unsmoothed_crease_curves))
+      source[c] = CurveSource::Input;
+  }
   BorderNodes borders = discretise_borders(input, segmentation, size_at, source);
   for (bool changed = true; changed;) {
     changed = false;
@@ -316,7 +324,6 @@ SurfaceMesh mesh_surface(const TriMesh& input, const Segmentation& segmentation,
     }
     if (changed) borders = discretise_borders(input, segmentation, size_at, source);
   }
-  out.curve_is_feature = feature_curves(input, segmentation, options.crease_angle_deg);
   report_progress(options.progress, "surfmesh: borders", 1.0);
 
   if (!options.sizing.adaptive) fit_all(borders);
