@@ -497,8 +497,10 @@ std::vector<double> curve_crease_angles(const TriMesh& mesh, const Segmentation&
   return out;
 }
 
-std::vector<std::uint8_t> feature_curves(const TriMesh& mesh, const Segmentation& seg, double crease_angle_deg) {
+std::vector<std::uint8_t> feature_curves(const TriMesh& mesh, const Segmentation& seg, double crease_angle_deg,
+                                         std::vector<double>* crease_angles) {
   const std::vector<double> angles = curve_crease_angles(mesh, seg, kCreaseRings);
+  if (crease_angles != nullptr) *crease_angles = angles;
   std::vector<std::uint8_t> out(seg.curves.size(), 0);
   const double cos_crease = std::cos(crease_angle_deg * std::numbers::pi / 180.0);
   for (std::size_t c = 0; c < seg.curves.size(); ++c) {

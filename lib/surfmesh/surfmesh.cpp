@@ -224,6 +224,8 @@ void SurfMeshOptions::validate() const {
   if (smoothing_passes < 0) bad_option("smoothing_passes must be >= 0, got " + std::to_string(smoothing_passes));
   if (!(crease_angle_deg > 0.0 && crease_angle_deg <= 180.0))
     bad_option("crease_angle_deg must be in (0, 180], got " + std::to_string(crease_angle_deg));
+  if (!(unsmoothed_crease_angle_deg >= 0.0 && unsmoothed_crease_angle_deg <= 180.0))
+    bad_option("unsmoothed_crease_angle_deg must be in [0, 180], got " + std::to_string(unsmoothed_crease_angle_deg));
   if (!(std::isfinite(max_node_offset_edges) && max_node_offset_edges >= 0.0))
     bad_option("max_node_offset_edges must be finite and >= 0, got " + std::to_string(max_node_offset_edges));
   if (threads < 0) bad_option("threads must be >= 0, got " + std::to_string(threads));
@@ -310,6 +312,16 @@ SurfaceMesh mesh_surface(const TriMesh& input, const Segmentation& segmentation,
   // resampled from their input positions, and if that is still wrong, take their input
   // vertices (which the segmentation guarantees not to cross).
   std::vector<CurveSource> source(segmentation.curves.size(), CurveSource::Smoothed);
+  std::vector<double> crease_angles;
+  out.curve_is_feature = feature_curves(input, segmentation, options.crease_angle_deg, &crease_angles);
+  // The input's boundary and its sharpest creases are discretised from their input positions
+  // (the smoothing moves them off the corners and folds they follow).
+  for (std::size_t c = 0; c < source.size() && !options.cell_grid.enabled; ++c) {
+    if (out.curve_is_feature[c] == 0) continue;
+    const bool keep = segmentation.curves[c].patch_right < 0 ? options.unsmoothed_boundary_curves
+                                                             : crease_angles[c] > options.unsmoothed_crease_angle_deg;
+    if (keep) source[c] = CurveSource::Input;
+  }
   BorderNodes borders = discretise_borders(input, segmentation, size_at, source);
   for (bool changed = true; changed;) {
     changed = false;

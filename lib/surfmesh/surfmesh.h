@@ -158,6 +158,21 @@ struct SurfMeshOptions {
   //! patches' surfaces, except corners of a feature curve (crease or input boundary), which
   //! keep their input position. Default true.
   bool project_border_nodes = false;
+  //! Discretise the curves on the input's boundary from their input positions instead of
+  //! the smoothed ones (BorderCurve::smoothed): the input's boundary is its geometry, and
+  //! the smoothing (up to one mean edge) rounds its corners off (terrain_stl_data: Hausdorff
+  //! 1.23 -> 0.28 mean input edges). Not with cell_grid. Default true.
+  bool unsmoothed_boundary_curves = true;
+  //! The same for the crease curves between two patches (SurfaceMesh::curve_is_feature) whose
+  //! crease angle (angle between the mean normals of the faces within 3 rings on each side,
+  //! median over the curve) exceeds this (deg): the smoothing moves them off the sharp
+  //! edge they follow, and the output then cuts the edge by up to one mean edge. At 100 only
+  //! sharp folds qualify (headsq@500 Hausdorff 2.77 -> 2.16, obtuse share unchanged); lower
+  //! values take the bevelled box edges of marching cubes too, whose border nodes then follow
+  //! the zig-zag (every crease, 0: DRAM 128 0.0242 -> 0.0212 but obtuse 0.62 -> 0.96%, trench
+  //! obtuse 0.23 -> 0.45%; docs/surfmesh.md). 180 = never. Not with cell_grid. In [0, 180].
+  //! Default 100.
+  double unsmoothed_crease_angle_deg = 100.0;
   //! Largest distance, in mean input edges, of a new inner node from the patch's own input
   //! faces along the patch axis: a node the fit lifts further (the fit smooths thin fins,
   //! tips and sharp bends by several edges, and such a node can pass through the

@@ -102,8 +102,9 @@ struct PatchBorder {
 
 //! Per curve: on the input's boundary, or its crease angle (curve_crease_angles, 3 rings)
 //! is above 0.75 x the given angle, or most of its input edges have a dihedral above it.
+//! `angles`, when given, receives those crease angles.
 [[nodiscard]] std::vector<std::uint8_t> feature_curves(const TriMesh& mesh, const Segmentation& segmentation,
-                                                       double crease_angle_deg);
+                                                       double crease_angle_deg, std::vector<double>* angles = nullptr);
 
 //! The band samples of points (world) in a patch frame: a point at the midpoint of a cell
 //! lattice edge (one coordinate half-way between centres, the other two on centres) gets

@@ -156,6 +156,28 @@ TEST(Pipeline, LevelSetSphere) {
   EXPECT_LE(after.max, before.max + 0.05 * in.voxel);
 }
 
+// An open height field over a square (a terrain): its boundary has four 90 deg corners. The
+// boundary curve is one loop without corners; smoothing it would round the corners off by
+// up to one mean edge (terrain_stl_data: Hausdorff 1.23 mean input edges), so boundary
+// curves keep their input polyline (SurfMeshOptions::unsmoothed_boundary_curves).
+TEST(Pipeline, OpenSquareKeepsBoundaryCorners) {
+  TriangleSoup soup = test::grid_patch(30, 30);
+  for (auto& p : soup.points) p.z() = 0.1 * std::sin(3.0 * p.x()) * std::cos(2.0 * p.y());
+  const TriMesh input = to_trimesh(soup);
+  const double mean_edge = mean_edge_length(input);
+  RemeshOptions options = fast_options();
+  const RemeshResult kept = remesh(input, options);
+  EXPECT_TRUE(kept.report.ok()) << errors_of(kept.report);
+  EXPECT_FALSE(kept.report.output.topology.is_closed);
+  EXPECT_EQ(kept.report.output.topology.euler_characteristic, 1);
+  ASSERT_TRUE(kept.report.output.distance.has_value());
+  options.surfmesh.unsmoothed_boundary_curves = false;
+  const RemeshResult rounded = remesh(input, options);
+  ASSERT_TRUE(rounded.report.output.distance.has_value());
+  EXPECT_LT(kept.report.output.distance->hausdorff, 0.3 * mean_edge);
+  EXPECT_GT(rounded.report.output.distance->hausdorff, 0.45 * mean_edge);
+}
+
 TEST(Pipeline, LevelSetTorus) {
   // Resolution 64, the smallest: at 40 cells the tube (minor radius about 5 cells)
   // is too thin for 1.5 mean edges and the obtuse share reaches 1%.

@@ -42,6 +42,8 @@ struct RemeshArgs {
   std::optional<double> split_above;
   std::optional<double> crease;
   bool bevel_creases = false;
+  std::optional<double> unsmoothed_crease_angle;
+  bool smoothed_boundary = false;
   std::optional<unsigned> threads;
   std::string report;
   std::string vtk;
@@ -88,6 +90,8 @@ void run_remesh(RemeshArgs& args) {
   if (args.split_above) options.surfmesh.fit.split_above_edges = *args.split_above;
   if (args.crease) options.segment.crease_angle_deg = *args.crease;
   if (args.bevel_creases) options.segment.bevel_creases = true;
+  if (args.unsmoothed_crease_angle) options.surfmesh.unsmoothed_crease_angle_deg = *args.unsmoothed_crease_angle;
+  if (args.smoothed_boundary) options.surfmesh.unsmoothed_boundary_curves = false;
   if (args.threads) options.set_threads(*args.threads);
   if (!args.cell_grid.empty()) {
     if (!args.scene.empty()) throw InvalidInput("remesh: --cell-grid applies to an input file (an occupancy scene sets it itself)");
@@ -173,6 +177,13 @@ void add_remesh_command(CLI::App& app) {
   cmd->add_flag("--bevel-creases", args->bevel_creases,
                 "Also make creases of the ~45 deg bends of bevelled (marching-cubes) sharp edges: closer to "
                 "the input at box edges, more narrow patches (docs/segment.md)");
+  cmd->add_option("--unsmoothed-crease-angle", args->unsmoothed_crease_angle,
+                  "Crease curves sharper than this (deg, 3-ring normals) keep the input's crease instead of "
+                  "its smoothed curve (default 100; 0 = every crease: closer at bevelled edges, more obtuse "
+                  "triangles; 180 = never; docs/surfmesh.md)");
+  cmd->add_flag("--smoothed-boundary", args->smoothed_boundary,
+                "Place the border nodes of the input's boundary on its smoothed curve (rounds its corners; "
+                "the default keeps the input's boundary polyline)");
   cmd->add_option("--threads", args->threads, "Worker threads for every stage (default: all for patches, 2 for checks)");
   cmd->add_option("--report", args->report, "Write the report as JSON");
   cmd->add_option("--vtk", args->vtk, "Write the output with per-face patch id and alpha (.vtk/.vtu)");
