@@ -116,7 +116,7 @@ TEST(SegmentIsosurface, OccupancyTrench) {
 // side and one patch surrounds (at 256 cells one left a 23-deg triangle beside its loop of
 // 0.93 target edges; at 80 cells there is one). They join the patch around them; none of
 // that kind is left.
-TEST(SegmentIsosurface, TinyCreaseBoundedIslandsJoinThePatchAroundThem) {
+TEST(SegmentIsosurfaceSlow, TinyCreaseBoundedIslandsJoinThePatchAroundThem) {
   const TriMesh mesh = scene_mesh("dram", 80, SampleMode::LevelSet);
   double mean_edge = 0.0;
   for (const auto e : mesh.edges()) mean_edge += mesh.calc_edge_length(e);
