@@ -948,6 +948,55 @@ std::vector<std::pair<std::vector<int>, Eigen::Vector3d>> split_by_normals(const
   return parts;
 }
 
+// Step 7b. Tiny islands (at most kSegmentTinyIslandFaces faces, every border edge shared
+// with one patch, none on the input's boundary, border shorter than max_perimeter) join
+// the patch around them across creases when their faces meet the bounds for its axis: a
+// crease-bounded sliver face (level-set DRAM cell: at the cups' bottoms) otherwise becomes
+// its own patch, whose border loop is shorter than a target edge and whose few triangles
+// leave small angles around it. Only islands smaller than a normal face: larger ones
+// (crease-bounded spikes of medical marching-cubes surfaces) are detail the fit would
+// round off. The union must pass the projection check. Every joined face is appended to
+// island_faces. Returns how many islands joined.
+std::size_t absorb_tiny_islands(const Grouping& grouping, double max_perimeter, Patches& patches, Scratch& scratch,
+                                std::vector<int>& island_faces) {
+  const FaceGraph& graph = grouping.graph;
+  std::size_t n_absorbed = 0;
+  for (std::size_t p = 0; p < patches.faces.size(); ++p) {
+    const auto& faces = patches.faces[p];
+    if (faces.empty() || faces.size() > kSegmentTinyIslandFaces) continue;
+    int around = -1;
+    bool island = true;
+    double perimeter = 0.0;
+    for (int f : faces) {
+      for (int i = 0; i < 3 && island; ++i) {
+        const int g = graph.neighbours[f][i];
+        if (g >= 0 && patches.face_patch[g] == static_cast<int>(p)) continue;
+        const int q = g < 0 ? -1 : patches.face_patch[g];
+        island = q >= 0 && (around < 0 || around == q);
+        around = q;
+        const auto a = graph.mesh->point(graph.mesh->vertex_handle(static_cast<unsigned>(graph.vertices[f][i])));
+        const auto b = graph.mesh->point(graph.mesh->vertex_handle(static_cast<unsigned>(graph.vertices[f][(i + 1) % 3])));
+        perimeter += (a - b).norm();
+      }
+    }
+    if (!island || around < 0 || !(perimeter < max_perimeter)) continue;
+    const Eigen::Vector3d& axis = patches.axes[static_cast<std::size_t>(around)];
+    if (!std::all_of(faces.begin(), faces.end(), [&](int f) { return grouping.fits(f, axis); })) continue;
+    auto& target = patches.faces[static_cast<std::size_t>(around)];
+    for (int f : faces) patches.face_patch[f] = around;
+    target.insert(target.end(), faces.begin(), faces.end());
+    if (!segment_detail::check_projection(graph, target, patches.face_patch, axis, scratch).is_simple) {
+      target.resize(target.size() - faces.size());
+      for (int f : faces) patches.face_patch[f] = static_cast<int>(p);
+      continue;
+    }
+    island_faces.insert(island_faces.end(), faces.begin(), faces.end());
+    patches.faces[p].clear();
+    ++n_absorbed;
+  }
+  return n_absorbed;
+}
+
 // Steps 1-2 of segment(): creases (bevel bends counted in result), raw and smoothed
 // normals, and the faces that admit no axis.
 FaceNormals prepare_normals(FaceGraph& graph, const SegmentOptions& options, Segmentation& result) {
@@ -1018,6 +1067,10 @@ Segmentation segment(const TriMesh& mesh, const SegmentOptions& options) {
   Scratch scratch(mesh);
   result.n_fold_splits = split_folds(grouping, mean_edge_length(mesh), scratch, patches, all_patches(patches));
   if (result.n_fold_splits > 0) merge_patches(grouping, options.min_patch_faces, patches, &scratch);
+  result.n_islands_absorbed =
+      absorb_tiny_islands(grouping, kSegmentTinyIslandPerimeterEdges * mean_edge_length(mesh), patches, scratch,
+                          result.island_faces);
+  std::sort(result.island_faces.begin(), result.island_faces.end());
   renumber(patches);
   report_progress(options.progress, kStage, 0.7);
 
@@ -1073,6 +1126,8 @@ Segmentation PatchSplitter::split(const Segmentation& segmentation, const std::v
 
   s.prepare();
   result.n_bevel_crease_edges = s.n_bevel_crease_edges;
+  result.n_islands_absorbed = segmentation.n_islands_absorbed;  // they stay where they are
+  result.island_faces = segmentation.island_faces;
   const double max_slope = radians(s.options.max_slope_deg);
   const Grouping grouping{s.graph, s.normals, std::cos(max_slope), max_slope, std::cos(kGrowthConeFraction * max_slope)};
   Patches patches;

@@ -23,6 +23,14 @@ namespace nurbsfront {
 //! projected triangles are positively oriented and not needles (about 84 deg at most).
 inline constexpr double kSegmentMinRawNormalDot = 0.1;
 
+//! Largest patch (in faces) that joins the one patch around it across creases (step 7b of
+//! segment()): a crease-bounded face or few inside one patch, whose border loop is shorter
+//! than a target edge (level-set DRAM cell: single faces at the cups' bottoms).
+inline constexpr std::size_t kSegmentTinyIslandFaces = 4;
+//! ... and whose border is shorter than this many mean input edges (smaller than a normal
+//! face, whose border is about 3).
+inline constexpr double kSegmentTinyIslandPerimeterEdges = 2.0;
+
 //! How the zig-zag border curves are smoothed (Taubin lambda|mu steps, corners fixed).
 struct BorderSmoothingOptions {
   //! Number of lambda|mu step pairs. 0 keeps the input positions. Default 10.
@@ -126,6 +134,11 @@ struct Segmentation {
   //! a flipped face) that no axis satisfies both bounds: only the raw bound holds.
   std::size_t n_slope_exceptions = 0;
   std::size_t n_fold_splits = 0;      //!< splits made because a projection folded
+  //! Tiny patches that only one patch surrounded, joined to it across creases (step 7b).
+  std::size_t n_islands_absorbed = 0;
+  //! The faces of those islands, ascending: the only faces that may have a crease edge
+  //! with a face of the same patch.
+  std::vector<int> island_faces;
 };
 
 //! Splits the faces of `mesh` into slope-bounded patches and extracts their borders.
@@ -148,11 +161,15 @@ struct Segmentation {
 //!    outer loop appears (a region covered twice), the fold is cut out locally (two rings
 //!    of faces) or the patch is bisected by a two-seed breadth-first partition; parts are
 //!    checked again, then small parts are re-merged where the merged patch passes.
+//! 7b. A patch of at most kSegmentTinyIslandFaces faces that only one patch surrounds (no
+//!    input boundary), with a border shorter than kSegmentTinyIslandPerimeterEdges mean
+//!    input edges, joins it across creases when its faces meet the bounds for that patch's
+//!    axis and the union passes the projection check (island_faces).
 //! 8. Border edges are chained into curves between corners (or closed loops), and each
 //!    curve is smoothed by Taubin steps with its ends fixed and a bounded displacement.
 //!
 //! Guarantees: every face is in exactly one patch; each patch is connected through
-//! edges; no crease edge has the same patch on both sides; for every non-degenerate face
+//! edges; no crease edge has the same patch on both sides, except edges of island_faces; for every non-degenerate face
 //! n_raw . axis >= kSegmentMinRawNormalDot (its projection is positively oriented) and,
 //! except the n_slope_exceptions faces, n_smoothed . axis >= cos(max_slope_deg); the
 //! projected border of each patch is a set of loops whose segments neither cross nor
