@@ -59,10 +59,20 @@ struct BandFitOptions {
   int curvature_passes = 0;
   //! The rectangle the field covers. Default: the bounding box of the sample centres.
   std::optional<Rectangle> domain;
+  //! Warm start: when set, the fit starts from this field (sampled onto the fit's lattice by
+  //! the cubic B-spline quasi-interpolant) instead of from the plain penalised fit of the
+  //! band centres. The minimum is the same (the objective is convex); a start close to it
+  //! (a fit of most of the same samples) saves active-set solves. Not owned; must outlive
+  //! the call. Default none.
+  const BicubicHeightField* start = nullptr;
+  //! If >= 0 and the fit before the curvature passes misses no band by more than this
+  //! (unit of z), that fit is returned without the passes (BandFitResult::passes 0): for a
+  //! caller that refits such patches anyway. Default -1 (never).
+  double skip_passes_max_miss = -1.0;
 
   //! \throw InvalidInput for a non-positive or non-finite spacing, a negative smoothing
-  //!        length, centre_weight outside [0, 1], max_iterations outside [1, 1000] or an
-  //!        invalid domain.
+  //!        length, centre_weight outside [0, 1], max_iterations outside [1, 1000], an
+  //!        invalid domain or a start field without coefficients.
   void validate() const;
 };
 
@@ -77,6 +87,8 @@ struct BandFitResult {
   double max_miss = 0.0;
   //! Largest |z - f(x, y)| at a point sample (0 if there is none).
   double max_point_residual = 0.0;
+  //! Curvature passes done (fewer than asked when skip_passes_max_miss applied).
+  int passes = 0;
 };
 
 //! Fits z = f(x, y) (uniform bicubic B-spline) so that it crosses every band, stays near

@@ -47,13 +47,15 @@ std::vector<BandSample> cell_band_samples(const std::vector<Eigen::Vector3d>& wo
 }
 
 BandFitResult fit_cell_bands(const std::vector<Eigen::Vector3d>& world, const PatchFrame& frame, const CellGrid& grid,
-                             const Rectangle& domain) {
+                             const Rectangle& domain, const BicubicHeightField* start, double skip_passes_max_miss) {
   const double cell = grid.spacing.minCoeff();
   BandFitOptions options;
   options.spacing = grid.lattice_cells * cell;
   options.smoothing_length = grid.smoothing_cells * cell;
   options.curvature_passes = grid.curvature_passes;
   options.domain = domain;
+  options.start = start;
+  options.skip_passes_max_miss = skip_passes_max_miss;
   return fit_height_field_to_bands(cell_band_samples(world, frame, grid), options);
 }
 

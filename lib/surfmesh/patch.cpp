@@ -354,14 +354,17 @@ void fit_patch(const TriMesh& mesh, const Segmentation& seg, int p, const Border
     if (options.cell_grid.enabled) {
       // Cell-based input: fit the bands of the vertices (docs/surfmesh.md, "Cell-based inputs").
       const CellGrid& grid = options.cell_grid;
-      BandFitResult fitted = fit_cell_bands(points, frame, grid, *fit.domain);
       // A patch whose fit meets its bands closely is smooth there: it is refitted with more
       // rings of its neighbours' faces, which carry their curvature over a wide terrace that
       // one ring leaves to the prior (the top ring of the occupancy torus's tube sat 0.4 voxel
       // low). Not where the fit misses bands (a patch across a sharp edge: the wider rings
-      // rounded the occupancy DRAM cell's edges off, volume -0.35% -> -0.9%).
-      if (grid.wide_overlap_rings > kFitOverlapRings &&
-          fitted.max_miss <= grid.wide_overlap_max_miss_cells * grid.spacing.minCoeff()) {
+      // rounded the occupancy DRAM cell's edges off, volume -0.35% -> -0.9%). The test is
+      // made on the fit before its curvature passes, which such a patch then skips (the wide
+      // refit does them), and the wide refit starts from that fit.
+      const bool wide = grid.wide_overlap_rings > kFitOverlapRings;
+      const double gate = grid.wide_overlap_max_miss_cells * grid.spacing.minCoeff();
+      BandFitResult fitted = fit_cell_bands(points, frame, grid, *fit.domain, nullptr, wide ? gate : -1.0);
+      if (wide && fitted.max_miss <= gate) {
         points.resize(n_own);
         for (const int v : overlap_vertices(mesh, seg, p, grid.wide_overlap_rings)) points.push_back(to_eigen(mesh.point(TriMesh::VertexHandle(v))));
         Rectangle domain = *fit.domain;
@@ -370,7 +373,8 @@ void fit_patch(const TriMesh& mesh, const Segmentation& seg, int p, const Border
           domain.min = domain.min.cwiseMin(q.head<2>() - Eigen::Vector2d::Constant(margin));
           domain.max = domain.max.cwiseMax(q.head<2>() + Eigen::Vector2d::Constant(margin));
         }
-        fitted = fit_cell_bands(points, frame, grid, domain);
+        const BicubicHeightField first = std::move(fitted.field);
+        fitted = fit_cell_bands(points, frame, grid, domain, &first);
       }
       result.surface.field = std::move(fitted.field);
       result.report.fit_max_residual = fitted.max_miss;

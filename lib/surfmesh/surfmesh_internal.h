@@ -112,9 +112,12 @@ struct PatchBorder {
 [[nodiscard]] std::vector<BandSample> cell_band_samples(const std::vector<Eigen::Vector3d>& world, const PatchFrame& frame,
                                                         const CellGrid& grid);
 
-//! The band fit of a patch's points (world) in its frame over `domain` (frame coordinates).
+//! The band fit of a patch's points (world) in its frame over `domain` (frame coordinates),
+//! from `start` if given, without the curvature passes if the fit before them misses no band
+//! by more than skip_passes_max_miss (if >= 0; BandFitOptions).
 [[nodiscard]] BandFitResult fit_cell_bands(const std::vector<Eigen::Vector3d>& world, const PatchFrame& frame,
-                                           const CellGrid& grid, const Rectangle& domain);
+                                           const CellGrid& grid, const Rectangle& domain,
+                                           const BicubicHeightField* start = nullptr, double skip_passes_max_miss = -1.0);
 
 //! One patch's result before global numbering.
 struct PatchResult {
