@@ -475,7 +475,8 @@ TEST(PipelineSlow, HeadsqShortEdgeCollapsesKept) {
   EXPECT_GT(s.n_collapses, s.n_collapses_undone);
   EXPECT_LT(with.mesh.n_faces(), without.mesh.n_faces());
   EXPECT_LT(s.n_small_angle_away_from_features, without.report.stitch.n_small_angle_away_from_features);
-  EXPECT_GT(s.min_angle_away_from_features_deg, without.report.stitch.min_angle_away_from_features_deg);
+  // (The smallest angle may sit where no merge reaches: never smaller, not always larger.)
+  EXPECT_GE(s.min_angle_away_from_features_deg, without.report.stitch.min_angle_away_from_features_deg);
   EXPECT_GT(with.report.output.quality.alpha_mean, without.report.output.quality.alpha_mean);
   ASSERT_TRUE(with.report.output.topology.n_self_intersecting_pairs.has_value());
   EXPECT_EQ(*with.report.output.topology.n_self_intersecting_pairs, 0u);
