@@ -1044,6 +1044,10 @@ void finish_segmentation(const TriMesh& mesh, const FaceGraph& graph, const Face
 }  // namespace
 
 Segmentation segment(const TriMesh& mesh, const SegmentOptions& options) {
+  return segment_detail::segment(mesh, options, mean_edge_length(mesh));
+}
+
+Segmentation segment_detail::segment(const TriMesh& mesh, const SegmentOptions& options, const double mean_edge) {
   options.validate();
   validate_mesh(mesh);
   Segmentation result;
@@ -1065,10 +1069,10 @@ Segmentation segment(const TriMesh& mesh, const SegmentOptions& options) {
   renumber(patches);
   refine_axes(grouping, patches);
   Scratch scratch(mesh);
-  result.n_fold_splits = split_folds(grouping, mean_edge_length(mesh), scratch, patches, all_patches(patches));
+  result.n_fold_splits = split_folds(grouping, mean_edge, scratch, patches, all_patches(patches));
   if (result.n_fold_splits > 0) merge_patches(grouping, options.min_patch_faces, patches, &scratch);
   result.n_islands_absorbed =
-      absorb_tiny_islands(grouping, kSegmentTinyIslandPerimeterEdges * mean_edge_length(mesh), patches, scratch,
+      absorb_tiny_islands(grouping, kSegmentTinyIslandPerimeterEdges * mean_edge, patches, scratch,
                           result.island_faces);
   std::sort(result.island_faces.begin(), result.island_faces.end());
   renumber(patches);

@@ -109,4 +109,8 @@ struct Borders {
 [[nodiscard]] Borders extract_borders(const TriMesh& mesh, const std::vector<int>& face_patch,
                                       const BorderSmoothingOptions& options);
 
+//! segment(mesh, options) with mean_edge = mean_edge_length(mesh) given by a caller that
+//! already has it (the pipeline computes it once per remesh).
+[[nodiscard]] Segmentation segment(const TriMesh& mesh, const SegmentOptions& options, double mean_edge);
+
 }  // namespace nurbsfront::segment_detail
