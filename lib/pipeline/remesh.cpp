@@ -120,7 +120,9 @@ RemeshResult remesh(const TriMesh& input, const RemeshOptions& options) {
   Stopwatch watch;
   // mean_edge_length(input), once for segment() and surfmesh (a pass over every edge).
   const double mean_edge = mean_edge_length(input);
-  const Segmentation first_segmentation = segment_detail::segment(input, segment_options, mean_edge);
+  // segment()'s face graph and normals, kept for the splits of split_unfitted_patches.
+  segment_detail::SplitterPtr splitter;
+  const Segmentation first_segmentation = segment_detail::segment(input, segment_options, mean_edge, &splitter);
   report.seconds_segment = watch.seconds();
   report.n_crease_edges = first_segmentation.n_crease_edges;
 
@@ -128,7 +130,8 @@ RemeshResult remesh(const TriMesh& input, const RemeshOptions& options) {
   // Patches whose fit leaves their input (sharp bends inside) are split and refitted.
   const Segmentation segmentation =
       surfmesh_detail::split_unfitted_patches(input, first_segmentation, surfmesh_options, segment_options,
-                                              &report.n_patches_split, mean_edge);
+                                              &report.n_patches_split, mean_edge, splitter.get());
+  splitter.reset();
   report.n_patches = segmentation.patches.size();
   report.n_curves = segmentation.curves.size();
   report.n_corners = segmentation.corners.size();

@@ -1043,11 +1043,39 @@ void finish_segmentation(const TriMesh& mesh, const FaceGraph& graph, const Face
 
 }  // namespace
 
+struct segment_detail::Splitter {
+  Splitter(const TriMesh& m, const SegmentOptions& o) : mesh(m), options(o) {}
+  const TriMesh& mesh;
+  SegmentOptions options;
+  // Computed at the first split (segment()'s steps 1-2), or handed over by segment().
+  bool prepared = false;
+  FaceGraph graph;
+  FaceNormals normals;
+  std::size_t n_bevel_crease_edges = 0;
+  double mean_edge = 0.0;
+  // The last result: each of its patches passed split_folds' checks with its axis.
+  std::vector<int> last_face_patch;
+  std::vector<Eigen::Vector3d> last_axes;
+
+  void prepare() {
+    if (prepared) return;
+    graph = segment_detail::build_graph(mesh);
+    Segmentation counts;
+    normals = prepare_normals(graph, options, counts);
+    n_bevel_crease_edges = counts.n_bevel_crease_edges;
+    mean_edge = mean_edge_length(mesh);
+    prepared = true;
+  }
+};
+
+void segment_detail::SplitterDeleter::operator()(Splitter* splitter) const { delete splitter; }
+
 Segmentation segment(const TriMesh& mesh, const SegmentOptions& options) {
   return segment_detail::segment(mesh, options, mean_edge_length(mesh));
 }
 
-Segmentation segment_detail::segment(const TriMesh& mesh, const SegmentOptions& options, const double mean_edge) {
+Segmentation segment_detail::segment(const TriMesh& mesh, const SegmentOptions& options, const double mean_edge,
+                                     SplitterPtr* splitter) {
   options.validate();
   validate_mesh(mesh);
   Segmentation result;
@@ -1056,7 +1084,7 @@ Segmentation segment_detail::segment(const TriMesh& mesh, const SegmentOptions& 
   report_progress(options.progress, kStage, 0.0);
 
   FaceGraph graph = segment_detail::build_graph(mesh);
-  const FaceNormals normals = prepare_normals(graph, options, result);
+  FaceNormals normals = prepare_normals(graph, options, result);
   const double max_slope = radians(options.max_slope_deg);
   report_progress(options.progress, kStage, 0.3);
 
@@ -1079,33 +1107,21 @@ Segmentation segment_detail::segment(const TriMesh& mesh, const SegmentOptions& 
   report_progress(options.progress, kStage, 0.7);
 
   finish_segmentation(mesh, graph, normals, patches, options, result);
+  if (splitter != nullptr) {
+    splitter->reset(new Splitter(mesh, options));
+    Splitter& kept = **splitter;
+    kept.graph = std::move(graph);
+    kept.normals = std::move(normals);
+    kept.n_bevel_crease_edges = result.n_bevel_crease_edges;
+    kept.mean_edge = mean_edge;
+    kept.prepared = true;
+  }
   report_progress(options.progress, kStage, 1.0);
   return result;
 }
 
-struct PatchSplitter::Impl {
-  Impl(const TriMesh& m, const SegmentOptions& o) : mesh(m), options(o) {}
-  const TriMesh& mesh;
-  SegmentOptions options;
-  // Computed at the first split (segment()'s steps 1-2).
-  bool prepared = false;
-  FaceGraph graph;
-  FaceNormals normals;
-  std::size_t n_bevel_crease_edges = 0;
-  double mean_edge = 0.0;
-  // The last result: each of its patches passed split_folds' checks with its axis.
-  std::vector<int> last_face_patch;
-  std::vector<Eigen::Vector3d> last_axes;
-
-  void prepare() {
-    if (prepared) return;
-    graph = segment_detail::build_graph(mesh);
-    Segmentation counts;
-    normals = prepare_normals(graph, options, counts);
-    n_bevel_crease_edges = counts.n_bevel_crease_edges;
-    mean_edge = mean_edge_length(mesh);
-    prepared = true;
-  }
+struct PatchSplitter::Impl : segment_detail::Splitter {
+  using Splitter::Splitter;
 };
 
 PatchSplitter::PatchSplitter(const TriMesh& mesh, const SegmentOptions& options) : impl_(std::make_unique<Impl>(mesh, options)) {
@@ -1116,7 +1132,10 @@ PatchSplitter::PatchSplitter(const TriMesh& mesh, const SegmentOptions& options)
 PatchSplitter::~PatchSplitter() = default;
 
 Segmentation PatchSplitter::split(const Segmentation& segmentation, const std::vector<int>& which) {
-  Impl& s = *impl_;
+  return segment_detail::split(*impl_, segmentation, which);
+}
+
+Segmentation segment_detail::split(Splitter& s, const Segmentation& segmentation, const std::vector<int>& which) {
   const auto n_faces = static_cast<int>(s.mesh.n_faces());
   const auto n_patches = static_cast<int>(segmentation.patches.size());
   if (segmentation.face_patch.size() != s.mesh.n_faces())

@@ -426,7 +426,7 @@ Segmentation split_unfitted_patches(const TriMesh& input, const Segmentation& se
 Segmentation surfmesh_detail::split_unfitted_patches(const TriMesh& input, const Segmentation& segmentation,
                                                      const SurfMeshOptions& options,
                                                      const SegmentOptions& segment_options, std::size_t* n_split,
-                                                     const double mean_edge) {
+                                                     const double mean_edge, segment_detail::Splitter* splitter) {
   options.validate();
   segment_options.validate();
   validate_segmentation(input, segmentation);
@@ -437,7 +437,7 @@ Segmentation surfmesh_detail::split_unfitted_patches(const TriMesh& input, const
   const unsigned threads = options.threads > 0 ? static_cast<unsigned>(options.threads)
                                                : std::max(1U, std::thread::hardware_concurrency());
   Segmentation seg = segmentation;
-  std::unique_ptr<PatchSplitter> splitter;  // made at the first split
+  std::unique_ptr<PatchSplitter> own_splitter;  // made at the first split when none is given
   std::vector<int> candidates(seg.patches.size());
   for (std::size_t p = 0; p < candidates.size(); ++p) candidates[p] = static_cast<int>(p);
   for (int round = 0; round < options.fit.split_rounds && !candidates.empty(); ++round) {
@@ -454,8 +454,8 @@ Segmentation surfmesh_detail::split_unfitted_patches(const TriMesh& input, const
     std::vector<std::uint8_t> was_bad(seg.patches.size(), 0);
     for (const int p : bad) was_bad[static_cast<std::size_t>(p)] = 1;
     const std::size_t n_before = seg.patches.size();
-    if (!splitter) splitter = std::make_unique<PatchSplitter>(input, segment_options);
-    Segmentation next = splitter->split(seg, bad);
+    if (splitter == nullptr && !own_splitter) own_splitter = std::make_unique<PatchSplitter>(input, segment_options);
+    Segmentation next = splitter != nullptr ? segment_detail::split(*splitter, seg, bad) : own_splitter->split(seg, bad);
     if (n_split != nullptr) *n_split += next.patches.size() - n_before;
     candidates.clear();
     for (std::size_t q = 0; q < next.patches.size(); ++q) {
