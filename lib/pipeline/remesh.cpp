@@ -7,7 +7,10 @@
 #include <utility>
 
 #include "nurbsfront/core/error.h"
+#include "nurbsfront/core/soup.h"
 #include "nurbsfront/core/stopwatch.h"
+#include "nurbsfront/segment/segment_internal.h"
+#include "nurbsfront/surfmesh/surfmesh_internal.h"
 
 namespace nurbsfront {
 
@@ -115,18 +118,24 @@ RemeshResult remesh(const TriMesh& input, const RemeshOptions& options) {
   stitch_options.progress = chained(options.progress, options.stitch.progress);
 
   Stopwatch watch;
-  const Segmentation first_segmentation = segment(input, segment_options);
+  // mean_edge_length(input), once for segment() and surfmesh (a pass over every edge).
+  const double mean_edge = mean_edge_length(input);
+  // segment()'s face graph and normals, kept for the splits of split_unfitted_patches.
+  segment_detail::SplitterPtr splitter;
+  const Segmentation first_segmentation = segment_detail::segment(input, segment_options, mean_edge, &splitter);
   report.seconds_segment = watch.seconds();
   report.n_crease_edges = first_segmentation.n_crease_edges;
 
   watch.restart();
   // Patches whose fit leaves their input (sharp bends inside) are split and refitted.
   const Segmentation segmentation =
-      split_unfitted_patches(input, first_segmentation, surfmesh_options, segment_options, &report.n_patches_split);
+      surfmesh_detail::split_unfitted_patches(input, first_segmentation, surfmesh_options, segment_options,
+                                              &report.n_patches_split, mean_edge, splitter.get());
+  splitter.reset();
   report.n_patches = segmentation.patches.size();
   report.n_curves = segmentation.curves.size();
   report.n_corners = segmentation.corners.size();
-  const SurfaceMesh surface = mesh_surface(input, segmentation, surfmesh_options);
+  const SurfaceMesh surface = surfmesh_detail::mesh_surface(input, segmentation, surfmesh_options, mean_edge);
   report.seconds_surfmesh = watch.seconds();
   report.n_nodes = surface.nodes.size();
   report.target_size = surface.target_size;

@@ -1043,47 +1043,11 @@ void finish_segmentation(const TriMesh& mesh, const FaceGraph& graph, const Face
 
 }  // namespace
 
-Segmentation segment(const TriMesh& mesh, const SegmentOptions& options) {
-  options.validate();
-  validate_mesh(mesh);
-  Segmentation result;
-  if (mesh.n_faces() == 0) return result;
-  constexpr std::string_view kStage = "segment";
-  report_progress(options.progress, kStage, 0.0);
-
-  FaceGraph graph = segment_detail::build_graph(mesh);
-  const FaceNormals normals = prepare_normals(graph, options, result);
-  const double max_slope = radians(options.max_slope_deg);
-  report_progress(options.progress, kStage, 0.3);
-
-  const Grouping grouping{graph, normals, std::cos(max_slope), max_slope,
-                          std::cos(kGrowthConeFraction * max_slope)};
-  Patches patches = grow_regions(grouping);
-  report_progress(options.progress, kStage, 0.5);
-  merge_patches(grouping, options.min_patch_faces, patches, nullptr);
-  clean_borders(grouping, patches);
-  renumber(patches);
-  refine_axes(grouping, patches);
-  Scratch scratch(mesh);
-  result.n_fold_splits = split_folds(grouping, mean_edge_length(mesh), scratch, patches, all_patches(patches));
-  if (result.n_fold_splits > 0) merge_patches(grouping, options.min_patch_faces, patches, &scratch);
-  result.n_islands_absorbed =
-      absorb_tiny_islands(grouping, kSegmentTinyIslandPerimeterEdges * mean_edge_length(mesh), patches, scratch,
-                          result.island_faces);
-  std::sort(result.island_faces.begin(), result.island_faces.end());
-  renumber(patches);
-  report_progress(options.progress, kStage, 0.7);
-
-  finish_segmentation(mesh, graph, normals, patches, options, result);
-  report_progress(options.progress, kStage, 1.0);
-  return result;
-}
-
-struct PatchSplitter::Impl {
-  Impl(const TriMesh& m, const SegmentOptions& o) : mesh(m), options(o) {}
+struct segment_detail::Splitter {
+  Splitter(const TriMesh& m, const SegmentOptions& o) : mesh(m), options(o) {}
   const TriMesh& mesh;
   SegmentOptions options;
-  // Computed at the first split (segment()'s steps 1-2).
+  // Computed at the first split (segment()'s steps 1-2), or handed over by segment().
   bool prepared = false;
   FaceGraph graph;
   FaceNormals normals;
@@ -1104,6 +1068,62 @@ struct PatchSplitter::Impl {
   }
 };
 
+void segment_detail::SplitterDeleter::operator()(Splitter* splitter) const { delete splitter; }
+
+Segmentation segment(const TriMesh& mesh, const SegmentOptions& options) {
+  return segment_detail::segment(mesh, options, mean_edge_length(mesh));
+}
+
+Segmentation segment_detail::segment(const TriMesh& mesh, const SegmentOptions& options, const double mean_edge,
+                                     SplitterPtr* splitter) {
+  options.validate();
+  validate_mesh(mesh);
+  Segmentation result;
+  if (mesh.n_faces() == 0) return result;
+  constexpr std::string_view kStage = "segment";
+  report_progress(options.progress, kStage, 0.0);
+
+  FaceGraph graph = segment_detail::build_graph(mesh);
+  FaceNormals normals = prepare_normals(graph, options, result);
+  const double max_slope = radians(options.max_slope_deg);
+  report_progress(options.progress, kStage, 0.3);
+
+  const Grouping grouping{graph, normals, std::cos(max_slope), max_slope,
+                          std::cos(kGrowthConeFraction * max_slope)};
+  Patches patches = grow_regions(grouping);
+  report_progress(options.progress, kStage, 0.5);
+  merge_patches(grouping, options.min_patch_faces, patches, nullptr);
+  clean_borders(grouping, patches);
+  renumber(patches);
+  refine_axes(grouping, patches);
+  Scratch scratch(mesh);
+  result.n_fold_splits = split_folds(grouping, mean_edge, scratch, patches, all_patches(patches));
+  if (result.n_fold_splits > 0) merge_patches(grouping, options.min_patch_faces, patches, &scratch);
+  result.n_islands_absorbed =
+      absorb_tiny_islands(grouping, kSegmentTinyIslandPerimeterEdges * mean_edge, patches, scratch,
+                          result.island_faces);
+  std::sort(result.island_faces.begin(), result.island_faces.end());
+  renumber(patches);
+  report_progress(options.progress, kStage, 0.7);
+
+  finish_segmentation(mesh, graph, normals, patches, options, result);
+  if (splitter != nullptr) {
+    splitter->reset(new Splitter(mesh, options));
+    Splitter& kept = **splitter;
+    kept.graph = std::move(graph);
+    kept.normals = std::move(normals);
+    kept.n_bevel_crease_edges = result.n_bevel_crease_edges;
+    kept.mean_edge = mean_edge;
+    kept.prepared = true;
+  }
+  report_progress(options.progress, kStage, 1.0);
+  return result;
+}
+
+struct PatchSplitter::Impl : segment_detail::Splitter {
+  using Splitter::Splitter;
+};
+
 PatchSplitter::PatchSplitter(const TriMesh& mesh, const SegmentOptions& options) : impl_(std::make_unique<Impl>(mesh, options)) {
   options.validate();
   validate_mesh(mesh);
@@ -1112,7 +1132,10 @@ PatchSplitter::PatchSplitter(const TriMesh& mesh, const SegmentOptions& options)
 PatchSplitter::~PatchSplitter() = default;
 
 Segmentation PatchSplitter::split(const Segmentation& segmentation, const std::vector<int>& which) {
-  Impl& s = *impl_;
+  return segment_detail::split(*impl_, segmentation, which);
+}
+
+Segmentation segment_detail::split(Splitter& s, const Segmentation& segmentation, const std::vector<int>& which) {
   const auto n_faces = static_cast<int>(s.mesh.n_faces());
   const auto n_patches = static_cast<int>(segmentation.patches.size());
   if (segmentation.face_patch.size() != s.mesh.n_faces())

@@ -4,6 +4,7 @@
 
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <utility>
 #include <vector>
 
@@ -108,5 +109,23 @@ struct Borders {
 };
 [[nodiscard]] Borders extract_borders(const TriMesh& mesh, const std::vector<int>& face_patch,
                                       const BorderSmoothingOptions& options);
+
+//! A PatchSplitter's state (face graph, normals, mean edge, last result); defined in
+//! segment.cpp.
+struct Splitter;
+struct SplitterDeleter {
+  void operator()(Splitter* splitter) const;
+};
+using SplitterPtr = std::unique_ptr<Splitter, SplitterDeleter>;
+
+//! segment(mesh, options) with mean_edge = mean_edge_length(mesh) given by a caller that
+//! already has it (the pipeline computes it once per remesh). With splitter, *splitter
+//! becomes a splitter for the same mesh and options holding segment()'s face graph and
+//! normals (split() then does not compute them again).
+[[nodiscard]] Segmentation segment(const TriMesh& mesh, const SegmentOptions& options, double mean_edge,
+                                   SplitterPtr* splitter = nullptr);
+
+//! PatchSplitter::split() on a splitter made by segment().
+[[nodiscard]] Segmentation split(Splitter& splitter, const Segmentation& segmentation, const std::vector<int>& which);
 
 }  // namespace nurbsfront::segment_detail

@@ -9,6 +9,7 @@
 #include <limits>
 #include <numbers>
 #include <numeric>
+#include <optional>
 #include <string>
 
 #include "nurbsfront/core/error.h"
@@ -471,8 +472,13 @@ StitchResult stitch_impl(const SurfaceMesh& surface, const TriMesh* input, const
   watch.restart();
   report_progress(options.progress, "stitch: verify", 0.0);
   std::vector<FacePair> pairs;
+  // The output's soup, kept for the report while the mesh stays as checked: with no pair
+  // found, neither the repair nor settling changes the mesh.
+  std::optional<TriangleSoup> soup;
   if (options.check_self_intersections) {
-    pairs = self_intersecting_pairs(to_soup(mesh), options.n_threads);
+    soup = to_soup(mesh);
+    pairs = self_intersecting_pairs(*soup, options.n_threads);
+    if (!pairs.empty()) soup.reset();
     report_progress(options.progress, "stitch: verify", 0.5);
     if (optimise && !repair_intersections(assembled, mesh, pairs, report)) {
       // Local repair did not converge: the assembled mesh (whose own intersections are
@@ -495,7 +501,9 @@ StitchResult stitch_impl(const SurfaceMesh& surface, const TriMesh* input, const
       return options.progress("stitch: verify", 0.5 + 0.5 * fraction);
     };
   }
-  report.output = mesh_report(to_soup(mesh), check);
+  if (!soup) soup = to_soup(mesh);
+  report.output = mesh_report(*soup, check);
+  soup.reset();
   if (options.check_self_intersections) report.output.topology.n_self_intersecting_pairs = pairs.size();
   const TopologyReport& topo = report.output.topology;
   if (!topo.is_manifold) {

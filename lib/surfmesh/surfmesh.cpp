@@ -245,14 +245,17 @@ Eigen::Vector3d PatchSurface::normal(const Eigen::Vector3d& world) const {
 }
 
 SurfaceMesh mesh_surface(const TriMesh& input, const Segmentation& segmentation, const SurfMeshOptions& options) {
-  using namespace surfmesh_detail;
+  return surfmesh_detail::mesh_surface(input, segmentation, options, mean_edge_length(input));
+}
+
+SurfaceMesh surfmesh_detail::mesh_surface(const TriMesh& input, const Segmentation& segmentation,
+                                          const SurfMeshOptions& options, const double mean_edge) {
   options.validate();
   validate_segmentation(input, segmentation);
   SurfaceMesh out;
   if (input.n_faces() == 0) return out;
   report_progress(options.progress, "surfmesh: borders", 0.0);
 
-  const double mean_edge = mean_edge_length(input);
   if (!(mean_edge > 0.0)) throw InvalidInput("mesh_surface: the mesh has no edge of positive length");
   const double h = options.sizing.size > 0.0 ? options.sizing.size : options.sizing.relative_size * mean_edge;
   out.input_mean_edge = mean_edge;
@@ -416,19 +419,25 @@ SurfaceMesh mesh_surface(const TriMesh& input, const Segmentation& segmentation,
 Segmentation split_unfitted_patches(const TriMesh& input, const Segmentation& segmentation,
                                     const SurfMeshOptions& options, const SegmentOptions& segment_options,
                                     std::size_t* n_split) {
-  using namespace surfmesh_detail;
+  return surfmesh_detail::split_unfitted_patches(input, segmentation, options, segment_options, n_split,
+                                                 mean_edge_length(input));
+}
+
+Segmentation surfmesh_detail::split_unfitted_patches(const TriMesh& input, const Segmentation& segmentation,
+                                                     const SurfMeshOptions& options,
+                                                     const SegmentOptions& segment_options, std::size_t* n_split,
+                                                     const double mean_edge, segment_detail::Splitter* splitter) {
   options.validate();
   segment_options.validate();
   validate_segmentation(input, segmentation);
   if (n_split != nullptr) *n_split = 0;
   if (input.n_faces() == 0 || options.fit.split_above_edges <= 0.0 || options.fit.split_rounds == 0) return segmentation;
-  const double mean_edge = mean_edge_length(input);
   if (!(mean_edge > 0.0)) throw InvalidInput("split_unfitted_patches: the mesh has no edge of positive length");
   const double bound = options.fit.split_above_edges * mean_edge;
   const unsigned threads = options.threads > 0 ? static_cast<unsigned>(options.threads)
                                                : std::max(1U, std::thread::hardware_concurrency());
   Segmentation seg = segmentation;
-  std::unique_ptr<PatchSplitter> splitter;  // made at the first split
+  std::unique_ptr<PatchSplitter> own_splitter;  // made at the first split when none is given
   std::vector<int> candidates(seg.patches.size());
   for (std::size_t p = 0; p < candidates.size(); ++p) candidates[p] = static_cast<int>(p);
   for (int round = 0; round < options.fit.split_rounds && !candidates.empty(); ++round) {
@@ -445,8 +454,8 @@ Segmentation split_unfitted_patches(const TriMesh& input, const Segmentation& se
     std::vector<std::uint8_t> was_bad(seg.patches.size(), 0);
     for (const int p : bad) was_bad[static_cast<std::size_t>(p)] = 1;
     const std::size_t n_before = seg.patches.size();
-    if (!splitter) splitter = std::make_unique<PatchSplitter>(input, segment_options);
-    Segmentation next = splitter->split(seg, bad);
+    if (splitter == nullptr && !own_splitter) own_splitter = std::make_unique<PatchSplitter>(input, segment_options);
+    Segmentation next = splitter != nullptr ? segment_detail::split(*splitter, seg, bad) : own_splitter->split(seg, bad);
     if (n_split != nullptr) *n_split += next.patches.size() - n_before;
     candidates.clear();
     for (std::size_t q = 0; q < next.patches.size(); ++q) {

@@ -12,6 +12,7 @@
 
 #include "nurbsfront/nurbs/band_fit.h"
 #include "nurbsfront/nurbs/mba.h"
+#include "nurbsfront/segment/segment_internal.h"
 #include "nurbsfront/surfmesh/surfmesh.h"
 
 namespace nurbsfront {
@@ -260,5 +261,15 @@ std::size_t clamp_inner_nodes(const TriMesh& mesh, const Segmentation& segmentat
 
 //! Even-odd point-in-polygon test (floating point).
 [[nodiscard]] bool polygon_contains(const std::vector<Eigen::Vector2d>& polygon, const Eigen::Vector2d& q);
+
+//! mesh_surface() and split_unfitted_patches() with mean_edge = mean_edge_length(input)
+//! given by a caller that already has it (the pipeline computes it once per remesh);
+//! splitter, when given, is the one segment() left for the same input and segment_options.
+[[nodiscard]] SurfaceMesh mesh_surface(const TriMesh& input, const Segmentation& segmentation,
+                                       const SurfMeshOptions& options, double mean_edge);
+[[nodiscard]] Segmentation split_unfitted_patches(const TriMesh& input, const Segmentation& segmentation,
+                                                  const SurfMeshOptions& options,
+                                                  const SegmentOptions& segment_options, std::size_t* n_split,
+                                                  double mean_edge, segment_detail::Splitter* splitter = nullptr);
 
 }  // namespace nurbsfront::surfmesh_detail

@@ -209,6 +209,34 @@ TEST(SplitPatches, SplitterRoundsMatchSplitPatches) {
   EXPECT_THROW((void)splitter.split(seg, {-1}), InvalidInput);
 }
 
+// The pipeline's splitter: segment() hands over its face graph, normals and mean edge; the
+// segmentation and every split round equal segment() and a PatchSplitter made afresh.
+TEST(SplitPatches, SplitterFromSegmentMatchesPatchSplitter) {
+  SegmentOptions options;
+  options.min_patch_faces = 20;
+  const TriMesh mesh = to_trimesh(test::torus(48, 24));
+  segment_detail::SplitterPtr kept;
+  const Segmentation seg = segment_detail::segment(mesh, options, mean_edge_length(mesh), &kept);
+  ASSERT_TRUE(kept);
+  const Segmentation plain = segment(mesh, options);
+  EXPECT_EQ(seg.face_patch, plain.face_patch);
+  ASSERT_EQ(seg.patches.size(), plain.patches.size());
+  ASSERT_GE(seg.patches.size(), 4u);
+  PatchSplitter fresh(mesh, options);
+  const Segmentation first = segment_detail::split(*kept, seg, {0, 1});
+  const Segmentation first_fresh = fresh.split(seg, {0, 1});
+  ASSERT_GT(first.patches.size(), seg.patches.size());
+  EXPECT_EQ(first.face_patch, first_fresh.face_patch);
+  EXPECT_EQ(first.n_bevel_crease_edges, first_fresh.n_bevel_crease_edges);
+  const Segmentation second = segment_detail::split(*kept, first, {0, 2});
+  const Segmentation second_fresh = fresh.split(first_fresh, {0, 2});
+  EXPECT_EQ(second.face_patch, second_fresh.face_patch);
+  ASSERT_EQ(second.patches.size(), second_fresh.patches.size());
+  for (std::size_t p = 0; p < second.patches.size(); ++p)
+    EXPECT_EQ(second.patches[p].axis, second_fresh.patches[p].axis) << "patch " << p;
+  segment_test::expect_contracts(mesh, second, options, 10.0);
+}
+
 TEST(Segment, SphereGivesFewLargePatches) {
   const TriMesh mesh = to_trimesh(test::icosphere(3));
   SegmentOptions options;
