@@ -235,6 +235,12 @@ void BandFitOptions::validate() const {
     throw InvalidInput("BandFitOptions: curvature_passes must be in [0, 10], got " + std::to_string(curvature_passes));
   if (domain) domain->validate();
   if (start != nullptr && start->is_empty()) throw InvalidInput("BandFitOptions: the start field has no coefficients");
+  if (start != nullptr) {
+    const auto& c = start->coefficients();
+    if (!std::all_of(c.begin(), c.end(), [](double x) { return std::isfinite(x); }))
+      throw InvalidInput("BandFitOptions: the start field has a non-finite coefficient");
+  }
+  if (std::isnan(skip_passes_max_miss)) throw InvalidInput("BandFitOptions: skip_passes_max_miss must not be NaN");
 }
 
 bool band_target(const BicubicHeightField& field, const BandSample& sample, Eigen::Vector3d& target) {

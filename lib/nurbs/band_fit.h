@@ -72,7 +72,8 @@ struct BandFitOptions {
 
   //! \throw InvalidInput for a non-positive or non-finite spacing, a negative smoothing
   //!        length, centre_weight outside [0, 1], max_iterations outside [1, 1000], an
-  //!        invalid domain or a start field without coefficients.
+  //!        invalid domain, a start field without coefficients or with a non-finite one,
+  //!        or a NaN skip_passes_max_miss.
   void validate() const;
 };
 

@@ -212,7 +212,8 @@ struct Segmentation {
 //! graph, creases and normals are computed once (at the first split), and when a round is
 //! given the previous round's result, only the parts of the patches it splits go through
 //! the projection and cliff checks (the others passed them in that round). Same results as
-//! split_patches(). The mesh must outlive the splitter.
+//! split_patches(). The mesh must outlive the splitter and must not change while it is
+//! used (its face graph, points and normals are kept from the first split).
 class PatchSplitter {
  public:
   //! \throw InvalidInput for invalid options or a mesh segment() refuses.

@@ -282,7 +282,8 @@ SurfaceMesh surfmesh_detail::mesh_surface(const TriMesh& input, const Segmentati
   };
   double sizing_grid = 0.0;  // > 0: the front's sizes are sampled on a grid (adaptive, feature)
   std::vector<std::uint8_t> feature_limited;  // feature sizing alone: patches not at the uniform h
-  out.curve_is_feature = feature_curves(input, segmentation, options.crease_angle_deg);
+  std::vector<double> crease_angles;
+  out.curve_is_feature = feature_curves(input, segmentation, options.crease_angle_deg, &crease_angles);
   if (options.sizing.feature_size > 0.0) {
     FeatureSizing feature = feature_sizing(input, segmentation, out.curve_is_feature, size_at, options.sizing.feature_size,
                                            options.sizing.min_size_fraction * h, options.sizing.gradation);
@@ -290,8 +291,10 @@ SurfaceMesh surfmesh_detail::mesh_surface(const TriMesh& input, const Segmentati
       size_at = std::move(feature.size_at);
       front_size = size_at;
       feature_limited = std::move(feature.patch_limited);
-      // The grid follows the smallest size (a narrow face is narrower than a mean edge).
-      sizing_grid = std::min(mean_edge, feature.smallest);
+      // The grid follows the smallest size (a narrow face is narrower than a mean edge),
+      // but no finer than a twentieth of a mean edge (a tiny min_size_fraction or callback
+      // size must not make the grid's cell count overflow).
+      sizing_grid = std::max(std::min(mean_edge, feature.smallest), 0.05 * mean_edge);
     }
   }
   if (options.sizing.adaptive) {
@@ -315,8 +318,6 @@ SurfaceMesh surfmesh_detail::mesh_surface(const TriMesh& input, const Segmentati
   // resampled from their input positions, and if that is still wrong, take their input
   // vertices (which the segmentation guarantees not to cross).
   std::vector<CurveSource> source(segmentation.curves.size(), CurveSource::Smoothed);
-  std::vector<double> crease_angles;
-  out.curve_is_feature = feature_curves(input, segmentation, options.crease_angle_deg, &crease_angles);
   // The input's boundary and its sharpest creases are discretised from their input positions
   // (the smoothing moves them off the corners and folds they follow).
   for (std::size_t c = 0; c < source.size() && !options.cell_grid.enabled; ++c) {

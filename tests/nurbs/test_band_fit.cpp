@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <functional>
+#include <limits>
 #include <numbers>
 #include <random>
 
@@ -244,6 +245,13 @@ TEST(BandFit, BadInput) {
   spoiled = o;
   const BicubicHeightField empty;
   spoiled.start = &empty;
+  EXPECT_THROW((void)fit_height_field_to_bands(samples, spoiled), InvalidInput);
+  BicubicHeightField spoiled_start(Rectangle{}, 2, 2);
+  spoiled_start.set_coefficient(0, 0, std::numeric_limits<double>::quiet_NaN());
+  spoiled.start = &spoiled_start;
+  EXPECT_THROW((void)fit_height_field_to_bands(samples, spoiled), InvalidInput);
+  spoiled = o;
+  spoiled.skip_passes_max_miss = std::numeric_limits<double>::quiet_NaN();
   EXPECT_THROW((void)fit_height_field_to_bands(samples, spoiled), InvalidInput);
 }
 
