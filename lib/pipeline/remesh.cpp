@@ -2,6 +2,7 @@
 // remesh(): the stages in order, their timings and counts, and the output's report.
 #include "nurbsfront/pipeline/remesh.h"
 
+#include <cmath>
 #include <cstdint>
 #include <string>
 #include <utility>
@@ -168,6 +169,34 @@ RemeshResult remesh(const TriMesh& input, const RemeshOptions& options) {
   report.seconds_distance = watch.seconds();
   report.seconds_total = total.seconds();
   return result;
+}
+
+RemeshResult remesh_to_vertex_count(const TriMesh& input, std::size_t target_vertices, RemeshOptions options,
+                                    double relative_tolerance, int max_runs) {
+  if (target_vertices < 4) throw InvalidInput("remesh_to_vertex_count: the target vertex count must be >= 4");
+  if (!(relative_tolerance >= 0.0 && relative_tolerance < 1.0)) {
+    throw InvalidInput("remesh_to_vertex_count: relative_tolerance must be in [0, 1)");
+  }
+  if (max_runs < 1) throw InvalidInput("remesh_to_vertex_count: max_runs must be >= 1");
+  if (options.surfmesh.sizing.callback) {
+    throw InvalidInput("remesh_to_vertex_count: a sizing callback cannot be scaled to a vertex count");
+  }
+  const double target = static_cast<double>(target_vertices);
+  auto miss = [target](const RemeshResult& r) { return std::abs(static_cast<double>(r.mesh.n_vertices()) - target); };
+  RemeshResult best;
+  bool have_best = false;
+  for (int run = 0; run < max_runs; ++run) {
+    RemeshResult result = remesh(input, options);
+    const std::size_t vertices = result.mesh.n_vertices();
+    const double size = result.report.target_size;
+    if (!have_best || miss(result) < miss(best)) {
+      best = std::move(result);
+      have_best = true;
+    }
+    if (miss(best) <= relative_tolerance * target || vertices == 0 || !(size > 0.0)) break;
+    options.surfmesh.sizing.size = size * std::sqrt(static_cast<double>(vertices) / target);
+  }
+  return best;
 }
 
 }  // namespace nurbsfront

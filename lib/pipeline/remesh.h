@@ -93,6 +93,22 @@ struct RemeshResult {
 //! \throw Cancelled if a progress callback returns false.
 [[nodiscard]] RemeshResult remesh(const TriMesh& input, const RemeshOptions& options = {});
 
+//! remesh() at a given output vertex count (issue 6 compares at equal vertex count, and a
+//! decimater may stop above ours): the uniform target size is chosen from the count. The
+//! first run uses options as given (its sizing.size, or relative_size); each further run
+//! scales the size by sqrt(vertices / target_vertices) (the vertex count of a surface meshed
+//! at size h goes as 1 / h^2). Stops at the first run within relative_tolerance of the
+//! target, or after max_runs runs, and returns the run closest to the target (the first of
+//! equals). Every run is a full remesh() (with distances if options.compute_distances), so
+//! a good first size (options.surfmesh.sizing.size) saves runs. Adaptive sizing and a
+//! sizing callback keep their shape: the uniform size they start from is what is scaled
+//! (a callback's sizes are not: it throws for a callback).
+//! 	hrow InvalidInput for target_vertices < 4, relative_tolerance not in [0, 1), max_runs
+//!        < 1, a sizing callback, or whatever remesh() throws.
+[[nodiscard]] RemeshResult remesh_to_vertex_count(const TriMesh& input, std::size_t target_vertices,
+                                                  RemeshOptions options, double relative_tolerance = 0.005,
+                                                  int max_runs = 4);
+
 //! JSON object: counts, seconds, patches (status counts and the failed ones), stitch,
 //! output (the quality module's MeshReport JSON), errors.
 [[nodiscard]] std::string to_json(const RemeshReport& report);

@@ -257,6 +257,28 @@ TEST(Pipeline, CancelFromAnyStage) {
   }
 }
 
+// Issue 6 compares at equal vertex count: where the decimater stops above ours, nurbsfront
+// reruns at its count. A 40% finer count is reached within the tolerance, by a finer size.
+TEST(Pipeline, RemeshToVertexCount) {
+  const SceneInput in = scene_input("sphere", 24, SampleMode::LevelSet);
+  RemeshOptions options = fast_options();
+  options.compute_distances = false;
+  const RemeshResult first = remesh(in.mesh, options);
+  const std::size_t target = first.mesh.n_vertices() * 7 / 5;
+  const RemeshResult r = remesh_to_vertex_count(in.mesh, target, options, 0.02, 4);
+  EXPECT_TRUE(r.report.ok());
+  EXPECT_NEAR(double(r.mesh.n_vertices()), double(target), 0.02 * double(target));
+  EXPECT_LT(r.report.target_size, first.report.target_size);
+  // One run when the first size already gives the count.
+  const RemeshResult same = remesh_to_vertex_count(in.mesh, first.mesh.n_vertices(), options, 0.0, 1);
+  EXPECT_EQ(same.mesh.n_vertices(), first.mesh.n_vertices());
+  EXPECT_THROW((void)remesh_to_vertex_count(in.mesh, 3, options), InvalidInput);
+  EXPECT_THROW((void)remesh_to_vertex_count(in.mesh, target, options, 1.0), InvalidInput);
+  EXPECT_THROW((void)remesh_to_vertex_count(in.mesh, target, options, 0.01, 0), InvalidInput);
+  options.surfmesh.sizing.callback = [](const Eigen::Vector3d&) { return 0.1; };
+  EXPECT_THROW((void)remesh_to_vertex_count(in.mesh, target, options), InvalidInput);
+}
+
 TEST(Pipeline, BadInputIsNamed) {
   auto expect_invalid = [](const TriMesh& mesh, const std::string& word) {
     try {
