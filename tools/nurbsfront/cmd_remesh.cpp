@@ -2,8 +2,10 @@
 // nurbsfront remesh IN OUT: the remeshing pipeline on a mesh file or a built-in scene's
 // marching-cubes surface; prints a summary, writes the mesh, optionally the JSON report
 // and a VTK file with per-face patch id and alpha. Exits non-zero when the report has errors.
+#include <cstddef>
 #include <fstream>
 #include <iostream>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <stdexcept>
@@ -35,6 +37,7 @@ struct RemeshArgs {
   bool no_cell_grid = false;
   std::optional<double> size;
   std::optional<double> relative_size;
+  std::optional<std::size_t> vertices;
   bool adaptive = false;
   double feature_size = 0.0;
   std::optional<double> chord;
@@ -109,7 +112,8 @@ void run_remesh(RemeshArgs& args) {
   const TriMesh& input = prepared.mesh;
   options.validate();
   const double seconds_input = watch.seconds();
-  const RemeshResult result = remesh(input, options);
+  const RemeshResult result = args.vertices ? remesh_to_vertex_count(input, *args.vertices, options) : remesh(input, options);
+
   watch.restart();
   write_mesh(result.mesh, args.output);
   if (!args.vtk.empty()) {
@@ -126,7 +130,12 @@ void run_remesh(RemeshArgs& args) {
   }
   const double seconds_output = watch.seconds();
   std::cout << "input repairs: " << prepared.report.summary() << '\n'
-            << to_summary(result.report) << "input " << seconds_input << " s, output " << seconds_output << " s\n"
+            << to_summary(result.report);
+  if (args.vertices) {
+    std::cout << "output vertices " << result.mesh.n_vertices() << " (asked " << *args.vertices << "), target edge "
+              << result.report.target_size << '\n';
+  }
+  std::cout << "input " << seconds_input << " s, output " << seconds_output << " s\n"
             << "wrote " << args.output << (args.vtk.empty() ? "" : ", " + args.vtk)
             << (args.report.empty() ? "" : ", " + args.report) << '\n';
   const auto& n_self = result.report.output.topology.n_self_intersecting_pairs;
@@ -165,6 +174,11 @@ void add_remesh_command(CLI::App& app) {
   auto* relative = cmd->add_option("--relative-size", args->relative_size,
                                    "Target edge length as a multiple of the input's mean edge length (default 1.5)");
   size->excludes(relative);
+  cmd->add_option("--vertices", args->vertices,
+                  "Output vertex count to aim at: the uniform size (from --size, --relative-size or the default) is "
+                  "scaled by sqrt(vertices / N) and the remesh rerun, at most 4 runs, until within 0.5% "
+                  "(remesh_to_vertex_count; docs/pipeline.md)")
+      ->check(CLI::Range(std::size_t{4}, std::numeric_limits<std::size_t>::max()));
   cmd->add_flag("--adaptive", args->adaptive, "Curvature-adaptive sizing (chord error)");
   cmd->add_option("--feature-size", args->feature_size,
                   "Size of a patch bounded mostly by feature curves at most F x its width (2 area / perimeter); "
