@@ -2,6 +2,7 @@
 // remesh(): the stages in order, their timings and counts, and the output's report.
 #include "nurbsfront/pipeline/remesh.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <string>
@@ -185,16 +186,25 @@ RemeshResult remesh_to_vertex_count(const TriMesh& input, std::size_t target_ver
   auto miss = [target](const RemeshResult& r) { return std::abs(static_cast<double>(r.mesh.n_vertices()) - target); };
   RemeshResult best;
   bool have_best = false;
+  // vertices ~ size^-exponent: 2 for a uniform size; from the last two runs once there are
+  // two (adaptive sizing's curvature bound sqrt(8 e / kappa) with e ~ size gives about 1).
+  double exponent = 2.0;
+  double last_size = 0.0, last_vertices = 0.0;
   for (int run = 0; run < max_runs; ++run) {
     RemeshResult result = remesh(input, options);
-    const std::size_t vertices = result.mesh.n_vertices();
+    const auto vertices = static_cast<double>(result.mesh.n_vertices());
     const double size = result.report.target_size;
     if (!have_best || miss(result) < miss(best)) {
       best = std::move(result);
       have_best = true;
     }
-    if (miss(best) <= relative_tolerance * target || vertices == 0 || !(size > 0.0)) break;
-    options.surfmesh.sizing.size = size * std::sqrt(static_cast<double>(vertices) / target);
+    if (miss(best) <= relative_tolerance * target || vertices == 0.0 || !(size > 0.0)) break;
+    if (last_size > 0.0 && last_size != size && last_vertices != vertices) {
+      exponent = std::clamp(std::log(vertices / last_vertices) / std::log(last_size / size), 0.5, 3.0);
+    }
+    last_size = size;
+    last_vertices = vertices;
+    options.surfmesh.sizing.size = size * std::pow(vertices / target, 1.0 / exponent);
   }
   return best;
 }

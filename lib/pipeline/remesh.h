@@ -95,9 +95,10 @@ struct RemeshResult {
 
 //! remesh() at a given output vertex count (issue 6 compares at equal vertex count, and a
 //! decimater may stop above ours): the uniform target size is chosen from the count. The
-//! first run uses options as given (its sizing.size, or relative_size); each further run
-//! scales the size by sqrt(vertices / target_vertices) (the vertex count of a surface meshed
-//! at size h goes as 1 / h^2). Stops at the first run within relative_tolerance of the
+//! first run uses options as given (its sizing.size, or relative_size); the second scales the
+//! size by sqrt(vertices / target_vertices) (the vertex count of a surface meshed at a uniform
+//! size h goes as 1 / h^2), later ones by (vertices / target_vertices)^(1 / p) with p measured
+//! from the last two runs (in [0.5, 3]; about 1 with adaptive sizing). Stops at the first run within relative_tolerance of the
 //! target, or after max_runs runs, and returns the run closest to the target (the first of
 //! equals). Every run is a full remesh() (with distances if options.compute_distances), so
 //! a good first size (options.surfmesh.sizing.size) saves runs. Adaptive sizing and a

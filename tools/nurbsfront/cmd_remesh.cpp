@@ -176,7 +176,7 @@ void add_remesh_command(CLI::App& app) {
   size->excludes(relative);
   cmd->add_option("--vertices", args->vertices,
                   "Output vertex count to aim at: the uniform size (from --size, --relative-size or the default) is "
-                  "scaled by sqrt(vertices / N) and the remesh rerun, at most 4 runs, until within 0.5% "
+                  "scaled by (vertices / N)^(1/p) (p = 2, then measured) and the remesh rerun, at most 4 runs, until within 0.5% "
                   "(remesh_to_vertex_count; docs/pipeline.md)")
       ->check(CLI::Range(std::size_t{4}, std::numeric_limits<std::size_t>::max()));
   cmd->add_flag("--adaptive", args->adaptive, "Curvature-adaptive sizing (chord error)");
