@@ -260,7 +260,7 @@ TEST(Pipeline, CancelFromAnyStage) {
 // Issue 6 compares at equal vertex count: where the decimater stops above ours, nurbsfront
 // reruns at its count. A 40% finer count is reached within the tolerance, by a finer size.
 TEST(Pipeline, RemeshToVertexCount) {
-  const SceneInput in = scene_input("sphere", 24, SampleMode::LevelSet);
+  const SceneInput in = scene_input("sphere", 16, SampleMode::LevelSet);
   RemeshOptions options = fast_options();
   options.compute_distances = false;
   const RemeshResult first = remesh(in.mesh, options);
