@@ -173,6 +173,13 @@ struct SurfMeshOptions {
   //! obtuse 0.23 -> 0.45%; docs/surfmesh.md). 180 = never. Not with cell_grid. In [0, 180].
   //! Default 100.
   double unsmoothed_crease_angle_deg = 100.0;
+  //! Two corners joined by a curve of one input edge shorter than this many local target
+  //! sizes become one node (at their middle) before the patches are meshed, unless the
+  //! curves around them then cross in a patch plane: marching cubes makes such edges where
+  //! the iso-surface passes near a grid vertex, and both patches' fronts would grade from
+  //! that piece up to the target size (docs/surfmesh.md, "Tiny corner curves"). Corners on
+  //! the input's boundary never merge. 0 disables. In [0, 0.5]. Default 0.2.
+  double tiny_curve_merge_size = 0.2;
   //! Largest distance, in mean input edges, of a new inner node from the patch's own input
   //! faces along the patch axis: a node the fit lifts further (the fit smooths thin fins,
   //! tips and sharp bends by several edges, and such a node can pass through the
