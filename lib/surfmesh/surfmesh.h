@@ -242,7 +242,8 @@ enum class NodeKind : std::uint8_t {
 //! The meshed patches with global node ids.
 struct SurfaceMesh {
   //! Global nodes: border nodes (corners included) first, then the inner nodes patch by
-  //! patch.
+  //! patch. A corner merged into another (SurfMeshOptions::tiny_curve_merge_size) stays a
+  //! node that no curve and no triangle uses.
   std::vector<Eigen::Vector3d> nodes;
   std::vector<NodeKind> node_kind;
   //! Patch of an inner node; the curve id of a border node; -1 for a corner.
@@ -256,8 +257,9 @@ struct SurfaceMesh {
   //! on the input's boundary; stitch never flips across or smooths such curves.
   std::vector<std::uint8_t> curve_is_feature;
   //! Per curve, its global node ids along the curve (an open curve starts and ends at its
-  //! corners; a closed one does not repeat its first node). May be empty (a hand-made
-  //! SurfaceMesh): stitch then counts every corner as a feature corner.
+  //! corners; a closed one does not repeat its first node; a tiny curve whose corners
+  //! merged is {survivor, survivor}). May be empty (a hand-made SurfaceMesh): stitch then
+  //! counts every corner as a feature corner.
   std::vector<std::vector<int>> curve_nodes;
   std::vector<PatchMeshReport> patches; //!< one per patch
   double target_size = 0.0;             //!< the resolved uniform target edge length
