@@ -6,6 +6,7 @@
 #include <array>
 #include <cmath>
 #include <numbers>
+#include <numeric>
 #include <string>
 #include <utility>
 
@@ -176,30 +177,77 @@ void validate_segmentation(const TriMesh& mesh, const Segmentation& seg) {
   }
 }
 
+std::vector<int> tiny_curve_merges(const TriMesh& mesh, const Segmentation& seg, const SizeAt& size_at, double fraction) {
+  const std::size_t n_corners = seg.corners.size();
+  std::vector<int> target(n_corners);
+  std::iota(target.begin(), target.end(), 0);
+  if (!(fraction > 0.0)) return target;
+  // Corners on the input's boundary stay; so do pairs joined by a second curve (the other
+  // would become a loop).
+  std::vector<std::uint8_t> is_fixed(n_corners, 0);
+  std::map<std::pair<int, int>, int> n_joining;
+  for (const BorderCurve& curve : seg.curves) {
+    if (curve.is_closed) continue;
+    const int a = corner_index(seg.corners, curve.vertices.front());
+    const int b = corner_index(seg.corners, curve.vertices.back());
+    ++n_joining[std::minmax(a, b)];
+    if (curve.patch_right < 0) is_fixed[static_cast<std::size_t>(a)] = is_fixed[static_cast<std::size_t>(b)] = 1;
+  }
+  std::vector<std::uint8_t> is_taken(n_corners, 0);
+  for (const BorderCurve& curve : seg.curves) {
+    if (curve.is_closed || curve.vertices.size() != 2) continue;
+    const int a = corner_index(seg.corners, curve.vertices.front());
+    const int b = corner_index(seg.corners, curve.vertices.back());
+    const auto ua = static_cast<std::size_t>(a), ub = static_cast<std::size_t>(b);
+    if (a == b || is_fixed[ua] != 0 || is_fixed[ub] != 0 || is_taken[ua] != 0 || is_taken[ub] != 0 ||
+        n_joining[std::minmax(a, b)] != 1)
+      continue;
+    const Eigen::Vector3d pa = point(mesh, curve.vertices.front()), pb = point(mesh, curve.vertices.back());
+    if (!((pa - pb).norm() < fraction * size_at(0.5 * (pa + pb)))) continue;
+    is_taken[ua] = is_taken[ub] = 1;
+    target[std::max(ua, ub)] = std::min(a, b);
+  }
+  return target;
+}
+
 BorderNodes discretise_borders(const TriMesh& mesh, const Segmentation& seg, const SizeAt& size_at,
-                               const std::vector<CurveSource>& source) {
+                               const std::vector<CurveSource>& source, const std::vector<int>& corner_target) {
   BorderNodes out;
   for (const int v : seg.corners) {
     out.positions.push_back(point(mesh, v));
     out.kind.push_back(NodeKind::Corner);
     out.owner.push_back(-1);
   }
+  // The corner node of a curve end (after the merges); a survivor sits between the two.
+  auto end_node = [&](int vertex) {
+    const int k = corner_index(seg.corners, vertex);
+    return corner_target.empty() ? k : corner_target[static_cast<std::size_t>(k)];
+  };
+  for (std::size_t k = 0; k < corner_target.size(); ++k) {
+    const auto t = static_cast<std::size_t>(corner_target[k]);
+    if (t != k) out.positions[t] = 0.5 * (point(mesh, seg.corners[t]) + point(mesh, seg.corners[k]));
+  }
   // Open curves joining the same two corners: each needs 2 pieces at least, or a patch
   // bounded by two of them would get the same segment twice.
   std::vector<std::pair<int, int>> ends;
   for (const BorderCurve& curve : seg.curves)
     if (!curve.is_closed)
-      ends.emplace_back(std::minmax(curve.vertices.front(), curve.vertices.back()));
+      ends.emplace_back(std::minmax(end_node(curve.vertices.front()), end_node(curve.vertices.back())));
   std::sort(ends.begin(), ends.end());
   out.curve_nodes.resize(seg.curves.size());
   for (std::size_t c = 0; c < seg.curves.size(); ++c) {
     const BorderCurve& curve = seg.curves[c];
     std::vector<int>& nodes = out.curve_nodes[c];
+    if (!curve.is_closed && curve.vertices.front() != curve.vertices.back() &&
+        end_node(curve.vertices.front()) == end_node(curve.vertices.back())) {
+      nodes.assign(2, end_node(curve.vertices.front()));  // a merged tiny curve: no piece left
+      continue;
+    }
     int min_pieces = 1;
     if (curve.is_closed || curve.vertices.front() == curve.vertices.back()) {
       min_pieces = 3;
     } else {
-      const auto key = std::minmax(curve.vertices.front(), curve.vertices.back());
+      const std::pair<int, int> key = std::minmax(end_node(curve.vertices.front()), end_node(curve.vertices.back()));
       const auto range = std::equal_range(ends.begin(), ends.end(), std::pair<int, int>(key));
       if (range.second - range.first > 1) min_pieces = 2;
     }
@@ -213,14 +261,14 @@ BorderNodes discretise_borders(const TriMesh& mesh, const Segmentation& seg, con
       samples.assign(polyline.begin() + (curve.is_closed ? 0 : 1), polyline.end() - (curve.is_closed ? 0 : 1));
     else
       samples = resample(polyline, curve.is_closed, min_pieces, size_at);
-    if (!curve.is_closed) nodes.push_back(corner_index(seg.corners, curve.vertices.front()));
+    if (!curve.is_closed) nodes.push_back(end_node(curve.vertices.front()));
     for (const auto& q : samples) {
       nodes.push_back(static_cast<int>(out.positions.size()));
       out.positions.push_back(q);
       out.kind.push_back(NodeKind::Border);
       out.owner.push_back(static_cast<int>(c));
     }
-    if (!curve.is_closed) nodes.push_back(corner_index(seg.corners, curve.vertices.back()));
+    if (!curve.is_closed) nodes.push_back(end_node(curve.vertices.back()));
   }
   return out;
 }
@@ -235,6 +283,7 @@ PatchBorder patch_border(const Segmentation& seg, int p, const BorderNodes& bord
     // The curve walks with patch_left on its left: reversed for the right patch.
     if (curve.patch_left != p) std::reverse(chain.begin(), chain.end());
     for (std::size_t i = 0; i + 1 < chain.size(); ++i) {
+      if (chain[i] == chain[i + 1]) continue;  // a merged tiny curve (discretise_borders)
       global_edges.push_back({chain[i], chain[i + 1]});
       out.edge_curve.push_back(c);
     }

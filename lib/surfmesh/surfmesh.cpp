@@ -226,6 +226,8 @@ void SurfMeshOptions::validate() const {
     bad_option("crease_angle_deg must be in (0, 180], got " + std::to_string(crease_angle_deg));
   if (!(unsmoothed_crease_angle_deg >= 0.0 && unsmoothed_crease_angle_deg <= 180.0))
     bad_option("unsmoothed_crease_angle_deg must be in [0, 180], got " + std::to_string(unsmoothed_crease_angle_deg));
+  if (!(tiny_curve_merge_size >= 0.0 && tiny_curve_merge_size <= 0.5))
+    bad_option("tiny_curve_merge_size must be in [0, 0.5], got " + std::to_string(tiny_curve_merge_size));
   if (!(std::isfinite(max_node_offset_edges) && max_node_offset_edges >= 0.0))
     bad_option("max_node_offset_edges must be finite and >= 0, got " + std::to_string(max_node_offset_edges));
   if (threads < 0) bad_option("threads must be >= 0, got " + std::to_string(threads));
@@ -326,7 +328,26 @@ SurfaceMesh surfmesh_detail::mesh_surface(const TriMesh& input, const Segmentati
                                                              : crease_angles[c] > options.unsmoothed_crease_angle_deg;
     if (keep) source[c] = CurveSource::Input;
   }
-  BorderNodes borders = discretise_borders(input, segmentation, size_at, source);
+  // Tiny corner curves merge their corners, except where a curve at such a corner crosses
+  // or folds (below): that merge is undone first.
+  std::vector<int> corner_target =
+      options.cell_grid.enabled ? std::vector<int>() : tiny_curve_merges(input, segmentation, size_at, options.tiny_curve_merge_size);
+  auto undo_merges = [&](int c) {
+    const BorderCurve& curve = segmentation.curves[static_cast<std::size_t>(c)];
+    if (curve.is_closed || corner_target.empty()) return false;
+    bool undone = false;
+    for (const int v : {curve.vertices.front(), curve.vertices.back()}) {
+      const auto k = static_cast<std::size_t>(std::lower_bound(segmentation.corners.begin(), segmentation.corners.end(), v) -
+                                              segmentation.corners.begin());
+      for (std::size_t j = 0; j < corner_target.size(); ++j) {
+        if (static_cast<std::size_t>(corner_target[j]) == j || (j != k && static_cast<std::size_t>(corner_target[j]) != k)) continue;
+        corner_target[j] = static_cast<int>(j);
+        undone = true;
+      }
+    }
+    return undone;
+  };
+  BorderNodes borders = discretise_borders(input, segmentation, size_at, source, corner_target);
   for (bool changed = true; changed;) {
     changed = false;
     std::vector<int> bad = crossing_curves(segmentation, borders);
@@ -341,12 +362,16 @@ SurfaceMesh surfmesh_detail::mesh_surface(const TriMesh& input, const Segmentati
     std::sort(bad.begin(), bad.end());
     bad.erase(std::unique(bad.begin(), bad.end()), bad.end());
     for (const int c : bad) {
+      if (undo_merges(c)) {
+        changed = true;
+        continue;
+      }
       CurveSource& s = source[static_cast<std::size_t>(c)];
       if (s == CurveSource::InputVertices) continue;  // crossing anyway: the patch will fail
       s = s == CurveSource::Smoothed ? CurveSource::Input : CurveSource::InputVertices;
       changed = true;
     }
-    if (changed) borders = discretise_borders(input, segmentation, size_at, source);
+    if (changed) borders = discretise_borders(input, segmentation, size_at, source, corner_target);
   }
   report_progress(options.progress, "surfmesh: borders", 1.0);
 

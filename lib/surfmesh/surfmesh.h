@@ -173,6 +173,13 @@ struct SurfMeshOptions {
   //! obtuse 0.23 -> 0.45%; docs/surfmesh.md). 180 = never. Not with cell_grid. In [0, 180].
   //! Default 100.
   double unsmoothed_crease_angle_deg = 100.0;
+  //! Two corners joined by a curve of one input edge shorter than this many local target
+  //! sizes become one node (at their middle) before the patches are meshed, unless the
+  //! curves around them then cross in a patch plane: marching cubes makes such edges where
+  //! the iso-surface passes near a grid vertex, and both patches' fronts would grade from
+  //! that piece up to the target size (docs/surfmesh.md, "Tiny corner curves"). Corners on
+  //! the input's boundary never merge. 0 disables. In [0, 0.5]. Default 0.2.
+  double tiny_curve_merge_size = 0.2;
   //! Largest distance, in mean input edges, of a new inner node from the patch's own input
   //! faces along the patch axis: a node the fit lifts further (the fit smooths thin fins,
   //! tips and sharp bends by several edges, and such a node can pass through the
@@ -235,7 +242,8 @@ enum class NodeKind : std::uint8_t {
 //! The meshed patches with global node ids.
 struct SurfaceMesh {
   //! Global nodes: border nodes (corners included) first, then the inner nodes patch by
-  //! patch.
+  //! patch. A corner merged into another (SurfMeshOptions::tiny_curve_merge_size) stays a
+  //! node that no curve and no triangle uses.
   std::vector<Eigen::Vector3d> nodes;
   std::vector<NodeKind> node_kind;
   //! Patch of an inner node; the curve id of a border node; -1 for a corner.
@@ -249,8 +257,9 @@ struct SurfaceMesh {
   //! on the input's boundary; stitch never flips across or smooths such curves.
   std::vector<std::uint8_t> curve_is_feature;
   //! Per curve, its global node ids along the curve (an open curve starts and ends at its
-  //! corners; a closed one does not repeat its first node). May be empty (a hand-made
-  //! SurfaceMesh): stitch then counts every corner as a feature corner.
+  //! corners; a closed one does not repeat its first node; a tiny curve whose corners
+  //! merged is {survivor, survivor}). May be empty (a hand-made SurfaceMesh): stitch then
+  //! counts every corner as a feature corner.
   std::vector<std::vector<int>> curve_nodes;
   std::vector<PatchMeshReport> patches; //!< one per patch
   double target_size = 0.0;             //!< the resolved uniform target edge length

@@ -71,9 +71,21 @@ enum class CurveSource : std::uint8_t {
 //! curves from a corner to itself at least 3; an open curve sharing both ends with another
 //! curve at least 2, so no patch gets a doubled segment), from the polyline `source` says
 //! (one entry per curve). Short loops are resampled from their input positions, never
-//! from the smoothed ones.
+//! from the smoothed ones. `corner_target` (empty: none) merges corners (tiny_curve_merges):
+//! a merged corner's curves end at its survivor, which sits at the middle of the two, and
+//! the curve between them becomes the one degenerate piece {survivor, survivor}.
 [[nodiscard]] BorderNodes discretise_borders(const TriMesh& mesh, const Segmentation& segmentation,
-                                             const SizeAt& size_at, const std::vector<CurveSource>& source);
+                                             const SizeAt& size_at, const std::vector<CurveSource>& source,
+                                             const std::vector<int>& corner_target = {});
+
+//! Per corner (index into Segmentation::corners): the corner it merges into, itself when
+//! none. Two corners merge when a curve of one input edge joins them, shorter than
+//! `fraction` x size_at at its middle, no other curve joins the same two, neither is on the
+//! input's boundary and neither merges with a third (the lower index survives). Without
+//! this the 2D fronts of both patches grade from that piece up to the target size, a
+//! cascade of tiny, often obtuse triangles (docs/surfmesh.md, "Tiny corner curves").
+[[nodiscard]] std::vector<int> tiny_curve_merges(const TriMesh& mesh, const Segmentation& segmentation,
+                                                 const SizeAt& size_at, double fraction);
 
 //! Border of one patch as directed edges (domain on the left) between its border nodes.
 struct PatchBorder {

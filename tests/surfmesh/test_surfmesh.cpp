@@ -9,7 +9,9 @@
 
 #include <cmath>
 #include <algorithm>
+#include <array>
 #include <functional>
+#include <limits>
 #include <map>
 #include <numbers>
 #include <set>
@@ -36,11 +38,22 @@ TriMesh scene_mesh(const std::string& name, int resolution, SampleMode mode) {
   return to_trimesh(marching_cubes(grid, scene_marching_cubes_options(mode)));
 }
 
+// The triangles as a soup of the nodes they use (a merged corner is in none).
 TriangleSoup as_soup(const SurfaceMesh& sm) {
   TriangleSoup soup;
-  soup.points = sm.nodes;
-  for (const auto& t : sm.triangles)
-    soup.triangles.push_back({static_cast<std::uint32_t>(t[0]), static_cast<std::uint32_t>(t[1]), static_cast<std::uint32_t>(t[2])});
+  std::vector<std::uint32_t> index(sm.nodes.size(), std::numeric_limits<std::uint32_t>::max());
+  for (const auto& t : sm.triangles) {
+    std::array<std::uint32_t, 3> u{};
+    for (std::size_t k = 0; k < 3; ++k) {
+      std::uint32_t& i = index[static_cast<std::size_t>(t[k])];
+      if (i == std::numeric_limits<std::uint32_t>::max()) {
+        i = static_cast<std::uint32_t>(soup.points.size());
+        soup.points.push_back(sm.nodes[static_cast<std::size_t>(t[k])]);
+      }
+      u[k] = i;
+    }
+    soup.triangles.push_back(u);
+  }
   return soup;
 }
 
@@ -61,7 +74,16 @@ void expect_consistent(const Segmentation& seg, const SurfaceMesh& sm) {
       ASSERT_LT(v, static_cast<int>(sm.nodes.size()));
       node_patches[static_cast<std::size_t>(v)].insert(sm.triangle_patch[t]);
     }
+  // A corner merged into another (SurfMeshOptions::tiny_curve_merge_size) ends no curve
+  // and is in no triangle.
+  std::vector<std::uint8_t> in_curve(sm.nodes.size(), 0);
+  for (const auto& nodes : sm.curve_nodes)
+    for (const int g : nodes) in_curve[static_cast<std::size_t>(g)] = 1;
   for (std::size_t v = 0; v < sm.nodes.size(); ++v) {
+    if (sm.node_kind[v] == NodeKind::Corner && in_curve[v] == 0) {
+      EXPECT_TRUE(node_patches[v].empty()) << "merged corner " << v << " is used";
+      continue;
+    }
     EXPECT_FALSE(node_patches[v].empty()) << "node " << v << " is unused";
     switch (sm.node_kind[v]) {
       case NodeKind::Inner:
@@ -364,6 +386,63 @@ TEST(Surfmesh, NeighbourTouchingTheOuterLoopAtACorner) {
   const std::vector<double> area = flat_patch_areas(sm, 2);
   EXPECT_NEAR(area[0] + area[1], 1.0, 1e-9);
   EXPECT_NEAR(area[1], 5.0 / (2.0 * kN * kN), 0.2 * 5.0 / (2.0 * kN * kN));  // chords cut its corners
+}
+
+TEST(Surfmesh, TinyCornerCurveMergesItsCorners) {
+  // A flat 8 x 8 grid whose row of cells j = 4 is squeezed to a height of 0.002 (y = 0.5 to
+  // 0.502). Patches: left below y = 0.502 (0), right above y = 0.5 (1), right below (2), left
+  // above (3). The corners (0.5, 0.5) and (0.5, 0.502) are then joined by a curve of one
+  // input edge (patches 0 | 1), 0.016 target edges long (below the default 0.2): merged, no output edge is that
+  // short, and the fronts do not grade from it (fewer triangles, a larger smallest angle).
+  constexpr int kN = 8;
+  TriMesh mesh = to_trimesh(test::grid_patch(kN, kN));
+  for (auto v : mesh.vertices()) {
+    auto q = mesh.point(v);
+    const double y = q[1] * kN;  // row index
+    q[1] = y <= 4.5 ? q[1] : 0.502 + (y - 5.0) * (0.498 / 3.0);
+    mesh.set_point(v, q);
+  }
+  std::vector<int> face_patch(mesh.n_faces(), 0);
+  for (int j = 0; j < kN; ++j)
+    for (int i = 0; i < kN; ++i) {
+      const bool right = i >= kN / 2;
+      const int patch = j < 4 ? (right ? 2 : 0) : j == 4 ? (right ? 1 : 0) : (right ? 1 : 3);
+      face_patch[static_cast<std::size_t>(2 * (j * kN + i))] = face_patch[static_cast<std::size_t>(2 * (j * kN + i) + 1)] = patch;
+    }
+  const Segmentation seg = labelled_segmentation(mesh, face_patch, 4);
+  SurfMeshOptions options;
+  options.sizing.size = 1.0 / kN;
+  const std::vector<int> target =
+      surfmesh_detail::tiny_curve_merges(mesh, seg, [](const Eigen::Vector3d&) { return 1.0 / kN; }, options.tiny_curve_merge_size);
+  int n_merged = 0;
+  for (std::size_t k = 0; k < target.size(); ++k)
+    if (target[k] != static_cast<int>(k)) {
+      ++n_merged;
+      const Eigen::Vector3d a = to_eigen(mesh.point(TriMesh::VertexHandle(seg.corners[k])));
+      const Eigen::Vector3d b = to_eigen(mesh.point(TriMesh::VertexHandle(seg.corners[static_cast<std::size_t>(target[k])])));
+      EXPECT_NEAR(a.x(), 0.5, 1e-12);
+      EXPECT_NEAR(b.x(), 0.5, 1e-12);
+      EXPECT_NEAR((a - b).norm(), 0.002, 1e-9);
+    }
+  EXPECT_EQ(n_merged, 1);
+
+  SurfMeshOptions kept = options;
+  kept.tiny_curve_merge_size = 0.0;
+  const SurfaceMesh before = mesh_surface(mesh, seg, kept);
+  const SurfaceMesh after = mesh_surface(mesh, seg, options);
+  std::array<SoupFigures, 2> f;
+  for (int i = 0; i < 2; ++i) {
+    const SurfaceMesh& sm = i == 0 ? before : after;
+    expect_consistent(seg, sm);
+    f[static_cast<std::size_t>(i)] = figures(sm);
+    EXPECT_EQ(f[static_cast<std::size_t>(i)].euler, 1);
+    const std::vector<double> area = flat_patch_areas(sm, 4);
+    EXPECT_NEAR(area[0] + area[1] + area[2] + area[3], 1.0, 1e-3);  // chords may cut the square's corners
+  }
+  EXPECT_LT(f[0].min_edge, 0.0021);  // the tiny piece itself
+  EXPECT_GT(f[1].min_edge, 0.1 / kN);
+  EXPECT_LT(after.triangles.size(), before.triangles.size());
+  EXPECT_GT(f[1].min_alpha, f[0].min_alpha);
 }
 
 TEST(Surfmesh, SmallPatchesFitTheirOwnVerticesOnly) {

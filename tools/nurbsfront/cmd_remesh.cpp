@@ -46,6 +46,7 @@ struct RemeshArgs {
   std::optional<double> crease;
   bool bevel_creases = false;
   std::optional<double> unsmoothed_crease_angle;
+  std::optional<double> tiny_curve_merge;
   bool smoothed_boundary = false;
   std::optional<unsigned> threads;
   std::string report;
@@ -95,6 +96,7 @@ void run_remesh(RemeshArgs& args) {
   if (args.bevel_creases) options.segment.bevel_creases = true;
   if (args.unsmoothed_crease_angle) options.surfmesh.unsmoothed_crease_angle_deg = *args.unsmoothed_crease_angle;
   if (args.smoothed_boundary) options.surfmesh.unsmoothed_boundary_curves = false;
+  if (args.tiny_curve_merge) options.surfmesh.tiny_curve_merge_size = *args.tiny_curve_merge;
   if (args.threads) options.set_threads(*args.threads);
   if (!args.cell_grid.empty()) {
     if (!args.scene.empty()) throw InvalidInput("remesh: --cell-grid applies to an input file (an occupancy scene sets it itself)");
@@ -195,6 +197,9 @@ void add_remesh_command(CLI::App& app) {
                   "Crease curves sharper than this (deg, 3-ring normals) keep the input's crease instead of "
                   "its smoothed curve (default 100; 0 = every crease: closer at bevelled edges, more obtuse "
                   "triangles; 180 = never; docs/surfmesh.md)");
+  cmd->add_option("--tiny-curve-merge", args->tiny_curve_merge,
+                  "Merge the two corners of a one-edge border curve shorter than this many target edges "
+                  "(default 0.2; 0 = never; docs/surfmesh.md)");
   cmd->add_flag("--smoothed-boundary", args->smoothed_boundary,
                 "Place the border nodes of the input's boundary on its smoothed curve (rounds its corners; "
                 "the default keeps the input's boundary polyline)");
