@@ -6,6 +6,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <numbers>
 #include <thread>
 #include <vector>
@@ -38,12 +39,15 @@ double alpha_with_area(const Vec& a, const Vec& b, const Vec& c, double twice_ar
 // alpha (as alpha_with_area) and the sine of the smallest interior angle of (a, b, c):
 // twice the area over the product of the two longest edges (the smallest angle is below
 // 90 deg, so its sine orders it; 0 for a degenerate triangle), from one set of squared
-// edge lengths. twice_area = |area_vector(a, b, c)|.
-std::array<double, 2> alpha_and_min_angle_sine(const Vec& a, const Vec& b, const Vec& c, double twice_area) {
+// edge lengths. twice_area = |area_vector(a, b, c)|. With alpha above skip_sine_above the
+// sine is not computed and 1 is returned in its place (see Optimiser::alpha_sine_skip_).
+std::array<double, 2> alpha_and_min_angle_sine(const Vec& a, const Vec& b, const Vec& c, double twice_area,
+                                               double skip_sine_above = std::numeric_limits<double>::infinity()) {
   std::array<double, 3> l2{(b - a).squaredNorm(), (c - b).squaredNorm(), (a - c).squaredNorm()};
   const double sum_sq = l2[0] + l2[1] + l2[2];
   const double area = 0.5 * twice_area;
   const double alpha = sum_sq > 0.0 ? 4.0 * std::numbers::sqrt3 * area / sum_sq : 0.0;
+  if (alpha > skip_sine_above) return {alpha, 1.0};
   std::sort(l2.begin(), l2.end());
   const double product = std::sqrt(l2[1] * l2[2]);
   return {alpha, product > 0.0 ? twice_area / product : 0.0};
@@ -68,6 +72,7 @@ class Optimiser {
     min_double_area_ = 2.0 * tolerance::kDegenerateAreaRelative * diagonal * diagonal;
     cos_dihedral_ = std::cos(options.max_flip_dihedral_deg * std::numbers::pi / 180.0);
     sin_angle_floor_ = std::sin(options.angle_floor_deg * std::numbers::pi / 180.0);
+    alpha_sine_skip_ = std::numbers::sqrt3 * (sin_angle_floor_ + kSineSkipMargin);
     classify_nodes(result.vertex_node);
   }
 
@@ -157,7 +162,7 @@ class Optimiser {
           ok = false;
           break;
         }
-        const auto [alpha, sine] = alpha_and_min_angle_sine(q, t.b, t.c, l_new);
+        const auto [alpha, sine] = alpha_and_min_angle_sine(q, t.b, t.c, l_new, alpha_sine_skip_);
         new_min = std::min(new_min, alpha);
         new_sine = std::min(new_sine, sine);
       }
@@ -301,6 +306,14 @@ class Optimiser {
   double min_double_area_ = 0.0;
   double cos_dihedral_ = 1.0;
   double sin_angle_floor_ = 0.0;
+  // The sine of a triangle's smallest angle is at least alpha / sqrt(3) (twice the area is
+  // alpha (l1^2 + l2^2 + l3^2) / (2 sqrt(3)), and the two longest edges' squares sum to at
+  // least twice their product). A new ring triangle with alpha above sqrt(3) (floor + a
+  // margin far above the rounding) is surely not below the angle floor: its sine is not
+  // computed (1 in its place). new_sine is compared only with the floor, and below the
+  // floor it is the smallest computed sine: the same decisions as with every sine.
+  static constexpr double kSineSkipMargin = 1e-9;
+  double alpha_sine_skip_ = 0.0;
 };
 
 }  // namespace
