@@ -337,6 +337,26 @@ TopologyReport compute_topology(const TriangleSoup& soup, std::vector<EdgeEntry>
   return r;
 }
 
+// False only when triangle (a, b, c) surely changes neither extreme angle: the sine of its
+// smallest angle (twice the area over the product of the two longest edges) exceeds
+// sin_min_bound (>= sin 30 deg) and the cosine of its largest angle (law of cosines at the
+// longest edge) exceeds cos_max_bound, both by far more than their rounding and
+// triangle_angles_deg()'s (with every angle above 30 deg the edges differ by at most 2x, so
+// the cosine is off by a few ulps). The triangles it lets through are measured with
+// triangle_angles_deg() as before, so the report does not change; most are spared its
+// three atan2.
+bool may_change_angle_extremes(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c,
+                               double sin_min_bound, double cos_max_bound) {
+  constexpr double kMargin = 1e-9;
+  std::array<double, 3> l2{(b - a).squaredNorm(), (c - b).squaredNorm(), (a - c).squaredNorm()};
+  std::sort(l2.begin(), l2.end());
+  const double product = std::sqrt(l2[1] * l2[2]);
+  if (!(product > 0.0)) return true;
+  if (!((b - a).cross(c - a).norm() / product > sin_min_bound + kMargin)) return true;
+  const double cos_largest = (l2[0] + l2[1] - l2[2]) / (2.0 * std::sqrt(l2[0] * l2[1]));
+  return !(cos_largest > cos_max_bound + kMargin);
+}
+
 QualityReport compute_quality(const TriangleSoup& soup, const std::vector<double>& edge_lengths) {
   QualityReport q;
   const std::size_t n = soup.triangles.size();
@@ -349,6 +369,9 @@ QualityReport compute_quality(const TriangleSoup& soup, const std::vector<double
   double alpha_sum = 0.0;
   double min_angle = std::numeric_limits<double>::infinity(), max_angle = 0.0;
   std::size_t n_obtuse = 0, n_small = 0;
+  // Triangles surely inside [max(min_angle, 30 deg), max_angle] change neither extreme nor
+  // the small-angle count: not measured (before the first triangle, every one is).
+  double sin_min_bound = 2.0, cos_max_bound = 2.0;
   for (std::size_t f = 0; f < n; ++f) {
     const auto& t = soup.triangles[f];
     const Eigen::Vector3d& a = soup.points[t[0]];
@@ -356,14 +379,17 @@ QualityReport compute_quality(const TriangleSoup& soup, const std::vector<double
     const Eigen::Vector3d& c = soup.points[t[2]];
     alpha[f] = triangle_alpha(a, b, c);
     alpha_sum += alpha[f];
+    // Obtuse by the sign of the dot products (exact for right angles on exact data).
+    if ((b - a).dot(c - a) < 0.0 || (c - b).dot(a - b) < 0.0 || (a - c).dot(b - c) < 0.0) ++n_obtuse;
+    if (!may_change_angle_extremes(a, b, c, sin_min_bound, cos_max_bound)) continue;
     const auto angles = triangle_angles_deg(a, b, c);
     const double lo = std::min({angles[0], angles[1], angles[2]});
     const double hi = std::max({angles[0], angles[1], angles[2]});
     min_angle = std::min(min_angle, lo);
     max_angle = std::max(max_angle, hi);
-    // Obtuse by the sign of the dot products (exact for right angles on exact data).
-    if ((b - a).dot(c - a) < 0.0 || (c - b).dot(a - b) < 0.0 || (a - c).dot(b - c) < 0.0) ++n_obtuse;
     if (lo < kSmallAngleDeg) ++n_small;
+    sin_min_bound = std::sin(std::max(min_angle, kSmallAngleDeg) / kRadToDeg);
+    cos_max_bound = std::cos(max_angle / kRadToDeg);
   }
   q.alpha_mean = alpha_sum / static_cast<double>(n);
   const auto rank = static_cast<std::size_t>(std::floor(kPercentileFraction * static_cast<double>(n - 1)));

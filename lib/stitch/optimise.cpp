@@ -1,11 +1,15 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // Cross-border optimisation of the stitched mesh: edge flips and smoothing constrained to
 // the fitted patch surfaces. Both sweeps run in index order (Gauss-Seidel), so the
-// result depends only on the input.
+// result depends only on the input (the flips' tests run in parallel, with the same flips).
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdint>
+#include <limits>
 #include <numbers>
+#include <thread>
+#include <vector>
 
 #include <Eigen/Geometry>
 
@@ -35,12 +39,15 @@ double alpha_with_area(const Vec& a, const Vec& b, const Vec& c, double twice_ar
 // alpha (as alpha_with_area) and the sine of the smallest interior angle of (a, b, c):
 // twice the area over the product of the two longest edges (the smallest angle is below
 // 90 deg, so its sine orders it; 0 for a degenerate triangle), from one set of squared
-// edge lengths. twice_area = |area_vector(a, b, c)|.
-std::array<double, 2> alpha_and_min_angle_sine(const Vec& a, const Vec& b, const Vec& c, double twice_area) {
+// edge lengths. twice_area = |area_vector(a, b, c)|. With alpha above skip_sine_above the
+// sine is not computed and 1 is returned in its place (see Optimiser::alpha_sine_skip_).
+std::array<double, 2> alpha_and_min_angle_sine(const Vec& a, const Vec& b, const Vec& c, double twice_area,
+                                               double skip_sine_above = std::numeric_limits<double>::infinity()) {
   std::array<double, 3> l2{(b - a).squaredNorm(), (c - b).squaredNorm(), (a - c).squaredNorm()};
   const double sum_sq = l2[0] + l2[1] + l2[2];
   const double area = 0.5 * twice_area;
   const double alpha = sum_sq > 0.0 ? 4.0 * std::numbers::sqrt3 * area / sum_sq : 0.0;
+  if (alpha > skip_sine_above) return {alpha, 1.0};
   std::sort(l2.begin(), l2.end());
   const double product = std::sqrt(l2[1] * l2[2]);
   return {alpha, product > 0.0 ? twice_area / product : 0.0};
@@ -65,39 +72,46 @@ class Optimiser {
     min_double_area_ = 2.0 * tolerance::kDegenerateAreaRelative * diagonal * diagonal;
     cos_dihedral_ = std::cos(options.max_flip_dihedral_deg * std::numbers::pi / 180.0);
     sin_angle_floor_ = std::sin(options.angle_floor_deg * std::numbers::pi / 180.0);
+    alpha_sine_skip_ = std::numbers::sqrt3 * (sin_angle_floor_ + kSineSkipMargin);
     classify_nodes(result.vertex_node);
   }
 
+  // One sweep of flips in edge order. With two or more threads every edge's flip test
+  // (all but OpenMesh's is_flip_ok(), which looks beyond the edge's two triangles) is first
+  // taken in parallel on the mesh as it is at the start of the sweep; the sweep then goes
+  // through the edges in order as before, testing again only the edges of the two
+  // triangles of a flip made earlier in the sweep (positions do not change during the
+  // sweep, so no other edge's test can change). The flips are those of the serial sweep
+  // for any thread count.
   std::size_t flip_sweep() {
+    const unsigned n_threads = options_.n_threads;
+    const std::size_t n_edges = mesh_.n_edges();
+    std::vector<std::uint8_t> passes, retest;
+    if (n_threads >= 2) {
+      passes.assign(n_edges, 0);
+      retest.assign(n_edges, 0);
+      const std::size_t chunk = (n_edges + n_threads - 1) / n_threads;
+      auto test_range = [this, &passes](std::size_t begin, std::size_t end) {
+        for (std::size_t i = begin; i < end; ++i) passes[i] = passes_flip_test(TriMesh::EdgeHandle(static_cast<int>(i))) ? 1 : 0;
+      };
+      std::vector<std::thread> workers;
+      for (unsigned t = 1; t < n_threads && t * chunk < n_edges; ++t)
+        workers.emplace_back(test_range, t * chunk, std::min(n_edges, (t + 1) * chunk));
+      test_range(0, std::min(n_edges, chunk));
+      for (auto& w : workers) w.join();
+    }
     std::size_t n_flips = 0;
     for (auto e : mesh_.edges()) {
-      // OpenMesh's is_flip_ok() (it circulates a vertex) is asked last: few edges pass the
-      // quality test. Until then c and d may be one vertex; the area test then refuses.
-      if (mesh_.is_boundary(e) || is_locked(e)) continue;
-      const auto h0 = mesh_.halfedge_handle(e, 0);
-      const auto h1 = mesh_.halfedge_handle(e, 1);
-      const auto va = mesh_.from_vertex_handle(h0);
-      const auto vb = mesh_.to_vertex_handle(h0);
-      const auto vc = mesh_.to_vertex_handle(mesh_.next_halfedge_handle(h0));
-      const auto vd = mesh_.to_vertex_handle(mesh_.next_halfedge_handle(h1));
-      const Vec a = point(mesh_, va), b = point(mesh_, vb), c = point(mesh_, vc), d = point(mesh_, vd);
-      // Old triangles (a, b, c), (b, a, d); new ones (a, d, c), (d, b, c).
-      const Vec n0 = area_vector(a, b, c), n1 = area_vector(b, a, d);
-      const Vec n2 = area_vector(a, d, c), n3 = area_vector(d, b, c);
-      const double l2 = n2.norm(), l3 = n3.norm();
-      if (l2 <= min_double_area_ || l3 <= min_double_area_) continue;
-      const double l0 = n0.norm(), l1 = n1.norm();
-      if (!within_dihedral(n0, n1, l0, l1) || !within_dihedral(n2, n3, l2, l3)) continue;
-      // n / |n| as Eigen's normalized() (a zero vector stays zero).
-      const Vec old_normal = (l0 > 0.0 ? Vec(n0 / l0) : n0) + (l1 > 0.0 ? Vec(n1 / l1) : n1);
-      if (n2.dot(old_normal) <= 0.0 || n3.dot(old_normal) <= 0.0) continue;
-      // The smaller new alpha must exceed the bound: the second new triangle is measured
-      // only when the first does.
-      const double bound =
-          (1.0 + options_.flip_gain) * std::min(alpha_with_area(a, b, c, l0), alpha_with_area(b, a, d, l1));
-      if (!(alpha_with_area(a, d, c, l2) > bound) || !(alpha_with_area(d, b, c, l3) > bound) || !mesh_.is_flip_ok(e)) continue;
+      const auto i = static_cast<std::size_t>(e.idx());
+      const bool passes_test = passes.empty() || retest[i] != 0 ? passes_flip_test(e) : passes[i] != 0;
+      if (!passes_test || !mesh_.is_flip_ok(e)) continue;
       mesh_.flip(e);
       ++n_flips;
+      if (!retest.empty()) {
+        for (const auto h : {mesh_.halfedge_handle(e, 0), mesh_.halfedge_handle(e, 1)}) {
+          for (auto g : mesh_.fh_range(mesh_.face_handle(h))) retest[static_cast<std::size_t>(mesh_.edge_handle(g).idx())] = 1;
+        }
+      }
     }
     return n_flips;
   }
@@ -148,7 +162,7 @@ class Optimiser {
           ok = false;
           break;
         }
-        const auto [alpha, sine] = alpha_and_min_angle_sine(q, t.b, t.c, l_new);
+        const auto [alpha, sine] = alpha_and_min_angle_sine(q, t.b, t.c, l_new, alpha_sine_skip_);
         new_min = std::min(new_min, alpha);
         new_sine = std::min(new_sine, sine);
       }
@@ -224,6 +238,35 @@ class Optimiser {
     }
   }
 
+  // Every test of a flip of e but OpenMesh's is_flip_ok() (it circulates a vertex and is
+  // asked last: few edges pass the quality test). c and d may be one vertex here; the area
+  // test then refuses. Reads the mesh only.
+  bool passes_flip_test(TriMesh::EdgeHandle e) const {
+    if (mesh_.is_boundary(e) || is_locked(e)) return false;
+    const auto h0 = mesh_.halfedge_handle(e, 0);
+    const auto h1 = mesh_.halfedge_handle(e, 1);
+    const auto va = mesh_.from_vertex_handle(h0);
+    const auto vb = mesh_.to_vertex_handle(h0);
+    const auto vc = mesh_.to_vertex_handle(mesh_.next_halfedge_handle(h0));
+    const auto vd = mesh_.to_vertex_handle(mesh_.next_halfedge_handle(h1));
+    const Vec a = point(mesh_, va), b = point(mesh_, vb), c = point(mesh_, vc), d = point(mesh_, vd);
+    // Old triangles (a, b, c), (b, a, d); new ones (a, d, c), (d, b, c).
+    const Vec n0 = area_vector(a, b, c), n1 = area_vector(b, a, d);
+    const Vec n2 = area_vector(a, d, c), n3 = area_vector(d, b, c);
+    const double l2 = n2.norm(), l3 = n3.norm();
+    if (l2 <= min_double_area_ || l3 <= min_double_area_) return false;
+    const double l0 = n0.norm(), l1 = n1.norm();
+    if (!within_dihedral(n0, n1, l0, l1) || !within_dihedral(n2, n3, l2, l3)) return false;
+    // n / |n| as Eigen's normalized() (a zero vector stays zero).
+    const Vec old_normal = (l0 > 0.0 ? Vec(n0 / l0) : n0) + (l1 > 0.0 ? Vec(n1 / l1) : n1);
+    if (n2.dot(old_normal) <= 0.0 || n3.dot(old_normal) <= 0.0) return false;
+    // The smaller new alpha must exceed the bound: the second new triangle is measured
+    // only when the first does.
+    const double bound =
+        (1.0 + options_.flip_gain) * std::min(alpha_with_area(a, b, c, l0), alpha_with_area(b, a, d, l1));
+    return alpha_with_area(a, d, c, l2) > bound && alpha_with_area(d, b, c, l3) > bound;
+  }
+
   // An edge between two patches lies on a border curve; it may flip only when the curve
   // is known (one end is a border node) and is not a feature.
   bool is_locked(TriMesh::EdgeHandle e) const {
@@ -263,6 +306,14 @@ class Optimiser {
   double min_double_area_ = 0.0;
   double cos_dihedral_ = 1.0;
   double sin_angle_floor_ = 0.0;
+  // The sine of a triangle's smallest angle is at least alpha / sqrt(3) (twice the area is
+  // alpha (l1^2 + l2^2 + l3^2) / (2 sqrt(3)), and the two longest edges' squares sum to at
+  // least twice their product). A new ring triangle with alpha above sqrt(3) (floor + a
+  // margin far above the rounding) is surely not below the angle floor: its sine is not
+  // computed (1 in its place). new_sine is compared only with the floor, and below the
+  // floor it is the smallest computed sine: the same decisions as with every sine.
+  static constexpr double kSineSkipMargin = 1e-9;
+  double alpha_sine_skip_ = 0.0;
 };
 
 }  // namespace

@@ -6,6 +6,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <future>
 #include <limits>
 #include <numbers>
 #include <numeric>
@@ -434,6 +435,12 @@ StitchResult stitch_impl(const SurfaceMesh& surface, const TriMesh* input, const
   report.n_input_triangles = surface.triangles.size();
   report_progress(options.progress, "stitch: assemble", 0.0);
   Stopwatch watch;
+  // With two or more threads the input's component signatures (only read from the input)
+  // are taken on a helper thread while this one stitches; the same values either way.
+  std::future<std::vector<ComponentSignature>> input_components;
+  if (input != nullptr && options.n_threads >= 2) {
+    input_components = std::async(std::launch::async, [input] { return component_signatures(*input); });
+  }
 
   // 1. Assembly by id.
   assemble(surface.nodes, surface.triangles, surface.triangle_patch, result, report);
@@ -502,6 +509,16 @@ StitchResult stitch_impl(const SurfaceMesh& surface, const TriMesh* input, const
     };
   }
   if (!soup) soup = to_soup(mesh);
+  // The mesh is final here: with two or more threads its component signatures and the
+  // figures away from features are taken on a helper thread while this one makes the
+  // report (they write other members of the report).
+  std::future<std::vector<ComponentSignature>> output_components;
+  if (options.n_threads >= 2) {
+    output_components = std::async(std::launch::async, [&feature, &result, &report] {
+      measure_away_from_features(feature, result, report);
+      return component_signatures(result.mesh);
+    });
+  }
   report.output = mesh_report(*soup, check);
   soup.reset();
   if (options.check_self_intersections) report.output.topology.n_self_intersecting_pairs = pairs.size();
@@ -525,10 +542,14 @@ StitchResult stitch_impl(const SurfaceMesh& surface, const TriMesh* input, const
                             " self-intersecting triangle pairs");
   }
   if (mesh.n_faces() == 0 && !surface.triangles.empty()) report.errors.push_back("output has no triangles");
-  measure_away_from_features(feature, result, report);
-  report.output_components = component_signatures(mesh);
+  if (output_components.valid()) {
+    report.output_components = output_components.get();
+  } else {
+    measure_away_from_features(feature, result, report);
+    report.output_components = component_signatures(mesh);
+  }
   if (input != nullptr) {
-    report.input_components = component_signatures(*input);
+    report.input_components = input_components.valid() ? input_components.get() : component_signatures(*input);
     compare_with_input(report);
   }
   report.seconds_verify = watch.seconds();

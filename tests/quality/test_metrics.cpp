@@ -1,8 +1,10 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <random>
 
 #include <Eigen/Geometry>
 
@@ -119,6 +121,41 @@ TEST(QualityMetrics, ObtuseAndSmallAngleFractions) {
   EXPECT_DOUBLE_EQ(r.quality.obtuse_fraction, 0.5);
   EXPECT_DOUBLE_EQ(r.quality.small_angle_fraction, 0.5);
   EXPECT_NEAR(r.quality.max_angle_deg, 180.0 - 2.0 * std::atan(0.25) * 180.0 / std::numbers::pi, 1e-10);
+}
+
+TEST(QualityMetrics, AngleExtremesEqualEveryTrianglesAngles) {
+  // The report measures the angles of only the triangles that may change the extremes or
+  // the small-angle count: its figures must be exactly those of every triangle's angles.
+  // Triangles of every shape (near-equilateral, right, obtuse up to ~180 deg, slivers
+  // near 0 deg, angles near 30 deg), in an order where the extremes move several times.
+  TriangleSoup s;
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  for (int i = 0; i < 2000; ++i) {
+    const double spread = std::pow(10.0, -6.0 * std::abs(unit(rng)));  // third corner's distance off the base
+    const V o(3.0 * i, unit(rng), unit(rng));
+    const V a = o, b = o + V(1.0 + 0.5 * unit(rng), 0.2 * unit(rng), 0);
+    V c = o + V(0.5 + 1.5 * unit(rng), spread * (1.0 + unit(rng)), 0.3 * unit(rng) * spread);
+    if (i % 7 == 0) c = o + V(0.5 * (b - a).x(), std::tan(std::numbers::pi / 6.0) * 0.5 * (b - a).x() * (1.0 + 1e-12 * unit(rng)), 0);
+    const auto base = static_cast<std::uint32_t>(s.points.size());
+    s.points.insert(s.points.end(), {a, b, c});
+    s.triangles.push_back({base, base + 1, base + 2});
+  }
+  double lo = 180.0, hi = 0.0;
+  std::size_t n_small = 0;
+  for (const auto& t : s.triangles) {
+    const auto angles = triangle_angles_deg(s.points[t[0]], s.points[t[1]], s.points[t[2]]);
+    const double smallest = std::min({angles[0], angles[1], angles[2]});
+    lo = std::min(lo, smallest);
+    hi = std::max({hi, angles[0], angles[1], angles[2]});
+    if (smallest < 30.0) ++n_small;
+  }
+  ASSERT_GT(n_small, 0u);
+  ASSERT_LT(n_small, s.triangles.size());
+  const MeshReport r = mesh_report(s);
+  EXPECT_EQ(r.quality.min_angle_deg, lo);
+  EXPECT_EQ(r.quality.max_angle_deg, hi);
+  EXPECT_EQ(r.quality.small_angle_fraction, static_cast<double>(n_small) / static_cast<double>(s.triangles.size()));
 }
 
 TEST(QualityMetrics, AlphaFirstPercentileOfManyFaces) {

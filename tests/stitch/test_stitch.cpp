@@ -202,6 +202,41 @@ TEST(Stitch, OptimisationImprovesAJitteredSphereAcrossBorders) {
   EXPECT_DOUBLE_EQ(raw.report.output.quality.alpha_mean, raw.report.alpha_mean_before);
 }
 
+// The flips' tests run in parallel and the verification's signatures on helper threads:
+// the same flips, positions and report for any thread count.
+TEST(Stitch, SameResultForAnyThreadCount) {
+  const TriangleSoup soup = jittered_sphere(3, 0.6);
+  const SurfaceMesh surface = cube_map_surface(soup);
+  const TriMesh input = to_trimesh(soup);
+  StitchOptions one;
+  one.n_threads = 1;
+  const StitchResult r1 = stitch(surface, input, one);
+  ASSERT_GT(r1.report.n_flips, 0u);
+  for (const unsigned n : {2u, 3u}) {
+    StitchOptions options;
+    options.n_threads = n;
+    const StitchResult r = stitch(surface, input, options);
+    EXPECT_EQ(r.report.n_flips, r1.report.n_flips);
+    EXPECT_EQ(r.report.n_smoothing_moves, r1.report.n_smoothing_moves);
+    EXPECT_EQ(r.report.min_angle_away_from_features_deg, r1.report.min_angle_away_from_features_deg);
+    EXPECT_EQ(r.report.n_away_from_features, r1.report.n_away_from_features);
+    EXPECT_EQ(r.report.output.quality.alpha_mean, r1.report.output.quality.alpha_mean);
+    ASSERT_EQ(r.report.input_components.size(), r1.report.input_components.size());
+    ASSERT_EQ(r.report.output_components.size(), r1.report.output_components.size());
+    EXPECT_EQ(r.report.output_components[0].n_faces, r1.report.output_components[0].n_faces);
+    EXPECT_EQ(r.report.input_components[0].n_vertices, r1.report.input_components[0].n_vertices);
+    ASSERT_EQ(r.mesh.n_faces(), r1.mesh.n_faces());
+    for (auto f : r.mesh.faces()) {
+      auto a = r.mesh.fv_range(f).begin();
+      auto b = r1.mesh.fv_range(TriMesh::FaceHandle(f.idx())).begin();
+      for (int k = 0; k < 3; ++k, ++a, ++b) {
+        ASSERT_EQ((*a).idx(), (*b).idx());
+        ASSERT_EQ(r.mesh.point(*a), r1.mesh.point(*b));
+      }
+    }
+  }
+}
+
 // Issue 5: a short edge no flip or smoothing removes (an inner node planted next to
 // another) is collapsed; the result keeps the contract and its worst triangle improves.
 TEST(Stitch, CollapsesAPlantedShortEdge) {
