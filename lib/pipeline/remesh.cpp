@@ -163,7 +163,11 @@ RemeshResult remesh(const TriMesh& input, const RemeshOptions& options) {
   // kept only if it crosses less, has no other error and no more failed patches; the first
   // remedy kept ends the round. The output stays the same for any thread count (the pairs
   // are sorted, the stages deterministic).
-  for (int round = 0; round < options.crossing_repair_rounds; ++round) {
+  // A self-intersecting input is not repaired: its output inherits the crossings (the tool
+  // names them), and removing them would move the surface away from the input.
+  const bool repair = options.crossing_repair_rounds > 0 && crossing_pairs(stitched.report) > 0 &&
+                      count_self_intersections(to_soup(input), stitch_options.n_threads) == 0;
+  for (int round = 0; repair && round < options.crossing_repair_rounds; ++round) {
     const std::size_t n_pairs = crossing_pairs(stitched.report);
     if (n_pairs == 0) break;
     const auto pairs = self_intersecting_pairs(to_soup(stitched.mesh), stitch_options.n_threads);
