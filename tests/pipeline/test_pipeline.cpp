@@ -485,6 +485,15 @@ TEST(PipelineSlow, HeadsqShortEdgeCollapsesKept) {
   EXPECT_EQ(*with.report.output.topology.n_self_intersecting_pairs, 0u);
 }
 
+// remesh() with the crossing repair off: the inputs it is tested on cross themselves then.
+RemeshResult remesh_unrepaired(const TriMesh& mesh, RemeshOptions options) {
+  options.crossing_repair_rounds = 0;
+  RemeshResult r = remesh(mesh, options);
+  EXPECT_GT(r.report.output.topology.n_self_intersecting_pairs.value_or(0), 0u);
+  EXPECT_EQ(r.report.n_crossing_repairs, 0u);
+  return r;
+}
+
 // The last resort against crossings stitching left (docs/segment.md, "Re-segmenting crossing
 // patches"). VTK's head CT at iso 1150 (the bone): a thin fin of two patches about 100 deg
 // apart wrapped by a third, whose triangles stitching could not pull out of the fin's; with
@@ -499,13 +508,7 @@ TEST(PipelineSlow, HeadsqBoneCrossingsResegmented) {
   const TriMesh mesh = prepare_mesh(marching_cubes(read_volume(test::test_data("volumes/headsq.mha")), mc)).mesh;
   RemeshOptions options = fast_options();
   options.compute_distances = false;
-  options.crossing_repair_rounds = 0;
-  const RemeshResult without = remesh(mesh, options);
-  ASSERT_TRUE(without.report.output.topology.n_self_intersecting_pairs.has_value());
-  EXPECT_GT(*without.report.output.topology.n_self_intersecting_pairs, 0u);
-  EXPECT_EQ(without.report.n_crossing_repairs, 0u);
-
-  options.crossing_repair_rounds = RemeshOptions{}.crossing_repair_rounds;
+  const RemeshResult without = remesh_unrepaired(mesh, options);
   const RemeshResult with = remesh(mesh, options);
   const RemeshReport& rep = with.report;
   EXPECT_TRUE(rep.ok()) << errors_of(rep);
@@ -537,11 +540,7 @@ TEST(PipelineSlow, FemurCrossingsResegmented) {
   const TriMesh mesh = prepare_mesh(read_soup(test::test_data("meshes/femur.off"))).mesh;
   RemeshOptions options = fast_options();
   options.compute_distances = false;
-  options.crossing_repair_rounds = 0;
-  const RemeshResult without = remesh(mesh, options);
-  ASSERT_TRUE(without.report.output.topology.n_self_intersecting_pairs.has_value());
-  EXPECT_GT(*without.report.output.topology.n_self_intersecting_pairs, 0u);
-  options.crossing_repair_rounds = RemeshOptions{}.crossing_repair_rounds;
+  const RemeshResult without = remesh_unrepaired(mesh, options);
   const RemeshResult with = remesh(mesh, options);
   const RemeshReport& rep = with.report;
   EXPECT_TRUE(rep.ok()) << errors_of(rep);
