@@ -45,6 +45,7 @@ std::string to_json(const RemeshReport& r) {
   counts.count("patches", r.n_patches).count("patches_split", r.n_patches_split);
   counts.count("curves", r.n_curves).count("corners", r.n_corners).count("crease_edges", r.n_crease_edges);
   counts.count("nodes", r.n_nodes).count("triangles", r.n_triangles).count("failed_patches", r.n_failed_patches);
+  counts.count("crossing_repairs", r.n_crossing_repairs);
   json::Object seconds;
   seconds.num("segment", r.seconds_segment).num("surfmesh", r.seconds_surfmesh).num("stitch", r.seconds_stitch);
   seconds.num("distance", r.seconds_distance).num("total", r.seconds_total);
@@ -88,7 +89,9 @@ std::string to_summary(const RemeshReport& r) {
   const TopologyReport& t = r.output.topology;
   std::string s;
   s += "patches " + std::to_string(r.n_patches) + " (" + std::to_string(r.n_failed_patches) + " failed), curves " +
-       std::to_string(r.n_curves) + ", corners " + std::to_string(r.n_corners) + "\n";
+       std::to_string(r.n_curves) + ", corners " + std::to_string(r.n_corners);
+  if (r.n_crossing_repairs > 0) s += ", crossings re-segmented " + std::to_string(r.n_crossing_repairs) + "x";
+  s += "\n";
   s += "faces " + std::to_string(r.n_input_faces) + " -> " + std::to_string(r.n_triangles) + ", target edge " +
        json::number(r.target_size) + " (input mean edge " + json::number(r.input_mean_edge) + ")\n";
   s += "topology: " + std::string(t.is_closed ? "closed" : "open") + ", " + (t.is_manifold ? "manifold" : "NOT manifold") +

@@ -11,6 +11,7 @@
 #include "nurbsfront/core/error.h"
 #include "nurbsfront/core/soup.h"
 #include "nurbsfront/core/stopwatch.h"
+#include "nurbsfront/quality/report.h"
 #include "nurbsfront/segment/segment_internal.h"
 #include "nurbsfront/surfmesh/surfmesh_internal.h"
 
@@ -28,6 +29,7 @@ void RemeshOptions::validate() const {
   surfmesh.validate();
   stitch.validate();
   if (compute_distances) distance.validate();
+  if (crossing_repair_rounds < 0) throw InvalidInput("remesh: crossing_repair_rounds must be >= 0");
 }
 
 const char* to_string(PatchStatus status) {
@@ -91,6 +93,21 @@ void check_input(const TriMesh& input) {
   }
 }
 
+std::size_t crossing_pairs(const StitchReport& report) {
+  return report.output.topology.n_self_intersecting_pairs.value_or(0);
+}
+
+// The stitch errors other than the crossings' (one line when there are any).
+std::size_t other_errors(const StitchReport& report) {
+  return report.errors.size() - (crossing_pairs(report) > 0 ? 1 : 0);
+}
+
+std::size_t failed_patches(const SurfaceMesh& surface) {
+  return static_cast<std::size_t>(std::count_if(surface.patches.begin(), surface.patches.end(), [](const auto& p) {
+    return p.status != PatchStatus::Ok;
+  }));
+}
+
 // A stage's callback that also feeds the run's callback (both must agree to go on).
 ProgressCallback chained(const ProgressCallback& top, const ProgressCallback& own) {
   if (!top) return own;
@@ -130,15 +147,72 @@ RemeshResult remesh(const TriMesh& input, const RemeshOptions& options) {
 
   watch.restart();
   // Patches whose fit leaves their input (sharp bends inside) are split and refitted.
-  const Segmentation segmentation =
+  Segmentation segmentation =
       surfmesh_detail::split_unfitted_patches(input, first_segmentation, surfmesh_options, segment_options,
                                               &report.n_patches_split, mean_edge, splitter.get());
+  SurfaceMesh surface = surfmesh_detail::mesh_surface(input, segmentation, surfmesh_options, mean_edge);
+  report.seconds_surfmesh = watch.seconds();
+
+  watch.restart();
+  StitchResult stitched = stitch(surface, input, stitch_options);
+  report.seconds_stitch = watch.seconds();
+
+  // Last resort against crossings that stitching left (docs/segment.md, "Re-segmenting
+  // crossing patches"). Remedies in order, each on the patches of every crossing pair: the
+  // smaller patch joins a neighbour, the larger joins one, the larger is bisected, the smaller
+  // is bisected. After a remedy the surface is meshed and stitched again, and that result is
+  // kept only if it crosses less, has no other error and no more failed patches; the first
+  // remedy kept ends the round. The output stays the same for any thread count (the pairs
+  // are sorted, the stages deterministic).
+  // A self-intersecting input is not repaired: its output inherits the crossings (the tool
+  // names them), and removing them would move the surface away from the input.
+  const bool repair = options.crossing_repair_rounds > 0 && crossing_pairs(stitched.report) > 0 &&
+                      count_self_intersections(to_soup(input), stitch_options.n_threads) == 0;
+  for (int round = 0; repair && round < options.crossing_repair_rounds; ++round) {
+    const std::size_t n_pairs = crossing_pairs(stitched.report);
+    if (n_pairs == 0) break;
+    const auto pairs = self_intersecting_pairs(to_soup(stitched.mesh), stitch_options.n_threads);
+    bool improved = false;
+    for (int remedy = 0; remedy < 4; ++remedy) {
+      const bool smaller = remedy == 0 || remedy == 3;
+      std::vector<int> which;
+      for (const auto& pair : pairs) {
+        const int a = stitched.face_patch[pair[0]], b = stitched.face_patch[pair[1]];
+        const bool a_first = segmentation.patches[static_cast<std::size_t>(a)].faces.size() <=
+                             segmentation.patches[static_cast<std::size_t>(b)].faces.size();
+        which.push_back(a_first == smaller ? a : b);
+      }
+      std::sort(which.begin(), which.end(), [&](int x, int y) {
+        const std::size_t nx = segmentation.patches[static_cast<std::size_t>(x)].faces.size();
+        const std::size_t ny = segmentation.patches[static_cast<std::size_t>(y)].faces.size();
+        return nx != ny ? nx < ny : x < y;
+      });
+      which.erase(std::unique(which.begin(), which.end()), which.end());
+      Segmentation merged = remedy < 2 ? segment_detail::merge_into_neighbours(*splitter, segmentation, which)
+                                       : segment_detail::bisect_patches(*splitter, segmentation, which);
+      if (merged.patches.size() == segmentation.patches.size()) continue;
+      watch.restart();
+      SurfaceMesh merged_surface = surfmesh_detail::mesh_surface(input, merged, surfmesh_options, mean_edge);
+      report.seconds_surfmesh += watch.seconds();
+      watch.restart();
+      StitchResult merged_stitched = stitch(merged_surface, input, stitch_options);
+      report.seconds_stitch += watch.seconds();
+      if (crossing_pairs(merged_stitched.report) >= n_pairs || other_errors(merged_stitched.report) > 0 ||
+          failed_patches(merged_surface) > failed_patches(surface))
+        continue;
+      ++report.n_crossing_repairs;
+      segmentation = std::move(merged);
+      surface = std::move(merged_surface);
+      stitched = std::move(merged_stitched);
+      improved = true;
+      break;
+    }
+    if (!improved) break;
+  }
   splitter.reset();
   report.n_patches = segmentation.patches.size();
   report.n_curves = segmentation.curves.size();
   report.n_corners = segmentation.corners.size();
-  const SurfaceMesh surface = surfmesh_detail::mesh_surface(input, segmentation, surfmesh_options, mean_edge);
-  report.seconds_surfmesh = watch.seconds();
   report.n_nodes = surface.nodes.size();
   report.target_size = surface.target_size;
   report.input_mean_edge = surface.input_mean_edge;
@@ -150,10 +224,6 @@ RemeshResult remesh(const TriMesh& input, const RemeshOptions& options) {
     report.errors.push_back("patch " + std::to_string(p) + " (" + std::to_string(patch.n_input_faces) +
                             " input faces): " + to_string(patch.status) + ": " + patch.message);
   }
-
-  watch.restart();
-  StitchResult stitched = stitch(surface, input, stitch_options);
-  report.seconds_stitch = watch.seconds();
   for (const auto& e : stitched.report.errors) report.errors.push_back("stitch: " + e);
   report.output = stitched.report.output;
   report.stitch = std::move(stitched.report);

@@ -27,6 +27,11 @@ struct RemeshOptions {
   SurfMeshOptions surfmesh;
   //! Assembly, cross-border optimisation and verification.
   StitchOptions stitch;
+  //! Rounds of the last resort against crossings stitching left (docs/segment.md,
+  //! "Re-segmenting crossing patches"): the patches of the crossing pairs are merged into a
+  //! neighbour or bisected and the surface meshed and stitched again, kept only when it
+  //! crosses less. Runs without crossings never pay it. 0 = off. Default 4.
+  int crossing_repair_rounds = 4;
   //! Measure the two-sided distance of the output to the input (Hausdorff, mean,
   //! relative volume change) into the report. Default true.
   bool compute_distances = true;
@@ -57,6 +62,9 @@ struct RemeshReport {
   std::size_t n_nodes = 0;        //!< nodes of the surface mesh (before stitching)
   std::size_t n_triangles = 0;    //!< triangles of the output
   std::size_t n_failed_patches = 0;  //!< patches whose status is not Ok
+  //! Patches merged into a neighbour because stitching left crossings there (the pipeline's
+  //! last resort, segment's merge_patches_into_neighbours(); 0 on a run without crossings).
+  std::size_t n_crossing_repairs = 0;
   double target_size = 0.0;       //!< resolved uniform target edge length (length units)
   double input_mean_edge = 0.0;   //!< mean edge length of the input
   double seconds_segment = 0.0;

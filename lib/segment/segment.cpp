@@ -1070,6 +1070,51 @@ struct segment_detail::Splitter {
 
 void segment_detail::SplitterDeleter::operator()(Splitter* splitter) const { delete splitter; }
 
+namespace {
+
+// The checks of an edit of a segmentation of the splitter's mesh (`what`: the function's name).
+void check_edit(const segment_detail::Splitter& s, const Segmentation& segmentation, const std::vector<int>& which,
+                const std::string& what) {
+  if (segmentation.face_patch.size() != s.mesh.n_faces())
+    throw InvalidInput(what + ": the segmentation has " + std::to_string(segmentation.face_patch.size()) +
+                       " face labels for " + std::to_string(s.mesh.n_faces()) + " faces");
+  for (const int p : which)
+    if (p < 0 || p >= static_cast<int>(segmentation.patches.size()))
+      throw InvalidInput(what + ": no patch " + std::to_string(p));
+}
+
+Grouping splitter_grouping(const segment_detail::Splitter& s) {
+  const double max_slope = radians(s.options.max_slope_deg);
+  return Grouping{s.graph, s.normals, std::cos(max_slope), max_slope, std::cos(kGrowthConeFraction * max_slope)};
+}
+
+Patches editable_patches(const Segmentation& segmentation) {
+  Patches patches;
+  patches.face_patch = segmentation.face_patch;
+  for (const Patch& patch : segmentation.patches) {
+    patches.faces.push_back(patch.faces);
+    patches.axes.push_back(patch.axis);
+  }
+  return patches;
+}
+
+// The edited patches renumbered, with their curves; counts and island faces as given.
+Segmentation finish_edit(const segment_detail::Splitter& s, Patches& patches,
+                         std::size_t n_fold_splits, std::size_t n_islands_absorbed, std::vector<int> island_faces) {
+  Segmentation result;
+  result.n_fold_splits = n_fold_splits;
+  result.n_bevel_crease_edges = s.n_bevel_crease_edges;
+  result.n_islands_absorbed = n_islands_absorbed;
+  std::sort(island_faces.begin(), island_faces.end());
+  island_faces.erase(std::unique(island_faces.begin(), island_faces.end()), island_faces.end());
+  result.island_faces = std::move(island_faces);
+  renumber(patches);
+  finish_segmentation(s.mesh, s.graph, s.normals, patches, s.options, result);
+  return result;
+}
+
+}  // namespace
+
 Segmentation segment(const TriMesh& mesh, const SegmentOptions& options) {
   return segment_detail::segment(mesh, options, mean_edge_length(mesh));
 }
@@ -1208,6 +1253,104 @@ Segmentation segment_detail::split(Splitter& s, const Segmentation& segmentation
   s.last_axes.clear();
   for (const Patch& patch : result.patches) s.last_axes.push_back(patch.axis);
   return result;
+}
+
+Segmentation segment_detail::merge_into_neighbours(Splitter& s, const Segmentation& segmentation,
+                                                   const std::vector<int>& which) {
+  check_edit(s, segmentation, which, "merge_patches_into_neighbours");
+  if (s.mesh.n_faces() == 0 || which.empty()) return segmentation;
+  s.prepare();
+  const Grouping grouping = splitter_grouping(s);
+  Patches patches = editable_patches(segmentation);
+  Scratch scratch(s.mesh);
+  std::vector<int> island_faces = segmentation.island_faces;
+  std::size_t n_merged = 0;
+  for (const int p : which) {
+    auto& faces = patches.faces[static_cast<std::size_t>(p)];
+    if (faces.empty()) continue;  // merged already
+    // Neighbours by the length of the border shared with p, longest first (ties: lower id).
+    std::vector<std::pair<double, int>> shared;
+    for (const int f : faces) {
+      for (int i = 0; i < 3; ++i) {
+        const int g = s.graph.neighbours[f][i];
+        if (g < 0 || patches.face_patch[g] == p) continue;
+        const int q = patches.face_patch[g];
+        const auto a = s.mesh.point(s.mesh.vertex_handle(static_cast<unsigned>(s.graph.vertices[f][i])));
+        const auto b = s.mesh.point(s.mesh.vertex_handle(static_cast<unsigned>(s.graph.vertices[f][(i + 1) % 3])));
+        auto it = std::find_if(shared.begin(), shared.end(), [&](const auto& e) { return e.second == q; });
+        if (it == shared.end()) it = shared.insert(shared.end(), {0.0, q});
+        it->first += (a - b).norm();
+      }
+    }
+    std::sort(shared.begin(), shared.end(),
+              [](const auto& x, const auto& y) { return x.first != y.first ? x.first > y.first : x.second < y.second; });
+    // Joins p to q if the union fits an axis (faces joined across creases are island faces).
+    const auto join = [&](int q) {
+      auto& target = patches.faces[static_cast<std::size_t>(q)];
+      const std::size_t n_target = target.size();
+      target.insert(target.end(), faces.begin(), faces.end());
+      for (const int f : faces) patches.face_patch[f] = q;
+      // The neighbour's axis, else the union's area-weighted mean raw normal.
+      Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+      for (const int f : target) mean += s.normals.area[f] * s.normals.raw[f];
+      std::vector<Eigen::Vector3d> axes{patches.axes[static_cast<std::size_t>(q)]};
+      if (mean.norm() > 0.0) axes.push_back(mean.normalized());
+      for (const Eigen::Vector3d& axis : axes) {
+        if (!std::all_of(target.begin(), target.end(), [&](int f) { return grouping.fits(f, axis); })) continue;
+        if (!segment_detail::check_projection(s.graph, target, patches.face_patch, axis, scratch).is_simple) continue;
+        patches.axes[static_cast<std::size_t>(q)] = axis;
+        island_faces.insert(island_faces.end(), faces.begin(), faces.end());
+        faces.clear();
+        return true;
+      }
+      target.resize(n_target);
+      for (const int f : faces) patches.face_patch[f] = p;
+      return false;
+    };
+    for (const auto& entry : shared) {
+      if (!join(entry.second)) continue;
+      ++n_merged;
+      break;
+    }
+  }
+  if (n_merged == 0) return segmentation;
+  return finish_edit(s, patches, segmentation.n_fold_splits, segmentation.n_islands_absorbed + n_merged,
+                     std::move(island_faces));
+}
+
+Segmentation segment_detail::bisect_patches(Splitter& s, const Segmentation& segmentation, const std::vector<int>& which) {
+  check_edit(s, segmentation, which, "bisect_patches");
+  s.prepare();
+  const Grouping grouping = splitter_grouping(s);
+  Patches patches = editable_patches(segmentation);
+  Scratch scratch(s.mesh);
+  std::vector<int> work;
+  std::vector<int> sorted = which;
+  std::sort(sorted.begin(), sorted.end());
+  sorted.erase(std::unique(sorted.begin(), sorted.end()), sorted.end());
+  for (const int p : sorted) {
+    auto& faces = patches.faces[static_cast<std::size_t>(p)];
+    if (faces.size() < 2) continue;
+    auto [first, second] = segment_detail::bisect_patch(s.graph, faces, patches.face_patch, scratch);
+    const int q = static_cast<int>(patches.faces.size());
+    for (const int f : second) patches.face_patch[f] = q;
+    faces = std::move(first);
+    patches.faces.push_back(std::move(second));
+    patches.axes.push_back(patches.axes[static_cast<std::size_t>(p)]);
+    work.push_back(p);
+    work.push_back(q);
+  }
+  if (work.empty()) return segmentation;
+  const std::size_t n_fold_splits = segmentation.n_fold_splits + split_folds(grouping, s.mean_edge, scratch, patches, work);
+  return finish_edit(s, patches, n_fold_splits, segmentation.n_islands_absorbed, segmentation.island_faces);
+}
+
+Segmentation merge_patches_into_neighbours(const TriMesh& mesh, const Segmentation& segmentation,
+                                           const std::vector<int>& which, const SegmentOptions& options) {
+  options.validate();
+  validate_mesh(mesh);
+  segment_detail::Splitter splitter(mesh, options);
+  return segment_detail::merge_into_neighbours(splitter, segmentation, which);
 }
 
 Segmentation split_patches(const TriMesh& mesh, const Segmentation& segmentation, const std::vector<int>& which,

@@ -208,6 +208,22 @@ struct Segmentation {
 [[nodiscard]] Segmentation split_patches(const TriMesh& mesh, const Segmentation& segmentation,
                                          const std::vector<int>& which, const SegmentOptions& options = {});
 
+//! Each listed patch (in the order given) joins the neighbouring patch it shares the longest
+//! border with, across creases, when every face of the union meets the slope bounds for an
+//! axis (the neighbour's, else the union's area-weighted mean face normal) and the union
+//! projects simply on that axis (segment()'s check); otherwise the next neighbour is tried,
+//! and a patch no neighbour takes stays. The pipeline's last resort against crossings that
+//! stitching left (docs/segment.md, "Re-segmenting crossing patches"); the joined faces are
+//! added to island_faces (creases may now lie inside a patch there) and each join counts in
+//! n_islands_absorbed (such a patch may have more than kSegmentTinyIslandFaces faces). Curves are rebuilt and patch
+//! ids renumbered as in segment(); the segmentation is returned unchanged when nothing joined.
+//! \param which  patch ids (duplicates and patches already joined are skipped)
+//! \throw InvalidInput for invalid options, a mesh segment() refuses, a segmentation of
+//!        another mesh or an unknown patch id.
+[[nodiscard]] Segmentation merge_patches_into_neighbours(const TriMesh& mesh, const Segmentation& segmentation,
+                                                         const std::vector<int>& which,
+                                                         const SegmentOptions& options = {});
+
 //! split_patches() in rounds on one mesh (surfmesh's split_unfitted_patches): the face
 //! graph, creases and normals are computed once (at the first split), and when a round is
 //! given the previous round's result, only the parts of the patches it splits go through

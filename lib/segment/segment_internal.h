@@ -128,4 +128,12 @@ using SplitterPtr = std::unique_ptr<Splitter, SplitterDeleter>;
 //! PatchSplitter::split() on a splitter made by segment().
 [[nodiscard]] Segmentation split(Splitter& splitter, const Segmentation& segmentation, const std::vector<int>& which);
 
+//! Each listed patch bisected (bisect_patch), the parts checked as segment()'s step 7.
+[[nodiscard]] Segmentation bisect_patches(Splitter& splitter, const Segmentation& segmentation,
+                                          const std::vector<int>& which);
+
+//! merge_patches_into_neighbours() on a splitter made by segment() (its graph and normals).
+[[nodiscard]] Segmentation merge_into_neighbours(Splitter& splitter, const Segmentation& segmentation,
+                                                 const std::vector<int>& which);
+
 }  // namespace nurbsfront::segment_detail

@@ -305,6 +305,9 @@ TEST(Pipeline, BadInputIsNamed) {
   RemeshOptions bad;
   bad.segment.max_slope_deg = 95.0;
   EXPECT_THROW((void)remesh(scene_input("sphere", 12, SampleMode::LevelSet).mesh, bad), InvalidInput);
+  RemeshOptions negative_rounds;
+  negative_rounds.crossing_repair_rounds = -1;
+  EXPECT_THROW((void)remesh(scene_input("sphere", 12, SampleMode::LevelSet).mesh, negative_rounds), InvalidInput);
 }
 
 TEST(Pipeline, OccupancySphere) {
@@ -502,6 +505,74 @@ TEST(PipelineSlow, HeadsqShortEdgeCollapsesKept) {
   EXPECT_GT(with.report.output.quality.alpha_mean, without.report.output.quality.alpha_mean);
   ASSERT_TRUE(with.report.output.topology.n_self_intersecting_pairs.has_value());
   EXPECT_EQ(*with.report.output.topology.n_self_intersecting_pairs, 0u);
+}
+
+// remesh() with the crossing repair off: the inputs it is tested on cross themselves then.
+RemeshResult remesh_unrepaired(const TriMesh& mesh, RemeshOptions options) {
+  options.crossing_repair_rounds = 0;
+  RemeshResult r = remesh(mesh, options);
+  EXPECT_GT(r.report.output.topology.n_self_intersecting_pairs.value_or(0), 0u);
+  EXPECT_EQ(r.report.n_crossing_repairs, 0u);
+  return r;
+}
+
+// The last resort against crossings stitching left (docs/segment.md, "Re-segmenting crossing
+// patches"). VTK's head CT at iso 1150 (the bone): a thin fin of two patches about 100 deg
+// apart wrapped by a third, whose triangles stitching could not pull out of the fin's; with
+// the repair off the output crosses itself (the case the repair is for; if a change removes
+// those crossings at the source, pick another input). With it the wrapping patch is
+// re-segmented: no crossing, nothing else broken, the same output for any thread count.
+TEST(PipelineSlow, HeadsqBoneCrossingsResegmented) {
+  MarchingCubesOptions mc;
+  mc.iso = 1150.0;
+  mc.inside_above = true;
+  mc.pad = true;
+  const TriMesh mesh = prepare_mesh(marching_cubes(read_volume(test::test_data("volumes/headsq.mha")), mc)).mesh;
+  RemeshOptions options = fast_options();
+  options.compute_distances = false;
+  const RemeshResult without = remesh_unrepaired(mesh, options);
+  const RemeshResult with = remesh(mesh, options);
+  const RemeshReport& rep = with.report;
+  EXPECT_TRUE(rep.ok()) << errors_of(rep);
+  EXPECT_GE(rep.n_crossing_repairs, 1u);
+  const TopologyReport& t = rep.output.topology;
+  ASSERT_TRUE(t.n_self_intersecting_pairs.has_value());
+  EXPECT_EQ(*t.n_self_intersecting_pairs, 0u);
+  EXPECT_EQ(count_self_intersections(to_soup(with.mesh)), 0u);
+  EXPECT_TRUE(t.is_closed && t.is_manifold && t.is_consistently_oriented);
+  EXPECT_EQ(t.euler_characteristic, without.report.output.topology.euler_characteristic);
+  EXPECT_EQ(rep.stitch.output_components.size(), rep.stitch.input_components.size());
+  // face_patch and the report describe the re-segmented surface.
+  ASSERT_EQ(with.face_patch.size(), with.mesh.n_faces());
+  EXPECT_EQ(rep.patches.size(), rep.n_patches);
+  for (const int p : with.face_patch) EXPECT_LT(static_cast<std::size_t>(p), rep.n_patches);
+
+  options.set_threads(1);
+  const RemeshResult serial = remesh(mesh, options);
+  ASSERT_EQ(serial.mesh.n_vertices(), with.mesh.n_vertices());
+  ASSERT_EQ(serial.mesh.n_faces(), with.mesh.n_faces());
+  for (auto v : with.mesh.vertices()) EXPECT_EQ(serial.mesh.point(v), with.mesh.point(v));
+}
+
+// The same last resort on CGAL's femur (7798 faces, genus 2): a big patch reaches one face
+// wide between crease-bounded patches of 3-7 faces, and stitching left its triangles crossing
+// theirs (docs/stitch.md). With the repair on, a small patch of the crossing pairs joins a
+// neighbour: no crossing, the genus kept.
+TEST(PipelineSlow, FemurCrossingsResegmented) {
+  const TriMesh mesh = prepare_mesh(read_soup(test::test_data("meshes/femur.off"))).mesh;
+  RemeshOptions options = fast_options();
+  options.compute_distances = false;
+  const RemeshResult without = remesh_unrepaired(mesh, options);
+  const RemeshResult with = remesh(mesh, options);
+  const RemeshReport& rep = with.report;
+  EXPECT_TRUE(rep.ok()) << errors_of(rep);
+  EXPECT_GE(rep.n_crossing_repairs, 1u);
+  EXPECT_LT(rep.n_patches, without.report.n_patches);  // a patch joined a neighbour
+  EXPECT_EQ(count_self_intersections(to_soup(with.mesh)), 0u);
+  const TopologyReport& t = rep.output.topology;
+  EXPECT_TRUE(t.is_closed && t.is_manifold && t.is_consistently_oriented);
+  EXPECT_EQ(t.n_components, 1u);
+  EXPECT_EQ(t.euler_characteristic, -2);
 }
 
 }  // namespace

@@ -467,5 +467,39 @@ TEST(SmoothPolyline, ClosedNoisyCircleKeepsItsRadius) {
   EXPECT_LT(max_r, 1.02);  // and the zig-zag (+-0.03) is damped
 }
 
+// The pipeline's last resort against crossings: a patch joins the neighbour it shares the
+// longest border with (ties: the lower id) across creases, with the union's mean normal as
+// the axis when the neighbour's own does not fit; the joined faces become island faces, so
+// segment()'s guarantees still hold.
+TEST(MergePatchesIntoNeighbours, CubeSideJoinsANeighbourAcrossItsCrease) {
+  const TriMesh mesh = to_trimesh(test::cube());
+  const SegmentOptions options;
+  const Segmentation seg = run(mesh, options, 0.0);
+  ASSERT_EQ(seg.patches.size(), 6u);
+  const Segmentation merged = merge_patches_into_neighbours(mesh, seg, {0}, options);
+  segment_test::expect_contracts(mesh, merged, options, 0.0);
+  ASSERT_EQ(merged.patches.size(), 5u);
+  EXPECT_EQ(merged.island_faces, seg.patches[0].faces);
+  // Every side shares one unit edge with patch 0: the lowest neighbour id takes it.
+  int lowest = -1;
+  for (const int f : seg.patches[0].faces) {
+    for (const auto g : mesh.ff_range(mesh.face_handle(f))) {
+      const int q = seg.face_patch[g.idx()];
+      if (q != 0 && (lowest < 0 || q < lowest)) lowest = q;
+    }
+  }
+  ASSERT_GE(lowest, 1);
+  const int joined = merged.face_patch[seg.patches[0].faces.front()];
+  for (const int f : seg.patches[0].faces) EXPECT_EQ(merged.face_patch[f], joined);
+  for (const int f : seg.patches[lowest].faces) EXPECT_EQ(merged.face_patch[f], joined);
+  EXPECT_EQ(merged.patches[joined].faces.size(), 4u);
+  // Two perpendicular sides: the axis is their mean normal, 45 deg from each.
+  const Eigen::Vector3d expected = (seg.patches[0].axis + seg.patches[lowest].axis).normalized();
+  EXPECT_NEAR(merged.patches[joined].axis.dot(expected), 1.0, 1e-12);
+  // Nothing listed: the same segmentation; a bad id throws.
+  EXPECT_EQ(merge_patches_into_neighbours(mesh, seg, {}, options).face_patch, seg.face_patch);
+  EXPECT_THROW((void)merge_patches_into_neighbours(mesh, seg, {6}, options), InvalidInput);
+}
+
 }  // namespace
 }  // namespace nurbsfront

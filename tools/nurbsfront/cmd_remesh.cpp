@@ -40,6 +40,7 @@ struct RemeshArgs {
   std::optional<std::size_t> vertices;
   bool adaptive = false;
   double feature_size = 0.0;
+  std::optional<int> crossing_repair_rounds;
   std::optional<double> chord;
   std::optional<double> max_slope;
   std::optional<double> split_above;
@@ -89,6 +90,7 @@ void run_remesh(RemeshArgs& args) {
   if (args.relative_size) options.surfmesh.sizing.relative_size = *args.relative_size;
   options.surfmesh.sizing.adaptive = args.adaptive;
   options.surfmesh.sizing.feature_size = args.feature_size;
+  if (args.crossing_repair_rounds) options.crossing_repair_rounds = *args.crossing_repair_rounds;
   if (args.chord) options.surfmesh.sizing.chord_error = *args.chord;
   if (args.max_slope) options.segment.max_slope_deg = *args.max_slope;
   if (args.split_above) options.surfmesh.fit.split_above_edges = *args.split_above;
@@ -185,6 +187,9 @@ void add_remesh_command(CLI::App& app) {
   cmd->add_option("--feature-size", args->feature_size,
                   "Size of a patch bounded mostly by feature curves at most F x its width (2 area / perimeter); "
                   "0 = off (default; docs/surfmesh.md \"Feature sizing\")");
+  cmd->add_option("--crossing-repair-rounds", args->crossing_repair_rounds,
+                  "Rounds of re-segmenting the patches of crossings the stitch left (default 4; 0 = off; "
+                  "docs/segment.md \"Re-segmenting crossing patches\")");
   cmd->add_option("--chord", args->chord, "Chord error for --adaptive (length units; default 0.05 x size)");
   cmd->add_option("--max-slope", args->max_slope, "Largest angle (deg) between a face normal and its patch axis (default 60)");
   cmd->add_option("--split-above", args->split_above,
