@@ -54,7 +54,7 @@ std::vector<Eigen::Vector3d> smooth_polyline(const std::vector<Eigen::Vector3d>&
 namespace segment_detail {
 
 Borders extract_borders(const TriMesh& mesh, const std::vector<int>& face_patch,
-                        const BorderSmoothingOptions& options) {
+                        const BorderSmoothingOptions& options, const unsigned workers) {
   const auto n_vertices = static_cast<int>(mesh.n_vertices());
   const auto n_edges = static_cast<int>(mesh.n_edges());
   auto patch_of = [&](OpenMesh::HalfedgeHandle h) {
@@ -123,10 +123,6 @@ Borders extract_borders(const TriMesh& mesh, const std::vector<int>& face_patch,
       if (curve.is_closed) std::reverse(curve.vertices.begin() + 1, curve.vertices.end());
       else std::reverse(curve.vertices.begin(), curve.vertices.end());
     }
-    std::vector<Eigen::Vector3d> positions;
-    positions.reserve(curve.vertices.size());
-    for (int w : curve.vertices) positions.push_back(to_eigen(mesh.point(mesh.vertex_handle(w))));
-    curve.smoothed = smooth_polyline(positions, curve.is_closed, options);
     return curve;
   };
 
@@ -140,6 +136,17 @@ Borders extract_borders(const TriMesh& mesh, const std::vector<int>& face_patch,
     if (is_border[e] != 0 && visited[e] == 0)
       borders.curves.push_back(trace(mesh.halfedge_handle(mesh.edge_handle(e), 0)));
   }
+  // Each curve is smoothed on its own: in parallel, the same positions for any thread count.
+  parallel_chunks(borders.curves.size(), workers, 64, [&](std::size_t begin, std::size_t end, unsigned) {
+    std::vector<Eigen::Vector3d> positions;
+    for (std::size_t c = begin; c < end; ++c) {
+      BorderCurve& curve = borders.curves[c];
+      positions.clear();
+      positions.reserve(curve.vertices.size());
+      for (int w : curve.vertices) positions.push_back(to_eigen(mesh.point(mesh.vertex_handle(w))));
+      curve.smoothed = smooth_polyline(positions, curve.is_closed, options);
+    }
+  });
   return borders;
 }
 

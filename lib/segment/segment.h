@@ -84,6 +84,9 @@ struct SegmentOptions {
   std::size_t min_patch_faces = 50;
   //! How border curves are smoothed.
   BorderSmoothingOptions border_smoothing;
+  //! Worker threads for the per-face and per-patch steps (normals, projection and cliff
+  //! checks); 0 = all hardware threads. The result does not depend on it (>= 0).
+  int threads = 0;
   //! Optional progress callback (stage "segment"); returning false cancels.
   ProgressCallback progress;
   //! Throws InvalidInput if a field is out of range.
