@@ -1159,7 +1159,9 @@ struct segment_detail::Splitter {
   // The last result: each of its patches passed split_folds' checks with its axis.
   std::vector<int> last_face_patch;
   std::vector<Eigen::Vector3d> last_axes;
-  // split_folds' scratches of the workers but the first.
+  // The scratch of the checks (kept between rounds), and split_folds' scratches of the
+  // workers but the first.
+  std::unique_ptr<Scratch> scratch;
   std::vector<std::unique_ptr<Scratch>> worker_scratch;
 
   void prepare() {
@@ -1201,7 +1203,8 @@ Segmentation segment_detail::segment(const TriMesh& mesh, const SegmentOptions& 
   clean_borders(grouping, patches);
   renumber(patches);
   refine_axes(grouping, patches);
-  Scratch scratch(mesh);
+  auto own_scratch = std::make_unique<Scratch>(mesh);
+  Scratch& scratch = *own_scratch;
   std::vector<std::unique_ptr<Scratch>> worker_scratch;
   result.n_fold_splits = split_folds(grouping, mean_edge, scratch, patches, all_patches(patches),
                                      segment_detail::worker_count(options.threads), worker_scratch);
@@ -1222,6 +1225,7 @@ Segmentation segment_detail::segment(const TriMesh& mesh, const SegmentOptions& 
     kept.n_bevel_crease_edges = result.n_bevel_crease_edges;
     kept.mean_edge = mean_edge;
     kept.prepared = true;
+    kept.scratch = std::move(own_scratch);
     kept.worker_scratch = std::move(worker_scratch);
   }
   report_progress(options.progress, kStage, 1.0);
@@ -1273,7 +1277,8 @@ Segmentation segment_detail::split(Splitter& s, const Segmentation& segmentation
   }
   // The last result again: its patches that are not split pass split_folds' checks as they did.
   const bool checked = segmentation.face_patch == s.last_face_patch && patches.axes == s.last_axes;
-  Scratch scratch(s.mesh);
+  if (!s.scratch) s.scratch = std::make_unique<Scratch>(s.mesh);
+  Scratch& scratch = *s.scratch;
   std::vector<int> sorted = which;
   std::sort(sorted.begin(), sorted.end());
   sorted.erase(std::unique(sorted.begin(), sorted.end()), sorted.end());
