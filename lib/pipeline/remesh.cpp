@@ -19,6 +19,7 @@ namespace nurbsfront {
 
 void RemeshOptions::set_threads(unsigned n) {
   if (n == 0) throw InvalidInput("remesh: the thread count must be >= 1");
+  segment.threads = static_cast<int>(n);
   surfmesh.threads = static_cast<int>(n);
   stitch.n_threads = n;
   distance.n_threads = n;

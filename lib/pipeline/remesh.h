@@ -41,7 +41,7 @@ struct RemeshOptions {
   //! progress (stages "segment", "surfmesh: ...", "stitch: ...", "distance"); a stage's own
   //! callback, if set too, is called as well. Returning false cancels (Cancelled).
   ProgressCallback progress;
-  //! The same thread count for every stage (surfmesh workers, checks, distances); n >= 1.
+  //! The same thread count for every stage (segmentation, surfmesh workers, checks, distances); n >= 1.
   void set_threads(unsigned n);
   //! \throw InvalidInput if any stage's options are invalid.
   void validate() const;

@@ -54,7 +54,7 @@ std::vector<Eigen::Vector3d> smooth_polyline(const std::vector<Eigen::Vector3d>&
 namespace segment_detail {
 
 Borders extract_borders(const TriMesh& mesh, const std::vector<int>& face_patch,
-                        const BorderSmoothingOptions& options) {
+                        const BorderSmoothingOptions& options, const unsigned workers) {
   const auto n_vertices = static_cast<int>(mesh.n_vertices());
   const auto n_edges = static_cast<int>(mesh.n_edges());
   auto patch_of = [&](OpenMesh::HalfedgeHandle h) {
@@ -66,25 +66,35 @@ Borders extract_borders(const TriMesh& mesh, const std::vector<int>& face_patch,
     return std::pair{std::min(a, b), std::max(a, b)};
   };
   std::vector<std::uint8_t> is_border(n_edges, 0), visited(n_edges, 0);
-  std::vector<int> degree(n_vertices, 0);
-  std::vector<std::pair<int, int>> first_sides(n_vertices, {-2, -2});
   std::vector<std::uint8_t> is_corner(n_vertices, 0);
-  for (const auto e : mesh.edges()) {
-    const auto s = sides(e);
-    if (s.first == s.second) continue;
-    is_border[e.idx()] = 1;
-    for (int k = 0; k < 2; ++k) {
-      const int v = mesh.to_vertex_handle(mesh.halfedge_handle(e, k)).idx();
-      ++degree[v];
-      if (first_sides[v].first == -2) first_sides[v] = s;
-      else if (first_sides[v] != s) is_corner[v] = 1;  // two different patch pairs meet
+  // The border edges, then per vertex: a corner where its border edges are not two, or
+  // where two of them separate different patch pairs. Both loops in parallel (each task
+  // writes only its own edges' or vertices' entries).
+  constexpr std::size_t kChunk = 16384;
+  parallel_chunks(static_cast<std::size_t>(n_edges), workers, kChunk, [&](std::size_t begin, std::size_t end, unsigned) {
+    for (std::size_t e = begin; e < end; ++e) {
+      const auto s = sides(OpenMesh::EdgeHandle(static_cast<int>(e)));
+      is_border[e] = s.first != s.second ? 1 : 0;
     }
-  }
+  });
+  parallel_chunks(static_cast<std::size_t>(n_vertices), workers, kChunk, [&](std::size_t begin, std::size_t end, unsigned) {
+    for (std::size_t v = begin; v < end; ++v) {
+      int degree = 0;
+      std::pair<int, int> first{-2, -2};
+      bool corner = false;
+      for (const auto out : mesh.voh_range(mesh.vertex_handle(static_cast<unsigned>(v)))) {
+        const auto e = mesh.edge_handle(out);
+        if (is_border[e.idx()] == 0) continue;
+        const auto s = sides(e);
+        if (++degree == 1) first = s;
+        else if (s != first) corner = true;  // two different patch pairs meet
+      }
+      is_corner[v] = corner || (degree > 0 && degree != 2) ? 1 : 0;
+    }
+  });
   Borders borders;
-  for (int v = 0; v < n_vertices; ++v) {
-    if (degree[v] > 0 && degree[v] != 2) is_corner[v] = 1;
+  for (int v = 0; v < n_vertices; ++v)
     if (is_corner[v] != 0) borders.corners.push_back(v);
-  }
 
   // Walks from halfedge h until a corner or back at the start vertex.
   auto trace = [&](OpenMesh::HalfedgeHandle h) {
@@ -123,10 +133,6 @@ Borders extract_borders(const TriMesh& mesh, const std::vector<int>& face_patch,
       if (curve.is_closed) std::reverse(curve.vertices.begin() + 1, curve.vertices.end());
       else std::reverse(curve.vertices.begin(), curve.vertices.end());
     }
-    std::vector<Eigen::Vector3d> positions;
-    positions.reserve(curve.vertices.size());
-    for (int w : curve.vertices) positions.push_back(to_eigen(mesh.point(mesh.vertex_handle(w))));
-    curve.smoothed = smooth_polyline(positions, curve.is_closed, options);
     return curve;
   };
 
@@ -140,6 +146,17 @@ Borders extract_borders(const TriMesh& mesh, const std::vector<int>& face_patch,
     if (is_border[e] != 0 && visited[e] == 0)
       borders.curves.push_back(trace(mesh.halfedge_handle(mesh.edge_handle(e), 0)));
   }
+  // Each curve is smoothed on its own: in parallel, the same positions for any thread count.
+  parallel_chunks(borders.curves.size(), workers, 64, [&](std::size_t begin, std::size_t end, unsigned) {
+    std::vector<Eigen::Vector3d> positions;
+    for (std::size_t c = begin; c < end; ++c) {
+      BorderCurve& curve = borders.curves[c];
+      positions.clear();
+      positions.reserve(curve.vertices.size());
+      for (int w : curve.vertices) positions.push_back(to_eigen(mesh.point(mesh.vertex_handle(w))));
+      curve.smoothed = smooth_polyline(positions, curve.is_closed, options);
+    }
+  });
   return borders;
 }
 

@@ -20,6 +20,11 @@
 
 namespace nurbsfront {
 
+namespace {
+// Faces per task of the parallel per-face loops.
+constexpr std::size_t kFaceChunk = 8192;
+}  // namespace
+
 void SegmentOptions::validate() const {
   auto fail = [](const std::string& what) { throw InvalidInput("SegmentOptions: " + what); };
   if (!(max_slope_deg > 0.0 && max_slope_deg < 90.0))
@@ -28,10 +33,11 @@ void SegmentOptions::validate() const {
     fail("crease_angle_deg must be in (0, 180], got " + std::to_string(crease_angle_deg));
   if (normal_smoothing_rings < 0)
     fail("normal_smoothing_rings must be >= 0, got " + std::to_string(normal_smoothing_rings));
+  if (threads < 0) fail("threads must be >= 0, got " + std::to_string(threads));
   border_smoothing.validate();
 }
 
-segment_detail::FaceGraph segment_detail::build_graph(const TriMesh& mesh) {
+segment_detail::FaceGraph segment_detail::build_graph(const TriMesh& mesh, const unsigned workers) {
   FaceGraph graph;
   graph.mesh = &mesh;
   const auto n = static_cast<int>(mesh.n_faces());
@@ -41,16 +47,18 @@ segment_detail::FaceGraph segment_detail::build_graph(const TriMesh& mesh) {
   graph.crease.assign(n, 0);
   graph.points.reserve(mesh.n_vertices());
   for (const auto v : mesh.all_vertices()) graph.points.push_back(to_eigen(mesh.point(v)));
-  for (int f = 0; f < n; ++f) {
-    auto h = mesh.halfedge_handle(mesh.face_handle(f));
-    for (int i = 0; i < 3; ++i) {
-      graph.vertices[f][i] = mesh.from_vertex_handle(h).idx();
-      graph.halfedges[f][i] = h.idx();
-      const auto g = mesh.face_handle(mesh.opposite_halfedge_handle(h));
-      graph.neighbours[f][i] = g.is_valid() ? g.idx() : -1;
-      h = mesh.next_halfedge_handle(h);
+  segment_detail::parallel_chunks(n, workers, kFaceChunk, [&](std::size_t begin, std::size_t end, unsigned) {
+    for (auto f = static_cast<int>(begin); f < static_cast<int>(end); ++f) {
+      auto h = mesh.halfedge_handle(mesh.face_handle(f));
+      for (int i = 0; i < 3; ++i) {
+        graph.vertices[f][i] = mesh.from_vertex_handle(h).idx();
+        graph.halfedges[f][i] = h.idx();
+        const auto g = mesh.face_handle(mesh.opposite_halfedge_handle(h));
+        graph.neighbours[f][i] = g.is_valid() ? g.idx() : -1;
+        h = mesh.next_halfedge_handle(h);
+      }
     }
-  }
+  });
   return graph;
 }
 
@@ -91,7 +99,7 @@ struct FaceNormals {
   std::vector<std::uint8_t> degenerate, exception;
 };
 
-FaceNormals face_normals(const FaceGraph& graph, double diagonal) {
+FaceNormals face_normals(const FaceGraph& graph, double diagonal, unsigned workers) {
   const int n = graph.n_faces();
   FaceNormals normals;
   normals.raw.assign(n, Eigen::Vector3d::Zero());
@@ -99,29 +107,34 @@ FaceNormals face_normals(const FaceGraph& graph, double diagonal) {
   normals.degenerate.assign(n, 0);
   normals.exception.assign(n, 0);
   const double min_area = tolerance::kDegenerateAreaRelative * diagonal * diagonal;
-  for (int f = 0; f < n; ++f) {
-    const auto& v = graph.vertices[f];
-    const Eigen::Vector3d cross =
-        (graph.points[v[1]] - graph.points[v[0]]).cross(graph.points[v[2]] - graph.points[v[0]]);
-    const double area = 0.5 * cross.norm();
-    if (!(area > min_area)) {
-      normals.degenerate[f] = 1;
-      continue;
+  segment_detail::parallel_chunks(n, workers, kFaceChunk, [&](std::size_t begin, std::size_t end, unsigned) {
+    for (auto f = static_cast<int>(begin); f < static_cast<int>(end); ++f) {
+      const auto& v = graph.vertices[f];
+      const Eigen::Vector3d cross =
+          (graph.points[v[1]] - graph.points[v[0]]).cross(graph.points[v[2]] - graph.points[v[0]]);
+      const double area = 0.5 * cross.norm();
+      if (!(area > min_area)) {
+        normals.degenerate[f] = 1;
+        continue;
+      }
+      normals.raw[f] = cross / (2.0 * area);
+      normals.area[f] = area;
     }
-    normals.raw[f] = cross / (2.0 * area);
-    normals.area[f] = area;
-  }
+  });
   return normals;
 }
 
-void mark_creases(FaceGraph& graph, const FaceNormals& normals, double cos_crease) {
-  for (int f = 0; f < graph.n_faces(); ++f) {
-    for (int i = 0; i < 3; ++i) {
-      const int g = graph.neighbours[f][i];
-      if (g < 0 || normals.degenerate[f] != 0 || normals.degenerate[g] != 0) continue;
-      if (normals.raw[f].dot(normals.raw[g]) < cos_crease) graph.crease[f] |= static_cast<std::uint8_t>(1U << i);
+void mark_creases(FaceGraph& graph, const FaceNormals& normals, double cos_crease, unsigned workers) {
+  const auto n = static_cast<std::size_t>(graph.n_faces());
+  segment_detail::parallel_chunks(n, workers, kFaceChunk, [&](std::size_t begin, std::size_t end, unsigned) {
+    for (auto f = static_cast<int>(begin); f < static_cast<int>(end); ++f) {
+      for (int i = 0; i < 3; ++i) {
+        const int g = graph.neighbours[f][i];
+        if (g < 0 || normals.degenerate[f] != 0 || normals.degenerate[g] != 0) continue;
+        if (normals.raw[f].dot(normals.raw[g]) < cos_crease) graph.crease[f] |= static_cast<std::uint8_t>(1U << i);
+      }
     }
-  }
+  });
 }
 
 // Bevel creases (SegmentOptions::bevel_creases): smallest dihedral (deg) of a bend, the
@@ -218,19 +231,22 @@ std::size_t mark_bevel_creases(FaceGraph& graph, const FaceNormals& normals) {
 }
 
 // Jacobi iterations of area-weighted averaging over edge-adjacent faces, not across creases.
-std::vector<Eigen::Vector3d> smooth_normals(const FaceGraph& graph, const FaceNormals& normals, int rings) {
+std::vector<Eigen::Vector3d> smooth_normals(const FaceGraph& graph, const FaceNormals& normals, int rings,
+                                            unsigned workers) {
   const int n = graph.n_faces();
   std::vector<Eigen::Vector3d> current = normals.raw, next(n);
   for (int it = 0; it < rings; ++it) {
-    for (int f = 0; f < n; ++f) {
-      Eigen::Vector3d sum = normals.area[f] * current[f];
-      for (int i = 0; i < 3; ++i) {
-        const int g = graph.neighbours[f][i];
-        if (g >= 0 && !graph.is_crease(f, i)) sum += normals.area[g] * current[g];
+    segment_detail::parallel_chunks(n, workers, kFaceChunk, [&](std::size_t begin, std::size_t end, unsigned) {
+      for (auto f = static_cast<int>(begin); f < static_cast<int>(end); ++f) {
+        Eigen::Vector3d sum = normals.area[f] * current[f];
+        for (int i = 0; i < 3; ++i) {
+          const int g = graph.neighbours[f][i];
+          if (g >= 0 && !graph.is_crease(f, i)) sum += normals.area[g] * current[g];
+        }
+        const double length = sum.norm();
+        next[f] = length > 0.0 ? Eigen::Vector3d(sum / length) : current[f];
       }
-      const double length = sum.norm();
-      next[f] = length > 0.0 ? Eigen::Vector3d(sum / length) : current[f];
-    }
+    });
     std::swap(current, next);
   }
   return current;
@@ -339,13 +355,27 @@ struct PatchCones {
   Cone smooth, raw;
 };
 
+// The radius is the largest angle to the axis. acos is evaluated only for the faces whose
+// dot product is within kConeDotSlack of the smallest: acos decreases with a slope of at
+// least 1, so any other face's angle is smaller by far more than acos' rounding error (the
+// same radius as acos of every face, without relying on acos' monotone rounding).
+constexpr double kConeDotSlack = 1e-9;
+
 PatchCones patch_cones(const Grouping& grouping, const std::vector<int>& faces, const Eigen::Vector3d& axis) {
   PatchCones cones{{axis, -1.0}, {axis, -1.0}};
+  const FaceNormals& normals = grouping.normals;
+  double raw_dot = std::numeric_limits<double>::infinity(), smooth_dot = raw_dot;
   for (int f : faces) {
-    if (grouping.normals.degenerate[f] != 0) continue;
-    cones.raw.radius = std::max(cones.raw.radius, angle_between(grouping.normals.raw[f], axis));
-    if (grouping.normals.exception[f] == 0)
-      cones.smooth.radius = std::max(cones.smooth.radius, angle_between(grouping.normals.smooth[f], axis));
+    if (normals.degenerate[f] != 0) continue;
+    raw_dot = std::min(raw_dot, normals.raw[f].dot(axis));
+    if (normals.exception[f] == 0) smooth_dot = std::min(smooth_dot, normals.smooth[f].dot(axis));
+  }
+  for (int f : faces) {
+    if (normals.degenerate[f] != 0) continue;
+    if (normals.raw[f].dot(axis) <= raw_dot + kConeDotSlack)
+      cones.raw.radius = std::max(cones.raw.radius, angle_between(normals.raw[f], axis));
+    if (normals.exception[f] == 0 && normals.smooth[f].dot(axis) <= smooth_dot + kConeDotSlack)
+      cones.smooth.radius = std::max(cones.smooth.radius, angle_between(normals.smooth[f], axis));
   }
   return cones;
 }
@@ -604,7 +634,7 @@ void renumber(Patches& patches) {
   for (int p = 0; p < static_cast<int>(patches.faces.size()); ++p) {
     auto& faces = patches.faces[p];
     if (faces.empty()) continue;
-    std::sort(faces.begin(), faces.end());
+    if (!std::is_sorted(faces.begin(), faces.end())) std::sort(faces.begin(), faces.end());
     order.push_back(p);
   }
   std::sort(order.begin(), order.end(), [&](int a, int b) { return patches.faces[a][0] < patches.faces[b][0]; });
@@ -676,6 +706,8 @@ bool has_cliff(const FaceGraph& graph, const std::vector<int>& faces, const Eige
   std::vector<Entry> entries;
   entries.reserve(faces.size());
   double z_min = std::numeric_limits<double>::infinity(), z_max = -z_min;
+  std::int64_t i_min = std::numeric_limits<std::int64_t>::max(), i_max = std::numeric_limits<std::int64_t>::min();
+  std::int64_t j_min = i_min, j_max = i_max;
   const int epoch = ++scratch.vertex_epoch;  // each vertex once
   for (const int f : faces) {
     for (const int v : graph.vertices[f]) {
@@ -687,14 +719,42 @@ bool has_cliff(const FaceGraph& graph, const std::vector<int>& faces, const Eige
                          static_cast<std::int64_t>(std::floor(local.y() / run)), local});
       z_min = std::min(z_min, local.z());
       z_max = std::max(z_max, local.z());
+      i_min = std::min(i_min, entries.back().i);
+      i_max = std::max(i_max, entries.back().i);
+      j_min = std::min(j_min, entries.back().j);
+      j_max = std::max(j_max, entries.back().j);
     }
   }
   if (!(z_max - z_min > rise)) return false;
-  std::sort(entries.begin(), entries.end(), [](const Entry& a, const Entry& b) {
-    if (a.i != b.i) return a.i < b.i;
-    if (a.j != b.j) return a.j < b.j;
-    return a.local.z() < b.local.z();
-  });
+  // Ordered by bucket (i, then j), heights ascending within a bucket (the order of equal
+  // heights does not matter: the test below treats them alike). A counting sort by bucket
+  // over the buckets' range, then a sort of each bucket, where that range is not much
+  // larger than the vertex count; else one comparison sort.
+  auto by_height = [](const Entry& a, const Entry& b) { return a.local.z() < b.local.z(); };
+  const auto n_i = static_cast<std::uint64_t>(i_max - i_min) + 1, n_j = static_cast<std::uint64_t>(j_max - j_min) + 1;
+  const std::uint64_t max_cells = 4 * static_cast<std::uint64_t>(entries.size()) + 64;
+  if (n_i <= max_cells && n_j <= max_cells && n_i * n_j <= max_cells) {
+    auto cell = [&](const Entry& e) {
+      return static_cast<std::size_t>(static_cast<std::uint64_t>(e.i - i_min) * n_j + static_cast<std::uint64_t>(e.j - j_min));
+    };
+    std::vector<std::size_t> start(static_cast<std::size_t>(n_i * n_j) + 1, 0);
+    for (const Entry& e : entries) ++start[cell(e) + 1];
+    for (std::size_t c = 1; c < start.size(); ++c) start[c] += start[c - 1];
+    std::vector<Entry> sorted(entries.size());
+    std::vector<std::size_t> fill(start.begin(), start.end() - 1);
+    for (const Entry& e : entries) sorted[fill[cell(e)]++] = e;
+    for (std::size_t c = 0; c + 1 < start.size(); ++c)
+      if (start[c + 1] - start[c] > 1)
+        std::sort(sorted.begin() + static_cast<std::ptrdiff_t>(start[c]), sorted.begin() + static_cast<std::ptrdiff_t>(start[c + 1]),
+                  by_height);
+    entries.swap(sorted);
+  } else {
+    std::sort(entries.begin(), entries.end(), [&](const Entry& a, const Entry& b) {
+      if (a.i != b.i) return a.i < b.i;
+      if (a.j != b.j) return a.j < b.j;
+      return by_height(a, b);
+    });
+  }
   struct Bucket {
     std::int64_t i, j;
     std::size_t begin, end;  // heights ascending
@@ -745,17 +805,55 @@ bool has_cliff(const FaceGraph& graph, const std::vector<int>& faces, const Eige
 // segments at a steep border face, typical of terraced inputs) is cut out with a few rings
 // of faces around it; anything else is bisected. Parts are checked again until every patch passes.
 // `work`: the patches to check, taken from the back (every patch unless some are known to pass).
+// With workers > 1, the patches of `work` are first checked in parallel, each worker but the
+// first with its own scratch from `worker_scratch` (made at first use, kept for later calls).
 std::size_t split_folds(const Grouping& grouping, double mean_edge, Scratch& scratch, Patches& patches,
-                        std::vector<int> work) {
+                        std::vector<int> work, unsigned workers,
+                        std::vector<std::unique_ptr<Scratch>>& worker_scratch) {
   const FaceGraph& graph = grouping.graph;
   const TriMesh& mesh = *graph.mesh;
+  // A patch fails when its projection is not simple or it holds a cliff.
+  auto check_patch = [&](int p, Scratch& own, bool& fails) {
+    segment_detail::ProjectionCheck check =
+        segment_detail::check_projection(graph, patches.faces[p], patches.face_patch, patches.axes[p], own);
+    fails = !check.is_simple || has_cliff(graph, patches.faces[p], patches.axes[p], mean_edge, own);
+    return check;
+  };
+  // The parallel checks: a patch's check depends only on its faces and axis and on which
+  // faces around it are not its own, which splitting other patches does not change, so a
+  // patch not split since it was checked here takes this result (the same as checking it
+  // in the loop: results do not depend on the thread count).
+  const std::size_t n_prechecked = workers > 1 && work.size() > 1 ? patches.faces.size() : 0;
+  std::vector<std::uint8_t> prechecked(n_prechecked, 0), prefails(n_prechecked, 0);
+  std::vector<segment_detail::ProjectionCheck> prechecks(n_prechecked);
+  if (n_prechecked > 0) {
+    if (worker_scratch.size() < workers) worker_scratch.resize(workers);
+    segment_detail::parallel_chunks(work.size(), workers, 1, [&](std::size_t begin, std::size_t end, unsigned worker) {
+      if (worker > 0 && !worker_scratch[worker]) worker_scratch[worker] = std::make_unique<Scratch>(mesh);
+      Scratch& own = worker == 0 ? scratch : *worker_scratch[worker];
+      for (std::size_t i = begin; i < end; ++i) {
+        const int p = work[i];
+        bool fails = false;
+        prechecks[p] = check_patch(p, own, fails);
+        prefails[p] = fails ? 1 : 0;
+        prechecked[p] = 1;
+      }
+    });
+  }
   std::size_t n_splits = 0;
   while (!work.empty()) {
     const int p = work.back();
     work.pop_back();
-    const segment_detail::ProjectionCheck check =
-        segment_detail::check_projection(graph, patches.faces[p], patches.face_patch, patches.axes[p], scratch);
-    if (check.is_simple && !has_cliff(graph, patches.faces[p], patches.axes[p], mean_edge, scratch)) continue;
+    segment_detail::ProjectionCheck check;
+    bool fails = false;
+    if (static_cast<std::size_t>(p) < n_prechecked && prechecked[p] != 0) {
+      prechecked[p] = 0;  // p's faces change if it is split
+      check = std::move(prechecks[p]);
+      fails = prefails[p] != 0;
+    } else {
+      check = check_patch(p, scratch, fails);
+    }
+    if (!fails) continue;
     ++n_splits;
     std::vector<std::vector<int>> parts;
     if (!check.trouble.empty()) {
@@ -1000,25 +1098,30 @@ std::size_t absorb_tiny_islands(const Grouping& grouping, double max_perimeter, 
 // Steps 1-2 of segment(): creases (bevel bends counted in result), raw and smoothed
 // normals, and the faces that admit no axis.
 FaceNormals prepare_normals(FaceGraph& graph, const SegmentOptions& options, Segmentation& result) {
-  FaceNormals normals = face_normals(graph, bounding_box(*graph.mesh).diagonal());
-  mark_creases(graph, normals, std::cos(radians(options.crease_angle_deg)));
+  const unsigned workers = segment_detail::worker_count(options.threads);
+  FaceNormals normals = face_normals(graph, bounding_box(*graph.mesh).diagonal(), workers);
+  mark_creases(graph, normals, std::cos(radians(options.crease_angle_deg)), workers);
   if (options.bevel_creases) result.n_bevel_crease_edges = mark_bevel_creases(graph, normals);
-  normals.smooth = smooth_normals(graph, normals, options.normal_smoothing_rings);
+  normals.smooth = smooth_normals(graph, normals, options.normal_smoothing_rings, workers);
   const double max_slope = radians(options.max_slope_deg);
   // A face whose raw and smoothed normals are further apart than this admits no axis.
   const double max_spread = max_slope + std::acos(kSegmentMinRawNormalDot) - kAngleMarginRad;
-  for (int f = 0; f < graph.n_faces(); ++f) {
-    if (normals.degenerate[f] != 0) continue;
-    const double spread = std::acos(std::clamp(normals.raw[f].dot(normals.smooth[f]), -1.0, 1.0));
-    normals.exception[f] = spread > max_spread ? 1 : 0;
-  }
+  segment_detail::parallel_chunks(graph.vertices.size(), workers, kFaceChunk,
+                                  [&](std::size_t begin, std::size_t end, unsigned) {
+    for (std::size_t f = begin; f < end; ++f) {
+      if (normals.degenerate[f] != 0) continue;
+      const double spread = std::acos(std::clamp(normals.raw[f].dot(normals.smooth[f]), -1.0, 1.0));
+      normals.exception[f] = spread > max_spread ? 1 : 0;
+    }
+  });
   return normals;
 }
 
 // Step 8 of segment(): border curves of the final (renumbered) patches, and the result.
 void finish_segmentation(const TriMesh& mesh, const FaceGraph& graph, const FaceNormals& normals, Patches& patches,
                          const SegmentOptions& options, Segmentation& result) {
-  segment_detail::Borders borders = segment_detail::extract_borders(mesh, patches.face_patch, options.border_smoothing);
+  segment_detail::Borders borders = segment_detail::extract_borders(mesh, patches.face_patch, options.border_smoothing,
+                                                                    segment_detail::worker_count(options.threads));
   result.face_patch = std::move(patches.face_patch);
   result.patches.assign(patches.faces.size(), Patch{});
   for (std::size_t p = 0; p < patches.faces.size(); ++p) {
@@ -1056,10 +1159,14 @@ struct segment_detail::Splitter {
   // The last result: each of its patches passed split_folds' checks with its axis.
   std::vector<int> last_face_patch;
   std::vector<Eigen::Vector3d> last_axes;
+  // The scratch of the checks (kept between rounds), and split_folds' scratches of the
+  // workers but the first.
+  std::unique_ptr<Scratch> scratch;
+  std::vector<std::unique_ptr<Scratch>> worker_scratch;
 
   void prepare() {
     if (prepared) return;
-    graph = segment_detail::build_graph(mesh);
+    graph = segment_detail::build_graph(mesh, segment_detail::worker_count(options.threads));
     Segmentation counts;
     normals = prepare_normals(graph, options, counts);
     n_bevel_crease_edges = counts.n_bevel_crease_edges;
@@ -1128,7 +1235,7 @@ Segmentation segment_detail::segment(const TriMesh& mesh, const SegmentOptions& 
   constexpr std::string_view kStage = "segment";
   report_progress(options.progress, kStage, 0.0);
 
-  FaceGraph graph = segment_detail::build_graph(mesh);
+  FaceGraph graph = segment_detail::build_graph(mesh, segment_detail::worker_count(options.threads));
   FaceNormals normals = prepare_normals(graph, options, result);
   const double max_slope = radians(options.max_slope_deg);
   report_progress(options.progress, kStage, 0.3);
@@ -1141,8 +1248,11 @@ Segmentation segment_detail::segment(const TriMesh& mesh, const SegmentOptions& 
   clean_borders(grouping, patches);
   renumber(patches);
   refine_axes(grouping, patches);
-  Scratch scratch(mesh);
-  result.n_fold_splits = split_folds(grouping, mean_edge, scratch, patches, all_patches(patches));
+  auto own_scratch = std::make_unique<Scratch>(mesh);
+  Scratch& scratch = *own_scratch;
+  std::vector<std::unique_ptr<Scratch>> worker_scratch;
+  result.n_fold_splits = split_folds(grouping, mean_edge, scratch, patches, all_patches(patches),
+                                     segment_detail::worker_count(options.threads), worker_scratch);
   if (result.n_fold_splits > 0) merge_patches(grouping, options.min_patch_faces, patches, &scratch);
   result.n_islands_absorbed =
       absorb_tiny_islands(grouping, kSegmentTinyIslandPerimeterEdges * mean_edge, patches, scratch,
@@ -1160,6 +1270,8 @@ Segmentation segment_detail::segment(const TriMesh& mesh, const SegmentOptions& 
     kept.n_bevel_crease_edges = result.n_bevel_crease_edges;
     kept.mean_edge = mean_edge;
     kept.prepared = true;
+    kept.scratch = std::move(own_scratch);
+    kept.worker_scratch = std::move(worker_scratch);
   }
   report_progress(options.progress, kStage, 1.0);
   return result;
@@ -1210,7 +1322,8 @@ Segmentation segment_detail::split(Splitter& s, const Segmentation& segmentation
   }
   // The last result again: its patches that are not split pass split_folds' checks as they did.
   const bool checked = segmentation.face_patch == s.last_face_patch && patches.axes == s.last_axes;
-  Scratch scratch(s.mesh);
+  if (!s.scratch) s.scratch = std::make_unique<Scratch>(s.mesh);
+  Scratch& scratch = *s.scratch;
   std::vector<int> sorted = which;
   std::sort(sorted.begin(), sorted.end());
   sorted.erase(std::unique(sorted.begin(), sorted.end()), sorted.end());
@@ -1246,7 +1359,8 @@ Segmentation segment_detail::split(Splitter& s, const Segmentation& segmentation
   std::vector<int> work = all_patches(patches);
   if (checked)
     std::erase_if(work, [&](int p) { return p < n_patches && !std::binary_search(sorted.begin(), sorted.end(), p); });
-  result.n_fold_splits += split_folds(grouping, s.mean_edge, scratch, patches, std::move(work));
+  result.n_fold_splits += split_folds(grouping, s.mean_edge, scratch, patches, std::move(work),
+                                      segment_detail::worker_count(s.options.threads), s.worker_scratch);
   renumber(patches);
   finish_segmentation(s.mesh, s.graph, s.normals, patches, s.options, result);
   s.last_face_patch = result.face_patch;

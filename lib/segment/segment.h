@@ -84,6 +84,9 @@ struct SegmentOptions {
   std::size_t min_patch_faces = 50;
   //! How border curves are smoothed.
   BorderSmoothingOptions border_smoothing;
+  //! Worker threads for the per-face and per-patch steps (normals, projection and cliff
+  //! checks); 0 = all hardware threads. The result does not depend on it (>= 0).
+  int threads = 0;
   //! Optional progress callback (stage "segment"); returning false cancels.
   ProgressCallback progress;
   //! Throws InvalidInput if a field is out of range.
@@ -179,7 +182,9 @@ struct Segmentation {
 //! smaller than min_patch_faces remain where no neighbour can take them. Degenerate
 //! (zero-area) faces join a neighbouring patch and are exempt from the normal bounds:
 //! weld and drop them first (io module). The result depends only on the mesh and the
-//! options (no hashing, no threads).
+//! options, not on options.threads (no hashing; the parallel steps compute per face, per
+//! patch or per curve what the serial ones would, and the order-dependent steps, region
+//! growing, merging and the splits, run on one thread).
 //!
 //! \param mesh     a 2-manifold triangle mesh without deleted elements (open or closed)
 //! \param options  see SegmentOptions

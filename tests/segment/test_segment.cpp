@@ -278,6 +278,28 @@ TEST(Segment, SelfOverlappingRampIsSplit) {
   EXPECT_GE(seg.patches.size(), 3u);
 }
 
+// The checks of split_folds run in parallel first (SegmentOptions::threads); the patches
+// that fail them are split the same way as with one thread.
+TEST(Segment, FoldSplitsDoNotDependOnTheThreadCount) {
+  // Two ramps side by side: two patches checked in parallel, both folded.
+  TriangleSoup soup = ramp(2.5, 48, 4);
+  const TriangleSoup other = ramp(1.5, 40, 3);
+  const auto offset = static_cast<std::uint32_t>(soup.points.size());
+  for (const auto& p : other.points) soup.points.push_back(p + Eigen::Vector3d(10.0, 0.0, 0.0));
+  for (const auto& t : other.triangles) soup.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
+  const TriMesh mesh = to_trimesh(soup);
+  SegmentOptions options;
+  options.threads = 1;
+  const Segmentation one = segment(mesh, options);
+  options.threads = 3;
+  const Segmentation three = run(mesh, options, 0.0);
+  EXPECT_GE(one.n_fold_splits, 2u);
+  EXPECT_EQ(one.n_fold_splits, three.n_fold_splits);
+  EXPECT_EQ(one.face_patch, three.face_patch);
+  ASSERT_EQ(one.patches.size(), three.patches.size());
+  for (std::size_t p = 0; p < one.patches.size(); ++p) EXPECT_EQ(one.patches[p].axis, three.patches[p].axis);
+}
+
 // 345 of 360 deg of a steeper ramp (normals within 17 deg of +z): no overlap, but its two
 // ends are 0.26 apart in the plane (about one mean edge) and 1.8 (8 mean edges) apart in
 // height, a cliff no fit lattice of 2.5 mean edges holds. Half a turn has no cliff.
@@ -387,6 +409,7 @@ TEST(Segment, InvalidOptionsAndMeshesThrow) {
   EXPECT_THROW((void)segment(mesh, with([](SegmentOptions& o) { o.max_slope_deg = 0.0; })), InvalidInput);
   EXPECT_THROW((void)segment(mesh, with([](SegmentOptions& o) { o.crease_angle_deg = 181.0; })), InvalidInput);
   EXPECT_THROW((void)segment(mesh, with([](SegmentOptions& o) { o.normal_smoothing_rings = -1; })), InvalidInput);
+  EXPECT_THROW((void)segment(mesh, with([](SegmentOptions& o) { o.threads = -1; })), InvalidInput);
   EXPECT_THROW((void)segment(mesh, with([](SegmentOptions& o) { o.border_smoothing.lambda = 0.0; })), InvalidInput);
   EXPECT_THROW((void)segment(mesh, with([](SegmentOptions& o) { o.border_smoothing.mu = 0.5; })), InvalidInput);
   EXPECT_THROW((void)segment(mesh, with([](SegmentOptions& o) { o.border_smoothing.iterations = -2; })), InvalidInput);

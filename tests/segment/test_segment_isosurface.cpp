@@ -8,6 +8,7 @@
 #include <numbers>
 #include <set>
 #include <string>
+#include <vector>
 
 #include <Eigen/Geometry>
 
@@ -51,6 +52,43 @@ TEST(SegmentIsosurface, RawNormalsFragmentTheTerracedSphere) {
   options.min_patch_faces = 0;
   const Segmentation raw = segment_test::run(mesh, options, kTerracedSlack);
   EXPECT_GT(raw.patches.size(), 2 * smoothed);
+}
+
+// SegmentOptions::threads: the per-face loops (more than one chunk of faces here), the
+// projection and cliff checks and the curve smoothing run on several workers; the result
+// is the same for any thread count, the splitter's rounds too.
+TEST(SegmentIsosurface, ResultDoesNotDependOnTheThreadCount) {
+  const TriMesh mesh = scene_mesh("sphere", 40, SampleMode::Occupancy);
+  ASSERT_GT(mesh.n_faces(), 8192u);  // two chunks of the per-face loops
+  auto expect_same = [](const Segmentation& a, const Segmentation& b) {
+    EXPECT_EQ(a.face_patch, b.face_patch);
+    EXPECT_EQ(a.corners, b.corners);
+    EXPECT_EQ(a.n_fold_splits, b.n_fold_splits);
+    EXPECT_EQ(a.n_slope_exceptions, b.n_slope_exceptions);
+    EXPECT_EQ(a.n_crease_edges, b.n_crease_edges);
+    ASSERT_EQ(a.patches.size(), b.patches.size());
+    for (std::size_t p = 0; p < a.patches.size(); ++p) EXPECT_EQ(a.patches[p].axis, b.patches[p].axis) << "patch " << p;
+    ASSERT_EQ(a.curves.size(), b.curves.size());
+    for (std::size_t c = 0; c < a.curves.size(); ++c) {
+      EXPECT_EQ(a.curves[c].vertices, b.curves[c].vertices) << "curve " << c;
+      EXPECT_EQ(a.curves[c].smoothed, b.curves[c].smoothed) << "curve " << c;
+    }
+  };
+  SegmentOptions raw;  // raw normals: many small patches
+  raw.normal_smoothing_rings = 0;
+  raw.min_patch_faces = 0;
+  for (SegmentOptions options : {SegmentOptions{}, raw}) {
+    options.threads = 1;
+    const Segmentation one = segment(mesh, options);
+    PatchSplitter one_splitter(mesh, options);
+    options.threads = 3;
+    const Segmentation three = segment(mesh, options);
+    PatchSplitter three_splitter(mesh, options);
+    expect_same(one, three);
+    ASSERT_GE(one.patches.size(), 4u);
+    const std::vector<int> which{0, 1, 2, 3};
+    expect_same(one_splitter.split(one, which), three_splitter.split(three, which));
+  }
 }
 
 TEST(SegmentIsosurface, LevelSetSphereAndTorus) {
