@@ -6,6 +6,7 @@
 // vertices of crease-bounded patches.
 
 #include <algorithm>
+#include <cstddef>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -117,9 +118,30 @@ SizeAt adaptive_sizing(const TriMesh& mesh, const Segmentation& segmentation, co
   return graded_sizing(mesh, std::move(sizes), gradation);
 }
 
+bool vertices_on_axis_lattice(const TriMesh& mesh) {
+  const std::size_t n = mesh.n_vertices();
+  if (n == 0) return false;
+  constexpr std::size_t kShared = 4;  // vertices sharing a lattice value, at least
+  std::vector<std::uint8_t> on_lattice(n, 0);  // per vertex: coordinates shared by >= kShared
+  std::vector<std::pair<double, std::uint32_t>> values(n);
+  for (int axis = 0; axis < 3; ++axis) {
+    for (std::size_t v = 0; v < n; ++v) values[v] = {mesh.point(TriMesh::VertexHandle(static_cast<int>(v)))[axis], static_cast<std::uint32_t>(v)};
+    std::sort(values.begin(), values.end());
+    for (std::size_t i = 0; i < n;) {
+      std::size_t j = i + 1;
+      while (j < n && values[j].first == values[i].first) ++j;
+      if (j - i >= kShared)
+        for (std::size_t k = i; k < j; ++k) ++on_lattice[values[k].second];
+      i = j;
+    }
+  }
+  const auto count = static_cast<std::size_t>(std::count_if(on_lattice.begin(), on_lattice.end(), [](std::uint8_t c) { return c >= 2; }));
+  return 10 * count >= 9 * n;
+}
+
 FeatureSizing feature_sizing(const TriMesh& mesh, const Segmentation& segmentation,
                              const std::vector<std::uint8_t>& curve_is_feature, const SizeAt& base, double factor,
-                             double min_size, double gradation) {
+                             double min_size, double gradation, double min_area_share) {
   FeatureSizing out;
   std::vector<double> curve_length(segmentation.curves.size(), 0.0);
   for (std::size_t c = 0; c < segmentation.curves.size(); ++c)
@@ -139,6 +161,17 @@ FeatureSizing feature_sizing(const TriMesh& mesh, const Segmentation& segmentati
     double area = 0.0;
     for (const int f : patch.faces) area += mesh.calc_face_area(TriMesh::FaceHandle(f));
     width[p] = 2.0 * area / perimeter;
+  }
+  if (min_area_share > 0.0) {
+    // Area of the faces whose patch's factor x width is below base at their first vertex.
+    double total = 0.0, limited_area = 0.0;
+    for (const auto f : mesh.faces()) {
+      const double a = mesh.calc_face_area(f);
+      total += a;
+      const double w = width[static_cast<std::size_t>(segmentation.face_patch[static_cast<std::size_t>(f.idx())])];
+      if (std::isfinite(w) && factor * w < base(to_eigen(mesh.point(*mesh.cfv_begin(f))))) limited_area += a;
+    }
+    if (!(limited_area >= min_area_share * total)) return out;
   }
   auto sizes = std::make_shared<VertexSizes>();
   sizes->soup = to_soup(mesh);

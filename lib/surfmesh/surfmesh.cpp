@@ -284,9 +284,12 @@ SurfaceMesh surfmesh_detail::mesh_surface(const TriMesh& input, const Segmentati
   std::vector<std::uint8_t> feature_limited;  // feature sizing alone: patches not at the uniform h
   std::vector<double> crease_angles;
   out.curve_is_feature = feature_curves(input, segmentation, options.crease_angle_deg, &crease_angles);
-  if (options.sizing.feature_size > 0.0) {
+  // Feature sizing where it helps (SizingOptions::feature_size): not on marching-cubes
+  // surfaces, not for a few thin parts.
+  if (options.sizing.feature_size > 0.0 && (options.sizing.feature_size_everywhere || !vertices_on_axis_lattice(input))) {
     FeatureSizing feature = feature_sizing(input, segmentation, out.curve_is_feature, size_at, options.sizing.feature_size,
-                                           options.sizing.min_size_fraction * h, options.sizing.gradation);
+                                           options.sizing.min_size_fraction * h, options.sizing.gradation,
+                                           options.sizing.feature_size_everywhere ? 0.0 : kFeatureSizingMinAreaShare);
     if (feature.size_at) {
       size_at = std::move(feature.size_at);
       front_size = size_at;
