@@ -46,7 +46,7 @@ constexpr std::size_t kMaxCavity = 4096;          // triangles examined for encr
 constexpr double kRefineMinLengthRelative = 1e-9;  // no piece shorter than twice this times the bbox diagonal is split
 constexpr double kRefineMaxPointsFactor = 2.0;     // at most this times the triangles (+1000) new points
 constexpr double kAutoSizeDivisor = 40.0;  // automatic uniform size: bbox diagonal / this
-constexpr int kSizingGridCells = 128;      // background grid of callback sizing fields, per side
+constexpr int kSizingGridCells = SizingField::kMaxCallbackGridCells;  // background grid of callback sizing fields, per side
 constexpr int kSegmentSamples = 16;        // sizing samples per segment when splitting it
 constexpr std::size_t kMaxGridCells = std::size_t{1} << 22;
 constexpr std::size_t kProgressEvery = 1u << 14;
@@ -95,7 +95,7 @@ class Sizing {
       h_ = f.uniform_size > 0 ? f.uniform_size : diag / kAutoSizeDivisor;
     } else if (f.kind == SizingField::Kind::Callback) {
       lo_ = lo;
-      n_ = kSizingGridCells;
+      n_ = f.callback_grid_cells > 0 ? std::min(f.callback_grid_cells, kSizingGridCells) : kSizingGridCells;
       cell_ = std::max((hi - lo).maxCoeff() / n_, diag * tolerance::kZeroLengthRelative);
       grid_.resize(static_cast<std::size_t>((n_ + 1) * (n_ + 1)));
       for (int j = 0; j <= n_; ++j)

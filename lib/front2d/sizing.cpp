@@ -24,6 +24,8 @@ void SizingField::validate() const {
       break;
     case Kind::Callback:
       if (!callback) throw InvalidInput("SizingField: Kind::Callback without a callback");
+      if (callback_grid_cells < 0 || callback_grid_cells > kMaxCallbackGridCells)
+        throw InvalidInput("SizingField: callback_grid_cells must be in [0, " + std::to_string(kMaxCallbackGridCells) + "], got " + std::to_string(callback_grid_cells));
       break;
   }
 }

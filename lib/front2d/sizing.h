@@ -37,6 +37,12 @@ struct SizingField {
   std::vector<double> vertex_sizes;
   //! User sizing function for Kind::Callback; must return a finite value > 0.
   std::function<double(const Eigen::Vector2d&)> callback;
+  //! Most cells per side of the background grid of Kind::Callback.
+  static constexpr int kMaxCallbackGridCells = 128;
+  //! Kind::Callback: cells per side of the background grid that limits the callback's sizes
+  //! by the gradation, in [1, kMaxCallbackGridCells]; 0 = kMaxCallbackGridCells. A caller whose callback is already graded and
+  //! varies on a coarser scale (surfmesh's sampled sizes) saves the grid's sweeps. Default 0.
+  int callback_grid_cells = 0;
   //! Gradation: neighbouring sizes may grow by at most this factor per unit of size,
   //! i.e. |grad h| <= gradation - 1. Must be > 1. Default 1.5.
   double gradation = 1.5;

@@ -6,6 +6,8 @@
 // vertices of crease-bounded patches.
 
 #include <algorithm>
+#include <atomic>
+#include <cstddef>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -32,8 +34,11 @@ struct VertexSizes {
   std::vector<double> size;  // per vertex
   std::unique_ptr<quality_detail::AabbTree> tree;
 
-  [[nodiscard]] double at(const Eigen::Vector3d& x) const {
-    const auto closest = tree->closest(x, std::numeric_limits<std::uint32_t>::max());
+  // hint: a face near x (the last answer of coherent queries) or UINT32_MAX; receives the
+  // closest face. The answer does not depend on it (ties go to the lowest face index).
+  [[nodiscard]] double at(const Eigen::Vector3d& x, std::uint32_t& hint) const {
+    const auto closest = tree->closest(x, hint);
+    hint = closest.face;
     const auto& t = soup.triangles[closest.face];
     const Eigen::Vector3d& a = soup.points[t[0]];
     const Eigen::Vector3d& b = soup.points[t[1]];
@@ -49,6 +54,27 @@ struct VertexSizes {
     const double wc = std::max(0.0, 1.0 - wa - wb);
     return wa * size[t[0]] + wb * size[t[1]] + wc * size[t[2]];
   }
+};
+
+// The SizeAt of VertexSizes: each call starts its closest-face search at the previous call's
+// answer (the front's size grid asks row by row: 5x fewer box tests on femur). The hint is
+// a relaxed atomic, so sharing one object between threads is safe; copies (one per patch)
+// keep their own.
+class HintedSizeAt {
+ public:
+  explicit HintedSizeAt(std::shared_ptr<const VertexSizes> sizes) : sizes_(std::move(sizes)) {}
+  HintedSizeAt(const HintedSizeAt& other) : sizes_(other.sizes_), hint_(other.hint_.load(std::memory_order_relaxed)) {}
+  HintedSizeAt& operator=(const HintedSizeAt&) = delete;
+  double operator()(const Eigen::Vector3d& x) const {
+    std::uint32_t hint = hint_.load(std::memory_order_relaxed);
+    const double s = sizes_->at(x, hint);
+    hint_.store(hint, std::memory_order_relaxed);
+    return s;
+  }
+
+ private:
+  std::shared_ptr<const VertexSizes> sizes_;
+  mutable std::atomic<std::uint32_t> hint_{std::numeric_limits<std::uint32_t>::max()};
 };
 
 // Limits the per-vertex sizes along the input's edges (h_v <= h_w + (gradation - 1)
@@ -79,7 +105,7 @@ SizeAt graded_sizing(const TriMesh& mesh, std::shared_ptr<VertexSizes> sizes, do
   std::vector<std::uint32_t> faces(sizes->soup.triangles.size());
   std::iota(faces.begin(), faces.end(), 0U);
   sizes->tree = std::make_unique<quality_detail::AabbTree>(sizes->soup, std::move(faces));
-  return [sizes](const Eigen::Vector3d& x) { return sizes->at(x); };
+  return HintedSizeAt(std::move(sizes));
 }
 
 }  // namespace
@@ -117,9 +143,30 @@ SizeAt adaptive_sizing(const TriMesh& mesh, const Segmentation& segmentation, co
   return graded_sizing(mesh, std::move(sizes), gradation);
 }
 
+bool vertices_on_axis_lattice(const TriMesh& mesh) {
+  const std::size_t n = mesh.n_vertices();
+  if (n == 0) return false;
+  constexpr std::size_t kShared = 4;  // vertices sharing a lattice value, at least
+  std::vector<std::uint8_t> on_lattice(n, 0);  // per vertex: coordinates shared by >= kShared
+  std::vector<std::pair<double, std::uint32_t>> values(n);
+  for (int axis = 0; axis < 3; ++axis) {
+    for (std::size_t v = 0; v < n; ++v) values[v] = {mesh.point(TriMesh::VertexHandle(static_cast<int>(v)))[axis], static_cast<std::uint32_t>(v)};
+    std::sort(values.begin(), values.end());
+    for (std::size_t i = 0; i < n;) {
+      std::size_t j = i + 1;
+      while (j < n && values[j].first == values[i].first) ++j;
+      if (j - i >= kShared)
+        for (std::size_t k = i; k < j; ++k) ++on_lattice[values[k].second];
+      i = j;
+    }
+  }
+  const auto count = static_cast<std::size_t>(std::count_if(on_lattice.begin(), on_lattice.end(), [](std::uint8_t c) { return c >= 2; }));
+  return 10 * count >= 9 * n;
+}
+
 FeatureSizing feature_sizing(const TriMesh& mesh, const Segmentation& segmentation,
                              const std::vector<std::uint8_t>& curve_is_feature, const SizeAt& base, double factor,
-                             double min_size, double gradation) {
+                             double min_size, double gradation, double min_area_share) {
   FeatureSizing out;
   std::vector<double> curve_length(segmentation.curves.size(), 0.0);
   for (std::size_t c = 0; c < segmentation.curves.size(); ++c)
@@ -140,6 +187,17 @@ FeatureSizing feature_sizing(const TriMesh& mesh, const Segmentation& segmentati
     for (const int f : patch.faces) area += mesh.calc_face_area(TriMesh::FaceHandle(f));
     width[p] = 2.0 * area / perimeter;
   }
+  if (min_area_share > 0.0) {
+    // Area of the faces whose patch's factor x width is below base at their first vertex.
+    double total = 0.0, limited_area = 0.0;
+    for (const auto f : mesh.faces()) {
+      const double a = mesh.calc_face_area(f);
+      total += a;
+      const double w = width[static_cast<std::size_t>(segmentation.face_patch[static_cast<std::size_t>(f.idx())])];
+      if (std::isfinite(w) && factor * w < base(to_eigen(mesh.point(*mesh.cfv_begin(f))))) limited_area += a;
+    }
+    if (!(limited_area >= min_area_share * total)) return out;
+  }
   auto sizes = std::make_shared<VertexSizes>();
   sizes->soup = to_soup(mesh);
   sizes->size.assign(mesh.n_vertices(), 0.0);
@@ -156,14 +214,17 @@ FeatureSizing feature_sizing(const TriMesh& mesh, const Segmentation& segmentati
   if (!limited) return out;
   out.size_at = graded_sizing(mesh, sizes, gradation);
   out.smallest = *std::min_element(sizes->size.begin(), sizes->size.end());
-  // Patches whose graded sizes are all base's keep the uniform front (no sizing grid).
+  // Patches whose graded sizes are all base's keep the uniform front (no sizing grid); the
+  // others' smallest size sets their sizing grid.
   out.patch_limited.assign(segmentation.patches.size(), 0);
+  out.patch_smallest.assign(segmentation.patches.size(), std::numeric_limits<double>::infinity());
   for (std::size_t p = 0; p < segmentation.patches.size(); ++p) {
     for (const int f : segmentation.patches[p].faces) {
       for (const auto v : mesh.fv_range(TriMesh::FaceHandle(f))) {
-        if (sizes->size[static_cast<std::size_t>(v.idx())] < base(to_eigen(mesh.point(v)))) out.patch_limited[p] = 1;
+        const double s = sizes->size[static_cast<std::size_t>(v.idx())];
+        out.patch_smallest[p] = std::min(out.patch_smallest[p], s);
+        if (s < base(to_eigen(mesh.point(v)))) out.patch_limited[p] = 1;
       }
-      if (out.patch_limited[p] != 0) break;
     }
   }
   return out;

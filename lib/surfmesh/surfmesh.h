@@ -52,9 +52,17 @@ struct SizingOptions {
   //! as its size at its input vertices, at least min_size_fraction x h, graded along the
   //! input's edges (`gradation`) and used for the borders and the 2D fronts: with the uniform
   //! h of the input's mean edge, a CAD input's narrow faces and small holes were one row of
-  //! triangles of border nodes (cheese, pinion). 0 = off. Default 0 (off: on by default it
-  //! gave cheese 8 self-intersecting pairs; see docs/surfmesh.md "Feature sizing").
-  double feature_size = 0.0;
+  //! triangles of border nodes (pinion, rotor). Applied only where it helps (see
+  //! feature_size_everywhere): not on a marching-cubes surface (its vertices on an axis
+  //! lattice: there the crease-bounded strips are voxel staircases, and the finer sizes made
+  //! headsq and the occupancy DRAM cell worse), and not when the patches it would limit hold
+  //! less than kFeatureSizingMinAreaShare (1%) of the input's area (a few thin organic parts:
+  //! armadillo, fandisk, mech-holes-shark got slightly worse). 0 = off. Default 1
+  //! (docs/surfmesh.md "Feature sizing").
+  double feature_size = 1.0;
+  //! Apply feature sizing (feature_size > 0) to every input, also marching-cubes surfaces and
+  //! inputs where it limits less than 1% of the area. Default false.
+  bool feature_size_everywhere = false;
   //! Optional user sizing h(x) at world points (length units, finite, > 0); when set it
   //! replaces the uniform size (adaptive still applies on top).
   std::function<double(const Eigen::Vector3d&)> callback;

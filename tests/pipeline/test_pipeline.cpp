@@ -421,15 +421,15 @@ TEST(Pipeline, ThinDiscLargeFacesSampledNoCrossings) {
   EXPECT_LE(rep.output.distance->hausdorff, rep.input_mean_edge);
 }
 
-// CGAL's rotor with feature sizing (SizingOptions::feature_size): its narrow crease-bounded
-// faces (hub walls, blade rims, narrower than the default 1.5 mean input edges of a mesh of
-// long fan triangles) are single rows of triangles of border nodes by default.
-// Sized from their width (2 area / perimeter) they hold well-shaped triangles; the surface
-// stays closed, of genus 1 and free of crossings.
+// CGAL's rotor by default (feature sizing, SizingOptions::feature_size, applies: a CAD mesh,
+// not a marching-cubes one): its narrow crease-bounded faces (hub walls, blade rims, narrower
+// than the uniform 1.5 mean input edges of a mesh of long fan triangles) were single rows of
+// triangles of border nodes without it (mean alpha 0.85, 19% obtuse: docs/surfmesh.md
+// "Feature sizing"). Sized from their width (2 area / perimeter) they hold well-shaped
+// triangles; the surface stays closed, of genus 1 and free of crossings.
 TEST(Pipeline, CreaseBoundedNarrowFacesSizedFromTheirWidth) {
   const TriMesh mesh = prepare_mesh(read_soup(test::test_data("meshes/rotor.off"))).mesh;
   RemeshOptions options = fast_options();
-  options.surfmesh.sizing.feature_size = 1.0;
   options.compute_distances = false;  // the shapes and the topology are the point (ASan time)
   const RemeshResult r = remesh(mesh, options);
   const RemeshReport& rep = r.report;
@@ -445,8 +445,6 @@ TEST(Pipeline, CreaseBoundedNarrowFacesSizedFromTheirWidth) {
   EXPECT_GE(q.alpha_mean, 0.9);
   EXPECT_LE(q.obtuse_fraction, 0.08);
   EXPECT_GE(q.min_angle_deg, 20.0);
-  // (The default, without feature sizing, gives mean alpha 0.85 and 19% obtuse triangles
-  // here: docs/surfmesh.md "Feature sizing"; not rerun, 17 s CPU under ASan for both.)
 }
 
 // The marching-cubes surface of VTK's head CT at iso 500 (the skin), padded.

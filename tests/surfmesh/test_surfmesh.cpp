@@ -843,6 +843,33 @@ TEST(Surfmesh, BevelledBoxEdgesAreFeatures) {
   EXPECT_GE(n_edges_found, 3);
 }
 
+// Feature sizing applies only where it helps (SizingOptions::feature_size): a marching-cubes
+// surface (every vertex on a lattice edge) is recognised and left alone, CGAL's rotor (a CAD
+// mesh of fan triangles) is not; on the rotor the narrow crease-bounded faces hold about a
+// tenth of the area (measured 11%), above the 1% gate and below a 50% one.
+TEST(Surfmesh, FeatureSizingOnlyWhereItHelps) {
+  EXPECT_TRUE(surfmesh_detail::vertices_on_axis_lattice(scene_mesh("sphere", 24, SampleMode::LevelSet)));
+  EXPECT_TRUE(surfmesh_detail::vertices_on_axis_lattice(scene_mesh("trench", 24, SampleMode::Occupancy)));
+  const TriMesh rotor = prepare_mesh(read_soup(test::test_data("meshes/rotor.off"))).mesh;
+  EXPECT_FALSE(surfmesh_detail::vertices_on_axis_lattice(rotor));
+  // The same marching-cubes sphere moved off its lattice by a rotation is no longer one.
+  TriMesh turned = scene_mesh("sphere", 24, SampleMode::LevelSet);
+  const Eigen::Matrix3d rotation = Eigen::AngleAxisd(0.3, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
+  for (const auto v : turned.vertices()) turned.set_point(v, to_openmesh(rotation * to_eigen(turned.point(v))));
+  EXPECT_FALSE(surfmesh_detail::vertices_on_axis_lattice(turned));
+
+  const Segmentation seg = segment(rotor);
+  const std::vector<std::uint8_t> features = surfmesh_detail::feature_curves(rotor, seg, 80.0);
+  const double h = 1.5 * mean_edge_length(rotor);
+  const surfmesh_detail::SizeAt base = [h](const Eigen::Vector3d&) { return h; };
+  const auto gated = surfmesh_detail::feature_sizing(rotor, seg, features, base, 1.0, 0.2 * h, 1.5,
+                                                     surfmesh_detail::kFeatureSizingMinAreaShare);
+  ASSERT_TRUE(gated.size_at);
+  EXPECT_LT(gated.smallest, h);
+  EXPECT_GE(gated.smallest, 0.2 * h);
+  EXPECT_FALSE(surfmesh_detail::feature_sizing(rotor, seg, features, base, 1.0, 0.2 * h, 1.5, 0.5).size_at);
+}
+
 TEST(Surfmesh, HolePointInsideClockwiseLoop) {
   // An L-shaped clockwise loop: the point must be strictly inside.
   const std::vector<Eigen::Vector2d> loop{{0, 0}, {0, 2}, {2, 2}, {2, 1}, {1, 1}, {1, 0}};

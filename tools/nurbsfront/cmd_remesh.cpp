@@ -39,7 +39,8 @@ struct RemeshArgs {
   std::optional<double> relative_size;
   std::optional<std::size_t> vertices;
   bool adaptive = false;
-  double feature_size = 0.0;
+  double feature_size = SizingOptions{}.feature_size;
+  bool feature_size_everywhere = false;
   std::optional<int> crossing_repair_rounds;
   std::optional<double> chord;
   std::optional<double> max_slope;
@@ -90,6 +91,7 @@ void run_remesh(RemeshArgs& args) {
   if (args.relative_size) options.surfmesh.sizing.relative_size = *args.relative_size;
   options.surfmesh.sizing.adaptive = args.adaptive;
   options.surfmesh.sizing.feature_size = args.feature_size;
+  options.surfmesh.sizing.feature_size_everywhere = args.feature_size_everywhere;
   if (args.crossing_repair_rounds) options.crossing_repair_rounds = *args.crossing_repair_rounds;
   if (args.chord) options.surfmesh.sizing.chord_error = *args.chord;
   if (args.max_slope) options.segment.max_slope_deg = *args.max_slope;
@@ -186,7 +188,10 @@ void add_remesh_command(CLI::App& app) {
   cmd->add_flag("--adaptive", args->adaptive, "Curvature-adaptive sizing (chord error)");
   cmd->add_option("--feature-size", args->feature_size,
                   "Size of a patch bounded mostly by feature curves at most F x its width (2 area / perimeter); "
-                  "0 = off (default; docs/surfmesh.md \"Feature sizing\")");
+                  "0 = off (default 1; not on marching-cubes surfaces nor where it limits under 1% of the area; "
+                  "docs/surfmesh.md \"Feature sizing\")");
+  cmd->add_flag("--feature-size-everywhere", args->feature_size_everywhere,
+                "Feature sizing also on marching-cubes surfaces and where it limits under 1% of the area");
   cmd->add_option("--crossing-repair-rounds", args->crossing_repair_rounds,
                   "Rounds of re-segmenting the patches of crossings the stitch left (default 4; 0 = off; "
                   "docs/segment.md \"Re-segmenting crossing patches\")");
