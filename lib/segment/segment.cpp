@@ -1455,7 +1455,9 @@ Segmentation segment_detail::bisect_patches(Splitter& s, const Segmentation& seg
     work.push_back(q);
   }
   if (work.empty()) return segmentation;
-  const std::size_t n_fold_splits = segmentation.n_fold_splits + split_folds(grouping, s.mean_edge, scratch, patches, work);
+  const std::size_t n_fold_splits =
+      segmentation.n_fold_splits + split_folds(grouping, s.mean_edge, scratch, patches, work,
+                                               segment_detail::worker_count(s.options.threads), s.worker_scratch);
   return finish_edit(s, patches, n_fold_splits, segmentation.n_islands_absorbed, segmentation.island_faces);
 }
 
