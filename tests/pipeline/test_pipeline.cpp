@@ -282,6 +282,20 @@ TEST(Pipeline, OccupancySphereBandFit) {
               r.report.output.quality.alpha_mean);
 }
 
+// The occupancy DRAM cell with the band fit: its bevelled box edges inside patches were rounded
+// off by the band fit (Hausdorff 1.18 voxel); such patches now get the plain fit
+// (CellGrid::plain_fit_miss_cells).
+TEST(PipelineSlow, OccupancyDramCell128WithinOneVoxel) {
+  const SceneInput in = scene_input("dram", 128, SampleMode::Occupancy);
+  RemeshOptions options = fast_options();
+  options.surfmesh.cell_grid = in.cells;
+  options.surfmesh.cell_grid.enabled = true;
+  const RemeshResult r = remesh(in.mesh, options);
+  expect_contract_and_quality(r, in, -18);  // Hausdorff to the input at most one voxel
+  EXPECT_LT(volume_change(r), 0.005);
+  expect_min_angle_away_from_features(r);
+}
+
 // CGAL's rotor (600 vertices, genus 1): a thin disc whose faces are fans of long input
 // triangles, so the fits of its small patches have no data inside and bulge by more than
 // the disc is thick; the two sides' triangles crossed in 32 pairs in the assembled mesh
