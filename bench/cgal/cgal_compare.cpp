@@ -119,24 +119,10 @@ std::vector<Input> inputs() {
   return list;
 }
 
-struct Truth {
-  double mean = 0.0;
-  double max = 0.0;
-};
-
-Truth truth_distance(const TriangleSoup& soup, const Scene& scene) {
-  Truth t;
-  std::size_t n = 0;
-  auto add = [&](const Eigen::Vector3d& p) {
-    const double d = std::abs(signed_distance(scene, p));
-    t.mean += d;
-    t.max = std::max(t.max, d);
-    ++n;
-  };
-  for (const auto& p : soup.points) add(p);
-  for (const auto& tri : soup.triangles) add((soup.points[tri[0]] + soup.points[tri[1]] + soup.points[tri[2]]) / 3.0);
-  if (n > 0) t.mean /= static_cast<double>(n);
-  return t;
+// |signed distance| to the scene's surface at the vertices and triangle centroids.
+DistanceSummary truth_distance(const TriangleSoup& soup, const Scene& scene) {
+  const SceneDistance d = distance_to_scene(soup, scene);
+  return d.vertices.merged(d.centroids);
 }
 
 double cpu_seconds() { return double(std::clock()) / CLOCKS_PER_SEC; }
@@ -147,7 +133,7 @@ struct Row {
   double cpu = 0.0;
   TriangleSoup soup;
   MeshReport report;
-  std::optional<Truth> truth;
+  std::optional<DistanceSummary> truth;
 };
 
 // `input` null: the input's own row (no distance to itself).

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <string>
 #include <thread>
 
@@ -145,6 +146,54 @@ void check(const DramScene& s) {
 
 double signed_distance(const Scene& scene, const Eigen::Vector3d& p) {
   return std::visit([&](const auto& s) { return sdf(s, p); }, scene);
+}
+
+DistanceSummary DistanceSummary::merged(const DistanceSummary& other) const {
+  DistanceSummary m;
+  m.count = count + other.count;
+  if (m.count == 0) return m;
+  m.mean = (mean * static_cast<double>(count) + other.mean * static_cast<double>(other.count)) / static_cast<double>(m.count);
+  m.max = std::max(max, other.max);
+  return m;
+}
+
+SceneDistance distance_to_scene(const TriangleSoup& soup, const Scene& scene, int dense_steps) {
+  validate(scene);
+  constexpr int kMaxDenseSteps = 64;
+  if (dense_steps < 0 || dense_steps > kMaxDenseSteps) {
+    throw InvalidInput("nurbsfront: distance_to_scene dense_steps must be in [0, 64], got " + std::to_string(dense_steps));
+  }
+  for (std::size_t t = 0; t < soup.triangles.size(); ++t)
+    for (const std::uint32_t v : soup.triangles[t])
+      if (v >= soup.points.size()) {
+        throw InvalidInput("nurbsfront: distance_to_scene: triangle " + std::to_string(t) + " refers to point " + std::to_string(v) +
+                           " of " + std::to_string(soup.points.size()));
+      }
+  // Sums first, means at the end.
+  auto add = [&](DistanceSummary& d, const Eigen::Vector3d& p) {
+    const double e = std::abs(signed_distance(scene, p));
+    d.mean += e;
+    d.max = std::max(d.max, e);
+    ++d.count;
+  };
+  SceneDistance out;
+  for (const auto& p : soup.points) add(out.vertices, p);
+  for (const auto& t : soup.triangles) {
+    const Eigen::Vector3d& a = soup.points[t[0]];
+    const Eigen::Vector3d& b = soup.points[t[1]];
+    const Eigen::Vector3d& c = soup.points[t[2]];
+    add(out.centroids, (a + b + c) / 3.0);
+    if (dense_steps < 2) continue;
+    for (int i = 0; i <= dense_steps; ++i)
+      for (int j = 0; i + j <= dense_steps; ++j) {
+        const int k = dense_steps - i - j;
+        if (i == dense_steps || j == dense_steps || k == dense_steps) continue;  // corners are vertices
+        add(out.dense, (i * a + j * b + k * c) / dense_steps);
+      }
+  }
+  for (DistanceSummary* d : {&out.vertices, &out.centroids, &out.dense})
+    if (d->count > 0) d->mean /= static_cast<double>(d->count);
+  return out;
 }
 
 BoundingBox bounding_box(const Scene& scene) {

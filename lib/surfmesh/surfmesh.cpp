@@ -99,9 +99,13 @@ void run_parallel(std::size_t n, unsigned threads, const ProgressCallback& progr
 // Moves each border node to the mean of its vertical projections onto the fitted surfaces
 // of its curve's patches, by at most one mean edge length, so the border lies near both
 // surfaces. Corners move the same way (onto all their patches' surfaces) unless one of
-// their curves is a feature: crease corners stay where the input has them.
+// their curves is a feature: crease corners stay where the input has them. With
+// `band_fits_only`, the nodes of a patch without a band fit (PatchResult::band_fit) stay
+// where they are: that patch holds a sharp edge, and the mean of its plain fit and its
+// neighbours' band fits put nodes at its concave corners a voxel off the input.
 void project_border_nodes(const Segmentation& seg, const std::vector<surfmesh_detail::PatchResult>& results,
-                          const std::vector<std::uint8_t>& is_feature, double max_move, surfmesh_detail::BorderNodes& borders) {
+                          const std::vector<std::uint8_t>& is_feature, double max_move, bool band_fits_only,
+                          surfmesh_detail::BorderNodes& borders) {
   const std::size_t n_corners = seg.corners.size();
   std::vector<std::vector<int>> node_patches(borders.positions.size());
   std::vector<std::uint8_t> corner_fixed(n_corners, 0);
@@ -121,6 +125,9 @@ void project_border_nodes(const Segmentation& seg, const std::vector<surfmesh_de
     Eigen::Vector3d& x = borders.positions[g];
     Eigen::Vector3d sum = Eigen::Vector3d::Zero();
     int count = 0;
+    if (band_fits_only && std::any_of(patches.begin(), patches.end(),
+                                      [&](int p) { return !results[static_cast<std::size_t>(p)].band_fit; }))
+      continue;
     for (const int p : patches) {
       const auto& r = results[static_cast<std::size_t>(p)];
       if (!r.has_surface) continue;
@@ -215,6 +222,8 @@ void CellGrid::validate() const {
     bad_option("cell_grid.wide_overlap_rings must be in [0, 20], got " + std::to_string(wide_overlap_rings));
   if (!finite_positive(wide_overlap_max_miss_cells))
     bad_option("cell_grid.wide_overlap_max_miss_cells must be finite and > 0, got " + std::to_string(wide_overlap_max_miss_cells));
+  if (!(std::isfinite(plain_fit_miss_cells) && plain_fit_miss_cells >= 0.0))
+    bad_option("cell_grid.plain_fit_miss_cells must be finite and >= 0, got " + std::to_string(plain_fit_miss_cells));
 }
 
 void SurfMeshOptions::validate() const {
@@ -390,13 +399,14 @@ SurfaceMesh surfmesh_detail::mesh_surface(const TriMesh& input, const Segmentati
   if (!options.sizing.adaptive) fit_all(borders);
 
   // With a cell grid the smoothed marching-cubes border is up to half a cell off the truth
-  // while the band fits are not: border nodes go onto them too.
+  // while the band fits are not: border nodes go onto them too (not the nodes of a patch
+  // that fell back to the plain fit, CellGrid::plain_fit_miss_cells).
   if (options.project_border_nodes || options.cell_grid.enabled) {
     // A projection that makes a curve cross another one in a patch plane is undone for that
     // curve's nodes (its corners included), until nothing crosses that did not before.
     const std::vector<int> crossing_before = crossing_curves(segmentation, borders);
     const std::vector<Eigen::Vector3d> unprojected = borders.positions;
-    project_border_nodes(segmentation, results, out.curve_is_feature, mean_edge, borders);
+    project_border_nodes(segmentation, results, out.curve_is_feature, mean_edge, options.cell_grid.enabled, borders);
     std::vector<std::uint8_t> restored(segmentation.curves.size(), 0);
     for (bool changed = true; changed;) {
       changed = false;

@@ -137,6 +137,8 @@ struct PatchResult {
   PatchMeshReport report;
   PatchSurface surface;
   bool has_surface = false;
+  //! The surface is a band fit (CellGrid), not a plain fit of the vertices.
+  bool band_fit = false;
   //! New nodes on the surface (world coordinates).
   std::vector<Eigen::Vector3d> inner_nodes;
   //! Triangles: ids >= 0 are global border nodes, id < 0 is inner node -(id + 1).

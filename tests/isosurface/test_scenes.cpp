@@ -3,6 +3,7 @@
 
 #include <cmath>
 #include <algorithm>
+#include <cstdint>
 #include <numbers>
 #include <vector>
 
@@ -181,6 +182,50 @@ TEST(Scenes, NamesAndValidation) {
   TrenchScene deep;
   deep.groove_depth = 2.0;
   EXPECT_THROW(validate(Scene{deep}), InvalidInput);
+}
+
+// distance_to_scene: hand-computed distances of an octahedron inscribed in the unit sphere
+// (vertices on it, face centroids at 1/sqrt(3), edge midpoints at 1/sqrt(2) from the centre)
+// and of a triangle parallel to the trench's top face.
+TEST(Scenes, DistanceToSceneIsExactOnKnownShapes) {
+  TriangleSoup octahedron;
+  for (int a = 0; a < 3; ++a)
+    for (const double s : {1.0, -1.0}) octahedron.points.push_back(s * Eigen::Vector3d::Unit(a));
+  for (const std::uint32_t x : {0u, 1u})
+    for (const std::uint32_t y : {2u, 3u})
+      for (const std::uint32_t z : {4u, 5u}) octahedron.triangles.push_back({x, y, z});
+  const double centroid = 1.0 - 1.0 / std::sqrt(3.0);
+  const double midpoint = 1.0 - 1.0 / std::sqrt(2.0);
+  const SceneDistance d = distance_to_scene(octahedron, SphereScene{}, 2);
+  EXPECT_EQ(d.vertices.count, 6u);
+  EXPECT_NEAR(d.vertices.max, 0.0, 1e-15);
+  EXPECT_EQ(d.centroids.count, 8u);
+  EXPECT_NEAR(d.centroids.mean, centroid, 1e-15);
+  EXPECT_NEAR(d.centroids.max, centroid, 1e-15);
+  EXPECT_EQ(d.dense.count, 24u);  // 3 edge midpoints per triangle
+  EXPECT_NEAR(d.dense.mean, midpoint, 1e-15);
+  const DistanceSummary all = d.all();
+  EXPECT_EQ(all.count, 38u);
+  EXPECT_NEAR(all.mean, (8.0 * centroid + 24.0 * midpoint) / 38.0, 1e-15);
+  EXPECT_NEAR(all.max, centroid, 1e-15);
+  EXPECT_EQ(distance_to_scene(octahedron, SphereScene{}).dense.count, 0u);
+
+  // 0.1 above the slab's top face, away from the groove: every sample at 0.1.
+  TriangleSoup above;
+  above.points = {{0.2, 0.2, 1.1}, {0.5, 0.2, 1.1}, {0.2, 0.5, 1.1}};
+  above.triangles = {{0, 1, 2}};
+  const SceneDistance t = distance_to_scene(above, TrenchScene{}, 4);
+  EXPECT_EQ(t.dense.count, 12u);
+  for (const DistanceSummary& s : {t.vertices, t.centroids, t.dense}) {
+    EXPECT_NEAR(s.mean, 0.1, 1e-12);
+    EXPECT_NEAR(s.max, 0.1, 1e-12);
+  }
+
+  above.triangles = {{0, 1, 3}};
+  EXPECT_THROW((void)distance_to_scene(above, TrenchScene{}), InvalidInput);
+  above.triangles = {{0, 1, 2}};
+  EXPECT_THROW((void)distance_to_scene(above, TrenchScene{}, -1), InvalidInput);
+  EXPECT_THROW((void)distance_to_scene(above, SphereScene{{0, 0, 0}, -1.0}), InvalidInput);
 }
 
 }  // namespace

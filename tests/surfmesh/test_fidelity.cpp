@@ -5,7 +5,7 @@
 
 #include <gtest/gtest.h>
 
-#include <algorithm>
+#include <cstdint>
 #include <cstdio>
 #include <string>
 
@@ -16,63 +16,31 @@
 namespace nurbsfront {
 namespace {
 
-struct Distance {
-  double mean = 0.0;
-  double max = 0.0;
-};
-
-// Distances to the scene's surface (in voxels) of the nodes, of the triangle centroids and
-// of dense samples (the 10 points of a 4-step barycentric grid inside every triangle that are
-// not vertices... plus the centroid).
+// Distances to the scene's surface (distance_to_scene, in voxels) of the nodes, of the
+// triangle centroids and of dense samples (the 12 points of a 4-step barycentric grid in every
+// triangle that are not its vertices).
 struct Fidelity {
-  Distance nodes;
-  Distance centroids;
-  Distance dense;
+  DistanceSummary nodes;
+  DistanceSummary centroids;
+  DistanceSummary dense;
 };
 
-Fidelity fidelity(const std::vector<Eigen::Vector3d>& nodes, const std::vector<std::array<int, 3>>& triangles,
-                  const Scene& scene, double voxel) {
-  auto add = [&](Distance& d, const Eigen::Vector3d& x, std::size_t& n) {
-    const double e = std::abs(signed_distance(scene, x)) / voxel;
-    d.mean += e;
-    d.max = std::max(d.max, e);
-    ++n;
+Fidelity fidelity(const TriangleSoup& soup, const Scene& scene, double voxel) {
+  const SceneDistance d = distance_to_scene(soup, scene, 4);
+  auto in_voxels = [voxel](DistanceSummary s) {
+    s.mean /= voxel;
+    s.max /= voxel;
+    return s;
   };
-  Fidelity f;
-  std::size_t n_nodes = 0;
-  std::size_t n_centroids = 0;
-  std::size_t n_dense = 0;
-  for (const auto& x : nodes) add(f.nodes, x, n_nodes);
-  constexpr int kSteps = 4;
-  for (const auto& t : triangles) {
-    const Eigen::Vector3d& a = nodes[static_cast<std::size_t>(t[0])];
-    const Eigen::Vector3d& b = nodes[static_cast<std::size_t>(t[1])];
-    const Eigen::Vector3d& c = nodes[static_cast<std::size_t>(t[2])];
-    add(f.centroids, (a + b + c) / 3.0, n_centroids);
-    for (int i = 0; i <= kSteps; ++i)
-      for (int j = 0; i + j <= kSteps; ++j) {
-        const int k = kSteps - i - j;
-        if (i == kSteps || j == kSteps || k == kSteps) continue;  // vertices are in `nodes`
-        add(f.dense, (i * a + j * b + k * c) / kSteps, n_dense);
-      }
-  }
-  f.nodes.mean /= static_cast<double>(n_nodes);
-  f.centroids.mean /= static_cast<double>(n_centroids);
-  f.dense.mean /= static_cast<double>(n_dense);
-  return f;
+  return {in_voxels(d.vertices), in_voxels(d.centroids), in_voxels(d.dense)};
 }
 
-Fidelity fidelity(const TriMesh& mesh, const Scene& scene, double voxel) {
-  std::vector<Eigen::Vector3d> nodes;
-  for (const auto v : mesh.vertices()) nodes.push_back(to_eigen(mesh.point(v)));
-  std::vector<std::array<int, 3>> triangles;
-  for (const auto f : mesh.faces()) {
-    std::array<int, 3> t{};
-    int k = 0;
-    for (const auto v : mesh.fv_range(f)) t[static_cast<std::size_t>(k++)] = v.idx();
-    triangles.push_back(t);
-  }
-  return fidelity(nodes, triangles, scene, voxel);
+Fidelity fidelity(const SurfaceMesh& mesh, const Scene& scene, double voxel) {
+  TriangleSoup soup;
+  soup.points = mesh.nodes;
+  for (const auto& t : mesh.triangles)
+    soup.triangles.push_back({static_cast<std::uint32_t>(t[0]), static_cast<std::uint32_t>(t[1]), static_cast<std::uint32_t>(t[2])});
+  return fidelity(soup, scene, voxel);
 }
 
 void print(const std::string& what, const Fidelity& f) {
@@ -94,14 +62,14 @@ FidelityRun run(const std::string& name, int resolution, SampleMode mode) {
   const double voxel = grid.spacing.x();
   const Segmentation seg = segment(mesh);
   FidelityRun r;
-  r.input = fidelity(mesh, scene, voxel);
+  r.input = fidelity(to_soup(mesh), scene, voxel);
   SurfMeshOptions options;
   options.threads = 2;
   const SurfaceMesh plain = mesh_surface(mesh, seg, options);
-  r.plain = fidelity(plain.nodes, plain.triangles, scene, voxel);
+  r.plain = fidelity(plain, scene, voxel);
   options.cell_grid = {true, grid.origin, grid.spacing};
   const SurfaceMesh bands = mesh_surface(mesh, seg, options);
-  r.bands = fidelity(bands.nodes, bands.triangles, scene, voxel);
+  r.bands = fidelity(bands, scene, voxel);
   for (const auto& p : bands.patches) r.n_failed += p.status == PatchStatus::Ok ? 0 : 1;
   for (const auto& p : plain.patches) r.n_failed += p.status == PatchStatus::Ok ? 0 : 1;
   std::printf("%s %d (%s):\n", name.c_str(), resolution, mode == SampleMode::Occupancy ? "occupancy" : "level set");

@@ -899,6 +899,8 @@ TEST(Surfmesh, BadOptionsAndMismatchedSegmentation) {
       [](SurfMeshOptions& o) { o.cell_grid = {true, Eigen::Vector3d::Zero(), Eigen::Vector3d::Ones()}; o.cell_grid.curvature_passes = -1; },
       [](SurfMeshOptions& o) { o.cell_grid = {true, Eigen::Vector3d::Zero(), Eigen::Vector3d::Ones()}; o.cell_grid.wide_overlap_rings = 21; },
       [](SurfMeshOptions& o) { o.cell_grid = {true, Eigen::Vector3d::Zero(), Eigen::Vector3d::Ones()}; o.cell_grid.wide_overlap_max_miss_cells = 0.0; },
+      [](SurfMeshOptions& o) { o.cell_grid = {true, Eigen::Vector3d::Zero(), Eigen::Vector3d::Ones()}; o.cell_grid.plain_fit_miss_cells = -1.0; },
+      [](SurfMeshOptions& o) { o.cell_grid = {true, Eigen::Vector3d::Zero(), Eigen::Vector3d::Ones()}; o.cell_grid.plain_fit_miss_cells = std::nan(""); },
   };
   for (const auto& spoil : bad) {
     SurfMeshOptions options;
