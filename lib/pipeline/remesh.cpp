@@ -151,6 +151,9 @@ RemeshResult remesh(const TriMesh& input, const RemeshOptions& options) {
   Segmentation segmentation =
       surfmesh_detail::split_unfitted_patches(input, first_segmentation, surfmesh_options, segment_options,
                                               &report.n_patches_split, mean_edge, splitter.get());
+  // The splitter's graph and normals are not held through surfmesh and stitch (about 100 MB
+  // on DRAM 256); the rare crossing repair below makes a new one (the same graph and normals).
+  splitter.reset();
   SurfaceMesh surface = surfmesh_detail::mesh_surface(input, segmentation, surfmesh_options, mean_edge);
   report.seconds_surfmesh = watch.seconds();
 
@@ -189,6 +192,7 @@ RemeshResult remesh(const TriMesh& input, const RemeshOptions& options) {
         return nx != ny ? nx < ny : x < y;
       });
       which.erase(std::unique(which.begin(), which.end()), which.end());
+      if (!splitter) splitter = segment_detail::make_splitter(input, segment_options);
       Segmentation merged = remedy < 2 ? segment_detail::merge_into_neighbours(*splitter, segmentation, which)
                                        : segment_detail::bisect_patches(*splitter, segmentation, which);
       if (merged.patches.size() == segmentation.patches.size()) continue;

@@ -1177,6 +1177,12 @@ struct segment_detail::Splitter {
 
 void segment_detail::SplitterDeleter::operator()(Splitter* splitter) const { delete splitter; }
 
+segment_detail::SplitterPtr segment_detail::make_splitter(const TriMesh& mesh, const SegmentOptions& options) {
+  options.validate();
+  validate_mesh(mesh);
+  return SplitterPtr(new Splitter(mesh, options));
+}
+
 namespace {
 
 // The checks of an edit of a segmentation of the splitter's mesh (`what`: the function's name).

@@ -176,6 +176,10 @@ using SplitterPtr = std::unique_ptr<Splitter, SplitterDeleter>;
 [[nodiscard]] Segmentation segment(const TriMesh& mesh, const SegmentOptions& options, double mean_edge,
                                    SplitterPtr* splitter = nullptr);
 
+//! A splitter for mesh and options that computes its face graph and normals at first use
+//! (the same as segment()'s), for callers that let segment()'s splitter go to save memory.
+[[nodiscard]] SplitterPtr make_splitter(const TriMesh& mesh, const SegmentOptions& options);
+
 //! PatchSplitter::split() on a splitter made by segment().
 [[nodiscard]] Segmentation split(Splitter& splitter, const Segmentation& segmentation, const std::vector<int>& which);
 
