@@ -129,7 +129,7 @@ struct ManifoldRepair {
 //! comes back unchanged (report.n_changes() == 0). The result passes check_manifold()
 //! except around non-orientable bands whose cut edges still meet at one fan.
 //! \pre clean() has run: no triangle repeats a vertex.
-//! 	hrow InvalidInput for out-of-range indices or a triangle repeating a vertex.
+//! \throw InvalidInput for out-of-range indices or a triangle repeating a vertex.
 [[nodiscard]] ManifoldRepair make_manifold(const TriangleSoup& soup);
 
 //! What prepare_mesh() did.
@@ -154,7 +154,7 @@ struct PreparedMesh {
 //! non-manifold edges and vertices), then removes triangles of exactly zero area (three
 //! distinct collinear corners) by flipping their long edge, or dropping them where that
 //! edge is on the boundary (the boundary curve stays the same). Positions never move.
-//! 	hrow InvalidInput for non-finite points, bad options, no triangle left, or a soup
+//! \throw InvalidInput for non-finite points, bad options, no triangle left, or a soup
 //! that is still not an oriented 2-manifold (non-orientable); the message names the problem.
 [[nodiscard]] PreparedMesh prepare_mesh(const TriangleSoup& soup, const CleanOptions& options = {});
 

@@ -108,7 +108,7 @@ struct SceneDistance {
 //! of it for the CSG scenes (see the file comment).
 //! \param soup the mesh (triangle indices into its points)
 //! \param dense_steps steps of the barycentric grid of SceneDistance::dense, in [0, 64]
-//! 	hrow InvalidInput for a triangle index out of range, a bad scene or dense_steps
+//! \throw InvalidInput for a triangle index out of range, a bad scene or dense_steps
 [[nodiscard]] SceneDistance distance_to_scene(const TriangleSoup& soup, const Scene& scene, int dense_steps = 0);
 
 //! Tight bounding box of the scene's solid.

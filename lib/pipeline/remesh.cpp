@@ -269,7 +269,10 @@ RemeshResult remesh_to_vertex_count(const TriMesh& input, std::size_t target_ver
     RemeshResult result = remesh(input, options);
     const auto vertices = static_cast<double>(result.mesh.n_vertices());
     const double size = result.report.target_size;
-    if (!have_best || miss(result) < miss(best)) {
+    // A run without errors is preferred to any run with some, then the closest count.
+    const bool better = !have_best || (result.report.ok() && !best.report.ok()) ||
+                        (result.report.ok() == best.report.ok() && miss(result) < miss(best));
+    if (better) {
       best = std::move(result);
       have_best = true;
     }
@@ -279,7 +282,8 @@ RemeshResult remesh_to_vertex_count(const TriMesh& input, std::size_t target_ver
     }
     last_size = size;
     last_vertices = vertices;
-    options.surfmesh.sizing.size = size * std::pow(vertices / target, 1.0 / exponent);
+    // At most a factor 3 per run: a far or unreachable target moves the size step by step.
+    options.surfmesh.sizing.size = size * std::clamp(std::pow(vertices / target, 1.0 / exponent), 1.0 / 3.0, 3.0);
   }
   return best;
 }

@@ -62,8 +62,10 @@ struct RemeshReport {
   std::size_t n_nodes = 0;        //!< nodes of the surface mesh (before stitching)
   std::size_t n_triangles = 0;    //!< triangles of the output
   std::size_t n_failed_patches = 0;  //!< patches whose status is not Ok
-  //! Patches merged into a neighbour because stitching left crossings there (the pipeline's
-  //! last resort, segment's merge_patches_into_neighbours(); 0 on a run without crossings).
+  //! Rounds of the last resort against crossings stitching left that were kept (at most one
+  //! remedy per round: a patch of a crossing pair joined a neighbour or was bisected, the
+  //! surface meshed and stitched again; RemeshOptions::crossing_repair_rounds; 0 on a run
+  //! without crossings).
   std::size_t n_crossing_repairs = 0;
   double target_size = 0.0;       //!< resolved uniform target edge length (length units)
   double input_mean_edge = 0.0;   //!< mean edge length of the input
@@ -106,13 +108,14 @@ struct RemeshResult {
 //! first run uses options as given (its sizing.size, or relative_size); the second scales the
 //! size by sqrt(vertices / target_vertices) (the vertex count of a surface meshed at a uniform
 //! size h goes as 1 / h^2), later ones by (vertices / target_vertices)^(1 / p) with p measured
-//! from the last two runs (in [0.5, 3]; about 1 with adaptive sizing). Stops at the first run within relative_tolerance of the
-//! target, or after max_runs runs, and returns the run closest to the target (the first of
-//! equals). Every run is a full remesh() (with distances if options.compute_distances), so
+//! from the last two runs (in [0.5, 3]; about 1 with adaptive sizing), the size changing by
+//! at most a factor 3 per run. Stops when the kept run is within relative_tolerance of the
+//! target, or after max_runs runs, and returns the run closest to the target among those
+//! whose report has no error (among all runs if none is clean; the first of equals). Every run is a full remesh() (with distances if options.compute_distances), so
 //! a good first size (options.surfmesh.sizing.size) saves runs. Adaptive sizing and a
 //! sizing callback keep their shape: the uniform size they start from is what is scaled
 //! (a callback's sizes are not: it throws for a callback).
-//! 	hrow InvalidInput for target_vertices < 4, relative_tolerance not in [0, 1), max_runs
+//! \throw InvalidInput for target_vertices < 4, relative_tolerance not in [0, 1), max_runs
 //!        < 1, a sizing callback, or whatever remesh() throws.
 [[nodiscard]] RemeshResult remesh_to_vertex_count(const TriMesh& input, std::size_t target_vertices,
                                                   RemeshOptions options, double relative_tolerance = 0.005,

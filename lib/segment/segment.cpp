@@ -807,9 +807,14 @@ bool has_cliff(const FaceGraph& graph, const std::vector<int>& faces, const Eige
 // `work`: the patches to check, taken from the back (every patch unless some are known to pass).
 // With workers > 1, the patches of `work` are first checked in parallel, each worker but the
 // first with its own scratch from `worker_scratch` (made at first use, kept for later calls).
+constexpr unsigned kMaxFoldCheckWorkers = 4;
+
 std::size_t split_folds(const Grouping& grouping, double mean_edge, Scratch& scratch, Patches& patches,
                         std::vector<int> work, unsigned workers,
                         std::vector<std::unique_ptr<Scratch>>& worker_scratch) {
+  // Each worker but the first holds a whole-mesh scratch (tens of MB on large inputs): at
+  // most kMaxFoldCheckWorkers of them, whatever the thread count.
+  workers = std::min(workers, kMaxFoldCheckWorkers);
   const FaceGraph& graph = grouping.graph;
   const TriMesh& mesh = *graph.mesh;
   // A patch fails when its projection is not simple or it holds a cliff.
@@ -1191,9 +1196,19 @@ void check_edit(const segment_detail::Splitter& s, const Segmentation& segmentat
   if (segmentation.face_patch.size() != s.mesh.n_faces())
     throw InvalidInput(what + ": the segmentation has " + std::to_string(segmentation.face_patch.size()) +
                        " face labels for " + std::to_string(s.mesh.n_faces()) + " faces");
+  const auto n_patches = static_cast<int>(segmentation.patches.size());
   for (const int p : which)
-    if (p < 0 || p >= static_cast<int>(segmentation.patches.size()))
-      throw InvalidInput(what + ": no patch " + std::to_string(p));
+    if (p < 0 || p >= n_patches) throw InvalidInput(what + ": no patch " + std::to_string(p));
+  for (std::size_t f = 0; f < segmentation.face_patch.size(); ++f) {
+    const int p = segmentation.face_patch[f];
+    if (p < 0 || p >= n_patches) throw InvalidInput(what + ": face " + std::to_string(f) + " has no valid patch");
+  }
+  for (int p = 0; p < n_patches; ++p)
+    for (const int f : segmentation.patches[static_cast<std::size_t>(p)].faces)
+      if (f < 0 || static_cast<std::size_t>(f) >= segmentation.face_patch.size() ||
+          segmentation.face_patch[static_cast<std::size_t>(f)] != p)
+        throw InvalidInput(what + ": patch " + std::to_string(p) + " lists face " + std::to_string(f) +
+                           ", which is not labelled with it");
 }
 
 Grouping splitter_grouping(const segment_detail::Splitter& s) {
@@ -1418,6 +1433,7 @@ Segmentation segment_detail::merge_into_neighbours(Splitter& s, const Segmentati
       for (const Eigen::Vector3d& axis : axes) {
         if (!std::all_of(target.begin(), target.end(), [&](int f) { return grouping.fits(f, axis); })) continue;
         if (!segment_detail::check_projection(s.graph, target, patches.face_patch, axis, scratch).is_simple) continue;
+        if (has_cliff(s.graph, target, axis, s.mean_edge, scratch)) continue;  // segment()'s step 7, both halves
         patches.axes[static_cast<std::size_t>(q)] = axis;
         island_faces.insert(island_faces.end(), faces.begin(), faces.end());
         faces.clear();

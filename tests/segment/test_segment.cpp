@@ -522,6 +522,14 @@ TEST(MergePatchesIntoNeighbours, CubeSideJoinsANeighbourAcrossItsCrease) {
   // Nothing listed: the same segmentation; a bad id throws.
   EXPECT_EQ(merge_patches_into_neighbours(mesh, seg, {}, options).face_patch, seg.face_patch);
   EXPECT_THROW((void)merge_patches_into_neighbours(mesh, seg, {6}, options), InvalidInput);
+  // A malformed segmentation is refused, not read out of bounds: a face labelled with no
+  // patch, and a patch listing a face labelled with another one.
+  Segmentation bad_label = seg;
+  bad_label.face_patch[0] = 6;
+  EXPECT_THROW((void)merge_patches_into_neighbours(mesh, bad_label, {1}, options), InvalidInput);
+  Segmentation bad_list = seg;
+  bad_list.patches[1].faces.push_back(seg.patches[0].faces.front());
+  EXPECT_THROW((void)merge_patches_into_neighbours(mesh, bad_list, {1}, options), InvalidInput);
 }
 
 }  // namespace

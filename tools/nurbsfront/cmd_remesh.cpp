@@ -209,11 +209,11 @@ void add_remesh_command(CLI::App& app) {
                   "triangles; 180 = never; docs/surfmesh.md)");
   cmd->add_option("--tiny-curve-merge", args->tiny_curve_merge,
                   "Merge the two corners of a one-edge border curve shorter than this many target edges "
-                  "(default 0.2; 0 = never; docs/surfmesh.md)");
+                  "(default 0.2; 0 = never; not with a cell grid; docs/surfmesh.md)");
   cmd->add_flag("--smoothed-boundary", args->smoothed_boundary,
                 "Place the border nodes of the input's boundary on its smoothed curve (rounds its corners; "
                 "the default keeps the input's boundary polyline)");
-  cmd->add_option("--threads", args->threads, "Worker threads for every stage (default: all for patches, 2 for checks)");
+  cmd->add_option("--threads", args->threads, "Worker threads for every stage (default: all hardware threads for segmentation and patches, 2 for the stitch and checks)");
   cmd->add_option("--report", args->report, "Write the report as JSON");
   cmd->add_option("--vtk", args->vtk, "Write the output with per-face patch id and alpha (.vtk/.vtu)");
   cmd->add_flag("-q,--quiet", args->quiet, "No progress display");
