@@ -195,8 +195,8 @@ struct SurfMeshOptions {
   //! the iso-surface passes near a grid vertex, and both patches' fronts would grade from
   //! that piece up to the target size (docs/surfmesh.md, "Tiny corner curves"). Corners on
   //! the input's boundary never merge; nothing merges with a cell grid (occupancy inputs).
-  //! 0 disables. In [0, 0.5]. Default 0.2.
-  double tiny_curve_merge_size = 0.2;
+  //! 0 disables. In [0, 0.5]. Default 0.3.
+  double tiny_curve_merge_size = 0.3;
   //! Largest distance, in mean input edges, of a new inner node from the patch's own input
   //! faces along the patch axis: a node the fit lifts further (the fit smooths thin fins,
   //! tips and sharp bends by several edges, and such a node can pass through the

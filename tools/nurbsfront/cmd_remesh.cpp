@@ -209,7 +209,7 @@ void add_remesh_command(CLI::App& app) {
                   "triangles; 180 = never; docs/surfmesh.md)");
   cmd->add_option("--tiny-curve-merge", args->tiny_curve_merge,
                   "Merge the two corners of a one-edge border curve shorter than this many target edges "
-                  "(default 0.2; 0 = never; not with a cell grid; docs/surfmesh.md)");
+                  "(default 0.3; 0 = never; not with a cell grid; docs/surfmesh.md)");
   cmd->add_flag("--smoothed-boundary", args->smoothed_boundary,
                 "Place the border nodes of the input's boundary on its smoothed curve (rounds its corners; "
                 "the default keeps the input's boundary polyline)");
