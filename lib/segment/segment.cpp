@@ -1316,11 +1316,7 @@ Segmentation PatchSplitter::split(const Segmentation& segmentation, const std::v
 Segmentation segment_detail::split(Splitter& s, const Segmentation& segmentation, const std::vector<int>& which) {
   const auto n_faces = static_cast<int>(s.mesh.n_faces());
   const auto n_patches = static_cast<int>(segmentation.patches.size());
-  if (segmentation.face_patch.size() != s.mesh.n_faces())
-    throw InvalidInput("split_patches: the segmentation has " + std::to_string(segmentation.face_patch.size()) +
-                       " face labels for " + std::to_string(n_faces) + " faces");
-  for (const int p : which)
-    if (p < 0 || p >= n_patches) throw InvalidInput("split_patches: no patch " + std::to_string(p));
+  check_edit(s, segmentation, which, "split_patches");
   Segmentation result;
   result.n_fold_splits = segmentation.n_fold_splits;
   if (n_faces == 0 || which.empty()) return segmentation;
@@ -1329,18 +1325,8 @@ Segmentation segment_detail::split(Splitter& s, const Segmentation& segmentation
   result.n_bevel_crease_edges = s.n_bevel_crease_edges;
   result.n_islands_absorbed = segmentation.n_islands_absorbed;  // they stay where they are
   result.island_faces = segmentation.island_faces;
-  const double max_slope = radians(s.options.max_slope_deg);
-  const Grouping grouping{s.graph, s.normals, std::cos(max_slope), max_slope, std::cos(kGrowthConeFraction * max_slope)};
-  Patches patches;
-  patches.face_patch = segmentation.face_patch;
-  for (const Patch& patch : segmentation.patches) {
-    patches.faces.push_back(patch.faces);
-    patches.axes.push_back(patch.axis);
-  }
-  for (int f = 0; f < n_faces; ++f) {
-    const int p = patches.face_patch[f];
-    if (p < 0 || p >= n_patches) throw InvalidInput("split_patches: face " + std::to_string(f) + " has no valid patch");
-  }
+  const Grouping grouping = splitter_grouping(s);
+  Patches patches = editable_patches(segmentation);
   // The last result again: its patches that are not split pass split_folds' checks as they did.
   const bool checked = segmentation.face_patch == s.last_face_patch && patches.axes == s.last_axes;
   if (!s.scratch) s.scratch = std::make_unique<Scratch>(s.mesh);
