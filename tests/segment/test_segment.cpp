@@ -532,5 +532,77 @@ TEST(MergePatchesIntoNeighbours, CubeSideJoinsANeighbourAcrossItsCrease) {
   EXPECT_THROW((void)merge_patches_into_neighbours(mesh, bad_list, {1}, options), InvalidInput);
 }
 
+// The pipeline's other remedy against crossings: segment_detail::bisect_patches cuts a patch
+// in two by a breadth-first partition from its two most distant faces. On a strip of 2 n
+// triangles (a chain through their shared edges) the cut is exactly at the middle.
+TEST(BisectPatches, StripIsCutAtItsMiddle) {
+  const int n = 6;
+  const TriMesh mesh = to_trimesh(test::grid_patch(n, 1));
+  const SegmentOptions options;
+  const Segmentation seg = run(mesh, options, 0.0);
+  ASSERT_EQ(seg.patches.size(), 1u);
+  segment_detail::SplitterPtr splitter = segment_detail::make_splitter(mesh, options);
+  const Segmentation halves = segment_detail::bisect_patches(*splitter, seg, {0});
+  // Partition, connected halves, projections simple, curves and corners consistent.
+  segment_test::expect_contracts(mesh, halves, options, 0.0);
+  ASSERT_EQ(halves.patches.size(), 2u);
+  for (const Patch& half : halves.patches) {
+    ASSERT_EQ(half.faces.size(), static_cast<std::size_t>(n));
+    // The faces of a half all lie on one side of x = 1/2 (the strip's middle edge).
+    const bool left = mesh.calc_face_centroid(mesh.face_handle(half.faces.front()))[0] < 0.5;
+    for (const int f : half.faces) {
+      EXPECT_EQ(mesh.calc_face_centroid(mesh.face_handle(f))[0] < 0.5, left) << "face " << f;
+    }
+    EXPECT_NEAR(half.axis.dot(Eigen::Vector3d::UnitZ()), 1.0, 1e-12);
+  }
+  // The two halves meet along the middle edge, from (1/2, 0) to (1/2, 1): one curve of one
+  // edge between patches 0 and 1, its ends the two corners (vertices 3 and n + 1 + 3).
+  const std::vector<int> corners{n / 2, n + 1 + n / 2};
+  EXPECT_EQ(halves.corners, corners);
+  int n_shared = 0;
+  for (const BorderCurve& curve : halves.curves) {
+    if (curve.patch_right < 0) continue;  // the input's boundary
+    ++n_shared;
+    EXPECT_EQ(curve.patch_left, 0);
+    EXPECT_EQ(curve.patch_right, 1);
+    ASSERT_EQ(curve.edges.size(), 1u);
+    std::vector<int> ends{curve.vertices.front(), curve.vertices.back()};
+    std::sort(ends.begin(), ends.end());
+    EXPECT_EQ(ends, corners);
+  }
+  EXPECT_EQ(n_shared, 1);
+  // Nothing listed: the same segmentation; a bad id throws.
+  EXPECT_EQ(segment_detail::bisect_patches(*splitter, seg, {}).face_patch, seg.face_patch);
+  EXPECT_THROW((void)segment_detail::bisect_patches(*splitter, seg, {1}), InvalidInput);
+}
+
+// A square: both halves non-empty, together the patch, each connected and projecting, cut
+// along one curve from boundary to boundary.
+TEST(BisectPatches, SquareHalvesPartitionThePatch) {
+  const TriMesh mesh = to_trimesh(test::grid_patch(5, 5));
+  const SegmentOptions options;
+  const Segmentation seg = run(mesh, options, 0.0);
+  ASSERT_EQ(seg.patches.size(), 1u);
+  segment_detail::SplitterPtr splitter = segment_detail::make_splitter(mesh, options);
+  const Segmentation halves = segment_detail::bisect_patches(*splitter, seg, {0});
+  segment_test::expect_contracts(mesh, halves, options, 0.0);
+  ASSERT_EQ(halves.patches.size(), 2u);
+  for (const Patch& half : halves.patches) EXPECT_FALSE(half.faces.empty());
+  EXPECT_EQ(halves.patches[0].faces.size() + halves.patches[1].faces.size(), mesh.n_faces());
+  // One cut: the halves share exactly one border curve, which ends at two corners on the
+  // square's boundary.
+  int n_shared = 0;
+  for (const BorderCurve& curve : halves.curves) {
+    if (curve.patch_right < 0) continue;
+    ++n_shared;
+    EXPECT_FALSE(curve.is_closed);
+    for (const int end : {curve.vertices.front(), curve.vertices.back()}) {
+      EXPECT_TRUE(mesh.is_boundary(mesh.vertex_handle(static_cast<unsigned>(end)))) << "vertex " << end;
+    }
+  }
+  EXPECT_EQ(n_shared, 1);
+  EXPECT_EQ(halves.corners.size(), 2u);
+}
+
 }  // namespace
 }  // namespace nurbsfront
