@@ -112,7 +112,11 @@ std::string outcome_json(const OneArgs& a, const std::string& outcome, const std
     if (out.distance) {
       o.num("hausdorff", out.distance->hausdorff).num("mean_distance", out.distance->mean);
       o.num("input_mean_edge", report->input_mean_edge);
+      // (V_output - V_input) / V_input; null unless both surfaces are closed.
+      const auto& volume = out.distance->relative_volume_change;
+      o.add("relative_volume_change", volume ? json::number(*volume) : "null");
     }
+    o.count("crossing_repairs", report->n_crossing_repairs);
     std::vector<std::string> errors;
     for (std::size_t i = 0; i < std::min<std::size_t>(report->errors.size(), 5); ++i) {
       errors.push_back(json::string(report->errors[i]));
@@ -130,7 +134,8 @@ std::string fixed(double x, int digits) {
 }
 
 // The figures of the Markdown table row: input faces, output faces, alpha mean, min angle,
-// obtuse %, self-intersecting pairs, Hausdorff / input mean edge.
+// obtuse %, self-intersecting pairs, crossing repairs, Hausdorff / input mean edge, relative
+// volume change % (closed inputs).
 std::string markdown_cells(const TriMesh* input, const RemeshReport* report, const PlanarRun* planar) {
   if (planar != nullptr) {
     const MeshReport& out = planar->report;
@@ -138,15 +143,18 @@ std::string markdown_cells(const TriMesh* input, const RemeshReport* report, con
            fixed(out.quality.alpha_mean, 3) + " | " + fixed(out.quality.min_angle_deg, 1) + " | " +
            fixed(100.0 * out.quality.obtuse_fraction, 2) + " | " +
            (out.topology.n_self_intersecting_pairs ? std::to_string(*out.topology.n_self_intersecting_pairs) : "-") +
-           " | -";
+           " | - | - | -";
   }
   std::string row = (input != nullptr ? std::to_string(input->n_faces()) : "-") + " | ";
-  if (report == nullptr) return row + "- | - | - | - | - | -";
+  if (report == nullptr) return row + "- | - | - | - | - | - | - | -";
   const MeshReport& out = report->output;
   row += std::to_string(out.topology.n_faces) + " | " + fixed(out.quality.alpha_mean, 3) + " | " +
          fixed(out.quality.min_angle_deg, 1) + " | " + fixed(100.0 * out.quality.obtuse_fraction, 2) + " | ";
   row += (out.topology.n_self_intersecting_pairs ? std::to_string(*out.topology.n_self_intersecting_pairs) : "-") + " | ";
+  row += std::to_string(report->n_crossing_repairs) + " | ";
   row += out.distance && report->input_mean_edge > 0.0 ? fixed(out.distance->hausdorff / report->input_mean_edge, 2) : "-";
+  row += " | ";
+  row += out.distance && out.distance->relative_volume_change ? fixed(100.0 * *out.distance->relative_volume_change, 2) : "-";
   return row;
 }
 
@@ -460,8 +468,9 @@ void run_corpus(const CorpusArgs& a) {
   std::map<std::string, int> counts;
   std::ostringstream md;
   md << "| input | outcome | input faces | output faces | alpha mean | min angle | obtuse % | self-int. | "
-        "Hausdorff / input mean edge | wall s | peak RSS MB | input repairs | first error |\n"
-        "|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+        "crossing repairs | Hausdorff / input mean edge | volume change % | wall s | peak RSS MB | input repairs | "
+        "first error |\n"
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
   for (std::size_t i = 0; i < items.size(); ++i) {
     const CorpusItem& item = items[i];
     std::vector<std::string> argv{exe, "corpus-one", item.path.string(), "--threads", std::to_string(a.threads)};
@@ -506,7 +515,7 @@ void run_corpus(const CorpusArgs& a) {
     {
       const std::string first_error = table_text(line, "message", 120);
       const std::string repairs = table_text(line, "input_repairs", 80);
-      md << "| " << label << " | " << outcome << " | " << (child.cells.empty() ? "- | - | - | - | - | - | -" : child.cells)
+      md << "| " << label << " | " << outcome << " | " << (child.cells.empty() ? "- | - | - | - | - | - | - | - | -" : child.cells)
          << " | " << fixed(child.wall_seconds, 1) << " | " << fixed(double(child.max_rss_kb) / 1024.0, 0) << " | "
          << (repairs == "nothing to repair" ? "" : repairs) << " | " << first_error << " |\n";
     }
