@@ -535,16 +535,29 @@ TEST(MergePatchesIntoNeighbours, CubeSideJoinsANeighbourAcrossItsCrease) {
 // The pipeline's other remedy against crossings: segment_detail::bisect_patches cuts a patch
 // in two by a breadth-first partition from its two most distant faces. On a strip of 2 n
 // triangles (a chain through their shared edges) the cut is exactly at the middle.
+// A mesh segmented into one patch, and that patch bisected.
+struct Bisected {
+  Segmentation seg;
+  segment_detail::SplitterPtr splitter;
+  Segmentation halves;
+};
+
+Bisected bisect_single_patch(const TriMesh& mesh, const SegmentOptions& options) {
+  Bisected b;
+  b.seg = run(mesh, options, 0.0);
+  EXPECT_EQ(b.seg.patches.size(), 1u);
+  b.splitter = segment_detail::make_splitter(mesh, options);
+  b.halves = segment_detail::bisect_patches(*b.splitter, b.seg, {0});
+  // Partition, connected halves, projections simple, curves and corners consistent.
+  segment_test::expect_contracts(mesh, b.halves, options, 0.0);
+  return b;
+}
+
 TEST(BisectPatches, StripIsCutAtItsMiddle) {
   const int n = 6;
   const TriMesh mesh = to_trimesh(test::grid_patch(n, 1));
   const SegmentOptions options;
-  const Segmentation seg = run(mesh, options, 0.0);
-  ASSERT_EQ(seg.patches.size(), 1u);
-  segment_detail::SplitterPtr splitter = segment_detail::make_splitter(mesh, options);
-  const Segmentation halves = segment_detail::bisect_patches(*splitter, seg, {0});
-  // Partition, connected halves, projections simple, curves and corners consistent.
-  segment_test::expect_contracts(mesh, halves, options, 0.0);
+  const auto [seg, splitter, halves] = bisect_single_patch(mesh, options);
   ASSERT_EQ(halves.patches.size(), 2u);
   for (const Patch& half : halves.patches) {
     ASSERT_EQ(half.faces.size(), static_cast<std::size_t>(n));
@@ -580,12 +593,7 @@ TEST(BisectPatches, StripIsCutAtItsMiddle) {
 // along one curve from boundary to boundary.
 TEST(BisectPatches, SquareHalvesPartitionThePatch) {
   const TriMesh mesh = to_trimesh(test::grid_patch(5, 5));
-  const SegmentOptions options;
-  const Segmentation seg = run(mesh, options, 0.0);
-  ASSERT_EQ(seg.patches.size(), 1u);
-  segment_detail::SplitterPtr splitter = segment_detail::make_splitter(mesh, options);
-  const Segmentation halves = segment_detail::bisect_patches(*splitter, seg, {0});
-  segment_test::expect_contracts(mesh, halves, options, 0.0);
+  const Segmentation halves = bisect_single_patch(mesh, SegmentOptions{}).halves;
   ASSERT_EQ(halves.patches.size(), 2u);
   for (const Patch& half : halves.patches) EXPECT_FALSE(half.faces.empty());
   EXPECT_EQ(halves.patches[0].faces.size() + halves.patches[1].faces.size(), mesh.n_faces());
