@@ -26,6 +26,7 @@ void StitchOptions::validate() const {
   if (!(max_flip_dihedral_deg >= 0.0 && max_flip_dihedral_deg < 180.0)) fail("max_flip_dihedral_deg must be in [0, 180)");
   if (!(flip_gain >= 0.0) || !std::isfinite(flip_gain)) fail("flip_gain must be finite and >= 0");
   if (!(smoothing_relaxation > 0.0 && smoothing_relaxation <= 1.0)) fail("smoothing_relaxation must be in (0, 1]");
+  if (!(chord_compensation >= 0.0 && chord_compensation <= 2.0)) fail("chord_compensation must be in [0, 2]");
   if (!(min_normal_dot >= -1.0 && min_normal_dot < 1.0)) fail("min_normal_dot must be in [-1, 1)");
   if (!(alpha_floor >= 0.0 && alpha_floor <= 1.0)) fail("alpha_floor must be in [0, 1]");
   if (!(angle_floor_deg >= 0.0 && angle_floor_deg < 60.0)) fail("angle_floor_deg must be in [0, 60)");
@@ -470,6 +471,8 @@ StitchResult stitch_impl(const SurfaceMesh& surface, const TriMesh* input, const
     assembled = mesh;
     assembled_patch = result.face_patch;
     stitch_detail::optimise(surface, options, feature, result, report);
+    stitch_detail::compensate_chords(mesh, result.vertex_node, feature, options.chord_compensation,
+                                     surface.input_mean_edge);
   }
   report.seconds_optimise = watch.seconds();
 

@@ -45,6 +45,14 @@ struct StitchOptions {
   //! triangles does not drop below min(its old value, angle_floor_deg), in [0, 60): a move
   //! never makes a triangle below issue 5's bound that was not there. Default 25.
   double angle_floor_deg = kAwayFromFeaturesAngleBoundDeg;
+  //! Chord compensation after the optimisation (docs/stitch.md, "Volume: chords over curved
+  //! surfaces"): a flat triangle whose corners lie on a curved surface lies on its concave
+  //! side, by about (1/24) sum over its edges of kappa_e |e|^2 on average; every node that is
+  //! no feature node nor on the input's boundary moves along its normal by this factor times
+  //! the area-weighted mean gap of its triangles, less the part an edge as long as the
+  //! input's mean edge has (the input's own chords; SurfaceMesh::input_mean_edge), at most
+  //! 0.1 of its edges. In [0, 2]; 0 switches it off. Default 1.
+  double chord_compensation = 1.0;
   //! Triangles whose smallest angle (deg) is below this get their shortest edge collapsed
   //! before the optimisation, when the merge is allowed and improves the worst triangle
   //! around it (feature nodes never moved, and removed only into a feature corner less

@@ -75,6 +75,13 @@ inline bool may_have_angle_below(const Eigen::Vector3d& a, const Eigen::Vector3d
   return !((b - a).cross(c - a).norm() / product > sin_bound + kSineMargin);
 }
 
+//! StitchOptions::chord_compensation: moves the nodes that are no feature node (is_feature,
+//! per node; vertex_node maps vertices to nodes) nor on the boundary along their normals so
+//! that the triangles are on average on the surface through their corners, less the chords
+//! an edge of length reference_edge has (0: none). Returns the number of nodes moved.
+std::size_t compensate_chords(TriMesh& mesh, const std::vector<int>& vertex_node, const std::vector<std::uint8_t>& is_feature,
+                              double strength, double reference_edge);
+
 //! alpha of every face, in face order.
 std::vector<double> face_alphas(const TriMesh& mesh);
 

@@ -49,6 +49,7 @@ struct RemeshArgs {
   bool bevel_creases = false;
   std::optional<double> unsmoothed_crease_angle;
   std::optional<double> tiny_curve_merge;
+  std::optional<double> chord_compensation;
   bool smoothed_boundary = false;
   std::optional<unsigned> threads;
   std::string report;
@@ -101,6 +102,7 @@ void run_remesh(RemeshArgs& args) {
   if (args.unsmoothed_crease_angle) options.surfmesh.unsmoothed_crease_angle_deg = *args.unsmoothed_crease_angle;
   if (args.smoothed_boundary) options.surfmesh.unsmoothed_boundary_curves = false;
   if (args.tiny_curve_merge) options.surfmesh.tiny_curve_merge_size = *args.tiny_curve_merge;
+  if (args.chord_compensation) options.stitch.chord_compensation = *args.chord_compensation;
   if (args.threads) options.set_threads(*args.threads);
   if (!args.cell_grid.empty()) {
     if (!args.scene.empty()) throw InvalidInput("remesh: --cell-grid applies to an input file (an occupancy scene sets it itself)");
@@ -207,6 +209,9 @@ void add_remesh_command(CLI::App& app) {
                   "Crease curves sharper than this (deg, 3-ring normals) keep the input's crease instead of "
                   "its smoothed curve (default 100; 0 = every crease: closer at bevelled edges, more obtuse "
                   "triangles; 180 = never; docs/surfmesh.md)");
+  cmd->add_option("--chord-compensation", args->chord_compensation,
+                  "Move the nodes along their normals by this times the chords' mean gap to the surface, so the "
+                  "triangles do not lose volume over convex parts (default 1; 0 = off; docs/stitch.md)");
   cmd->add_option("--tiny-curve-merge", args->tiny_curve_merge,
                   "Merge the two corners of a one-edge border curve shorter than this many target edges "
                   "(default 0.3; 0 = never; not with a cell grid; docs/surfmesh.md)");

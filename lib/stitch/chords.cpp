@@ -1,0 +1,94 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Chord compensation: the nodes lie on the fitted surfaces, so a flat triangle between them
+// lies on the concave side of the surface and a convex part loses volume (docs/stitch.md,
+// "Volume: chords over curved surfaces").
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <numbers>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "nurbsfront/stitch/stitch_internal.h"
+
+namespace nurbsfront::stitch_detail {
+
+std::size_t compensate_chords(TriMesh& mesh, const std::vector<int>& vertex_node, const std::vector<std::uint8_t>& is_feature,
+                              double strength, double reference_edge) {
+  if (!(strength > 0.0) || mesh.n_faces() == 0) return 0;
+  const std::size_t nv = mesh.n_vertices();
+  std::vector<Eigen::Vector3d> point(nv);
+  for (auto v : mesh.vertices()) point[static_cast<std::size_t>(v.idx())] = to_eigen(mesh.point(v));
+  // Fixed: feature nodes (creases and their corners) and the input's boundary.
+  std::vector<std::uint8_t> fixed(nv, 0);
+  for (auto v : mesh.vertices()) {
+    const auto i = static_cast<std::size_t>(v.idx());
+    fixed[i] = mesh.is_boundary(v) || is_feature[static_cast<std::size_t>(vertex_node[i])] != 0;
+  }
+  // Area-weighted vertex normals (the sum of the incident triangles' area vectors).
+  std::vector<Eigen::Vector3d> normal(nv, Eigen::Vector3d::Zero());
+  std::vector<std::array<int, 3>> corners(mesh.n_faces());
+  std::vector<Eigen::Vector3d> area_vector(mesh.n_faces());
+  for (auto f : mesh.faces()) {
+    auto& c = corners[static_cast<std::size_t>(f.idx())];
+    int k = 0;
+    for (auto v : mesh.fv_range(f)) c[static_cast<std::size_t>(k++)] = v.idx();
+    const Eigen::Vector3d n = (point[c[1]] - point[c[0]]).cross(point[c[2]] - point[c[0]]);
+    area_vector[static_cast<std::size_t>(f.idx())] = n;
+    for (const int v : c) normal[static_cast<std::size_t>(v)] += n;
+  }
+  for (auto& n : normal) {
+    const double l = n.norm();
+    if (l > 0.0) n /= l;
+  }
+  // Per triangle: the mean gap between the surface and the flat triangle over its area,
+  // (1/24) sum over its edges (i, j) of (n_j - n_i).(p_j - p_i) (kappa_e |e|^2 with kappa_e
+  // the normal curvature along the edge; exact for a quadric through the corners), spread
+  // area-weighted onto its corners. Triangles with a fixed corner (whose normal averages
+  // across a crease) or whose corner normals turn by more than kMaxTurnDeg from the
+  // triangle's own add nothing.
+  constexpr double kMaxTurnDeg = 30.0;
+  const double min_dot = std::cos(kMaxTurnDeg * std::numbers::pi / 180.0);
+  std::vector<double> weighted_gap(nv, 0.0), area(nv, 0.0), edge_sq(nv, 0.0);
+  for (std::size_t f = 0; f < corners.size(); ++f) {
+    const auto& c = corners[f];
+    const double twice_area = area_vector[f].norm();
+    if (!(twice_area > 0.0)) continue;
+    const Eigen::Vector3d n = area_vector[f] / twice_area;
+    bool counts = true;
+    double gap = 0.0, sum_sq = 0.0;
+    for (int k = 0; k < 3; ++k) {
+      const auto i = static_cast<std::size_t>(c[k]), j = static_cast<std::size_t>(c[(k + 1) % 3]);
+      counts = counts && fixed[i] == 0 && normal[i].dot(n) >= min_dot;
+      gap += (normal[j] - normal[i]).dot(point[j] - point[i]);
+      sum_sq += (point[j] - point[i]).squaredNorm();
+    }
+    // The input's own chords (edges of reference_edge) are not compensated.
+    gap *= std::max(0.0, 1.0 - 3.0 * reference_edge * reference_edge / sum_sq) / 24.0;
+    for (const int v : c) {
+      const auto i = static_cast<std::size_t>(v);
+      area[i] += twice_area;
+      edge_sq[i] += twice_area * sum_sq / 3.0;
+      if (counts) weighted_gap[i] += twice_area * gap;
+    }
+  }
+  // Each free node moves along its normal by the area-weighted mean gap of its triangles
+  // (times strength): moving node v by d changes the volume by about d A_v, A_v a third of
+  // its triangles' area, so the moves give back the triangles' volume. A move is at most
+  // kMaxMoveEdges of the node's root-mean-square edge (where the curvature is of the order
+  // of 1 / edge the estimate no longer holds).
+  constexpr double kMaxMoveEdges = 0.1;
+  std::size_t n_moved = 0;
+  for (std::size_t i = 0; i < nv; ++i) {
+    if (fixed[i] != 0 || !(area[i] > 0.0) || weighted_gap[i] == 0.0) continue;
+    const double limit = kMaxMoveEdges * std::sqrt(edge_sq[i] / area[i]);
+    const double d = std::clamp(strength * weighted_gap[i] / area[i], -limit, limit);
+    mesh.set_point(mesh.vertex_handle(static_cast<unsigned>(i)), to_openmesh(point[i] + d * normal[i]));
+    ++n_moved;
+  }
+  return n_moved;
+}
+
+}  // namespace nurbsfront::stitch_detail
