@@ -786,7 +786,7 @@ TEST(Surfmesh, DetailFitFollowsDetailTheDefaultLatticeSmooths) {
   // Ridges 4 edges apart, half an edge high: the default lattice (2.5 mean edges) smooths
   // them; the detail fit (PatchFitOptions::detail_spacing_edges) refits on a lattice of one
   // mean edge and keeps the new nodes within detail_node_offset_edges of the input.
-  constexpr int kN = 24;
+  constexpr int kN = 16;
   const double edge = 1.0 / kN;
   TriMesh mesh = to_trimesh(test::grid_patch(kN, kN));
   for (const auto v : mesh.vertices()) mesh.point(v)[2] = 0.5 * edge * std::sin(2.0 * std::numbers::pi * mesh.point(v)[0] / (4.0 * edge));

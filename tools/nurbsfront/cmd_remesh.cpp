@@ -192,7 +192,7 @@ void add_remesh_command(CLI::App& app) {
                   "Refit a patch whose fit misses its input by more than 0.25 mean edges on a lattice of this many mean "
                   "edges (e.g. 1; default 0 = off; not with a cell grid) and keep its new nodes within 0.05 mean edges "
                   "of the input: for inputs with detail of 1-2 mean edges (scans, smoothed-image level sets), with "
-                  "--adaptive (docs/surfmesh.md \"Detail fit\")");
+                  "--adaptive; not for label-image surfaces (it follows their terraces; docs/surfmesh.md \"Detail fit\")");
   cmd->add_option("--feature-size", args->feature_size,
                   "Size of a patch bounded mostly by feature curves at most F x its width (2 area / perimeter); "
                   "0 = off (default 1; not on marching-cubes surfaces nor where it limits under 1% of the area; "
