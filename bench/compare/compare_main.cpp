@@ -5,7 +5,11 @@
 //
 //   bench_compare [--quick] [--filter REGEX] [google benchmark flags]   timings (Google Benchmark)
 //   bench_compare --report [--quick] [--filter REGEX] [--md FILE] [--json FILE] [--threads N]
-//                 [--write-dir DIR]                                     tables (Markdown, JSON)
+//                 [--write-dir DIR] [--detail]                          tables (Markdown, JSON)
+//
+// --detail (report mode): the nurbsfront row is adaptive sizing with the detail fit
+// (PatchFitOptions::detail_spacing_edges 1) at the default run's vertex count
+// (remesh_to_vertex_count; its time includes the default run).
 //
 // Report mode measures every method once (wall time of the method alone, without reading
 // or writing files) and the output with the quality module's mesh_report() against the input:
@@ -50,12 +54,19 @@ struct Settings {
   std::string write_dir;
   unsigned threads = 1;
   double roundness_angle = 20.0;
+  //! --detail: nurbsfront with adaptive sizing and the detail fit (docs/surfmesh.md "Detail
+  //! fit"), rerun at the vertex count of the default run.
+  bool detail = false;
 };
 
-RemeshOptions remesh_options(unsigned threads) {
+RemeshOptions remesh_options(unsigned threads, bool detail = false) {
   RemeshOptions options;  // library defaults (relative size 1.5, max slope 60, crease 80)
   options.set_threads(threads);
   options.compute_distances = false;  // measured below, the same way for every method
+  if (detail) {
+    options.surfmesh.sizing.adaptive = true;
+    options.surfmesh.fit.detail_spacing_edges = 1.0;
+  }
   return options;
 }
 
@@ -165,9 +176,15 @@ InputResult run_input(const CompareInput& in, const Settings& s) {
   try {
     watch.restart();
     cpu = process_cpu_seconds();
-    const RemeshResult remeshed = remesh(input, remesh_options(s.threads));
+    RemeshResult remeshed = remesh(input, remesh_options(s.threads));
+    if (s.detail) {
+      // The default run's vertex count, with adaptive sizing and the detail fit.
+      RemeshOptions options = remesh_options(s.threads, true);
+      options.surfmesh.sizing.size = remeshed.report.target_size;
+      remeshed = remesh_to_vertex_count(input, remeshed.mesh.n_vertices(), options);
+    }
     const double seconds = watch.seconds();
-    MethodRow row = measure("nurbsfront remesh", remeshed.mesh, seconds, process_cpu_seconds() - cpu, input_soup,
+    MethodRow row = measure(s.detail ? "nurbsfront remesh --adaptive --detail-fit 1" : "nurbsfront remesh", remeshed.mesh, seconds, process_cpu_seconds() - cpu, input_soup,
                             input_topology, s.threads);
     row.remesh_errors = remeshed.report.errors.size();
     if (!remeshed.report.errors.empty()) row.note = "report errors: " + remeshed.report.errors.front();
@@ -214,7 +231,7 @@ InputResult run_input(const CompareInput& in, const Settings& s) {
     if (result.rows[d].nurbsfront_row != 1) continue;
     const std::string method = "nurbsfront remesh (rerun at " + std::to_string(count) + ")";
     try {
-      RemeshOptions options = remesh_options(s.threads);
+      RemeshOptions options = remesh_options(s.threads, s.detail);
       options.surfmesh.sizing.size = first_size * std::sqrt(double(target) / double(count));
       watch.restart();
       cpu = process_cpu_seconds();
@@ -439,7 +456,7 @@ int run_report(const Settings& s) {
   }
   std::ostringstream header;
   header << "Measured " << date << " by `bench_compare --report" << (s.quick ? " --quick" : "")
-         << (s.filter.empty() ? "" : " --filter '" + s.filter + "'") << "` (nurbsfront threads: " << s.threads
+         << (s.filter.empty() ? "" : " --filter '" + s.filter + "'") << (s.detail ? " --detail" : "") << "` (nurbsfront threads: " << s.threads
          << "); load average (1, 5, 15 min) before: " << load_before << ", after: " << load_average() << " on "
          << sysconf(_SC_NPROCESSORS_ONLN) << " cores.";
   const std::string md = markdown(results, skipped, s, header.str());
@@ -538,11 +555,13 @@ int main(int argc, char** argv) {
     else if (a == "--json") s.json_path = value("--json");
     else if (a == "--write-dir") s.write_dir = value("--write-dir");
     else if (a == "--threads") s.threads = static_cast<unsigned>(std::stoul(value("--threads")));
+    else if (a == "--detail") s.detail = true;
     else if (a == "--roundness-angle") s.roundness_angle = std::stod(value("--roundness-angle"));
     else if (a == "--help" || a == "-h") {
-      std::cout << "bench_compare [--quick] [--filter REGEX] [--threads N] [--roundness-angle DEG]\n"
+      std::cout << "bench_compare [--quick] [--filter REGEX] [--threads N] [--roundness-angle DEG] [--detail]\n"
                    "              [--report [--md FILE] [--json FILE] [--write-dir DIR]] [benchmark flags]\n"
-                   "Without --report: Google Benchmark timings (Remesh/, Decimate/, DecimateRoundness/ per input).\n";
+                   "Without --report: Google Benchmark timings (Remesh/, Decimate/, DecimateRoundness/ per input).\n"
+                   "--detail (with --report): nurbsfront with --adaptive --detail-fit 1 at the default run's vertex count.\n";
       return 0;
     } else rest.push_back(argv[i]);
   }

@@ -396,6 +396,19 @@ void fit_patch(const TriMesh& mesh, const Segmentation& seg, int p, const Border
     }
     if (plain) {
       FitResult fitted = fit_height_field(local, fit);
+      // Detail fit (PatchFitOptions::detail_spacing_edges): a patch that the lattice misses
+      // is refitted on the finer one.
+      const PatchFitOptions& o = options.fit;
+      if (o.detail_spacing_edges > 0.0 && !options.cell_grid.enabled && fitted.max_residual() > o.detail_above_edges * mean_edge) {
+        FitOptions fine = fit;
+        const double margin = fit_margin(mean_edge, lo, hi);
+        fine.domain = Rectangle{lo - Eigen::Vector2d::Constant(margin), hi + Eigen::Vector2d::Constant(margin)};
+        fine.base_cells = FitOptions{}.base_cells;
+        fine.min_spacing = o.detail_spacing_edges * mean_edge;
+        fit_lattice_to_spacing(fine);
+        fitted = fit_height_field(local, fine);
+        result.detail_fit = true;
+      }
       result.surface.field = std::move(fitted.field);
       result.report.fit_max_residual = fitted.max_residual();
       result.report.fit_levels = static_cast<int>(fitted.levels.size());

@@ -207,6 +207,12 @@ void PatchFitOptions::validate() const {
   if (split_rounds < 0 || split_rounds > 20) bad_option("fit.split_rounds must be in [0, 20], got " + std::to_string(split_rounds));
   if (!(std::isfinite(large_face_edges) && large_face_edges >= 0.0))
     bad_option("fit.large_face_edges must be finite and >= 0, got " + std::to_string(large_face_edges));
+  if (!(std::isfinite(detail_spacing_edges) && detail_spacing_edges >= 0.0))
+    bad_option("fit.detail_spacing_edges must be finite and >= 0, got " + std::to_string(detail_spacing_edges));
+  if (!(std::isfinite(detail_above_edges) && detail_above_edges >= 0.0))
+    bad_option("fit.detail_above_edges must be finite and >= 0, got " + std::to_string(detail_above_edges));
+  if (!finite_positive(detail_node_offset_edges))
+    bad_option("fit.detail_node_offset_edges must be finite and > 0, got " + std::to_string(detail_node_offset_edges));
 }
 
 void CellGrid::validate() const {
@@ -428,9 +434,10 @@ SurfaceMesh surfmesh_detail::mesh_surface(const TriMesh& input, const Segmentati
                          feature_limited[p] == 0;
     mesh_patch(segmentation, static_cast<int>(p), borders, options, h, uniform ? SizeAt() : front_size,
                patch_grid.empty() ? sizing_grid : patch_grid[p], results[p]);
-    if (options.max_node_offset_edges > 0.0)
-      results[p].report.n_clamped_nodes =
-          clamp_inner_nodes(input, segmentation, static_cast<int>(p), options.max_node_offset_edges * mean_edge, results[p]);
+    // A detail-fitted patch keeps its nodes closer to its input (PatchFitOptions::detail_spacing_edges).
+    const double offset = results[p].detail_fit ? options.fit.detail_node_offset_edges : options.max_node_offset_edges;
+    if (offset > 0.0)
+      results[p].report.n_clamped_nodes = clamp_inner_nodes(input, segmentation, static_cast<int>(p), offset * mean_edge, results[p]);
   });
   // Patches meshed independently can join the same two border nodes (a thin fin, a tiny
   // closed component): split such shared chords before the numbering.

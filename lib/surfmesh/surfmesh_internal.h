@@ -139,6 +139,8 @@ struct PatchResult {
   bool has_surface = false;
   //! The surface is a band fit (CellGrid), not a plain fit of the vertices.
   bool band_fit = false;
+  //! The plain fit was refitted on the detail lattice (PatchFitOptions::detail_spacing_edges).
+  bool detail_fit = false;
   //! New nodes on the surface (world coordinates).
   std::vector<Eigen::Vector3d> inner_nodes;
   //! Triangles: ids >= 0 are global border nodes, id < 0 is inner node -(id + 1).

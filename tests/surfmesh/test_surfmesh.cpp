@@ -782,6 +782,32 @@ TEST(Surfmesh, InnerNodesStayNearTheirPatchsFaces) {
   EXPECT_THROW((void)mesh_surface(mesh, seg, options), InvalidInput);
 }
 
+TEST(Surfmesh, DetailFitFollowsDetailTheDefaultLatticeSmooths) {
+  // Ridges 4 edges apart, half an edge high: the default lattice (2.5 mean edges) smooths
+  // them; the detail fit (PatchFitOptions::detail_spacing_edges) refits on a lattice of one
+  // mean edge and keeps the new nodes within detail_node_offset_edges of the input.
+  constexpr int kN = 16;
+  const double edge = 1.0 / kN;
+  TriMesh mesh = to_trimesh(test::grid_patch(kN, kN));
+  for (const auto v : mesh.vertices()) mesh.point(v)[2] = 0.5 * edge * std::sin(2.0 * std::numbers::pi * mesh.point(v)[0] / (4.0 * edge));
+  const Segmentation seg = labelled_segmentation(mesh, std::vector<int>(mesh.n_faces(), 0), 1);
+  SurfMeshOptions options;
+  options.sizing.size = edge;
+  const SurfaceMesh plain = mesh_surface(mesh, seg, options);
+  const double mean_edge = plain.input_mean_edge;
+  EXPECT_GT(plain.patches[0].fit_max_residual, 0.25 * mean_edge);  // the default lattice misses the ridges
+  options.fit.detail_spacing_edges = 1.0;
+  const SurfaceMesh detail = mesh_surface(mesh, seg, options);
+  expect_consistent(seg, detail);
+  EXPECT_LT(detail.patches[0].fit_max_residual, 0.5 * plain.patches[0].fit_max_residual);
+  EXPECT_LE(max_inner_offset(mesh, detail), options.fit.detail_node_offset_edges * mean_edge * (1.0 + 1e-9));
+  EXPECT_GT(max_inner_offset(mesh, plain), 2.0 * options.fit.detail_node_offset_edges * mean_edge);
+  EXPECT_EQ(count_self_intersections(as_soup(detail)), 0u);
+  // A patch the default lattice fits within detail_above_edges is not refitted: the same nodes.
+  options.fit.detail_above_edges = 2.0 * plain.patches[0].fit_max_residual / mean_edge;
+  EXPECT_EQ(mesh_surface(mesh, seg, options).nodes, plain.nodes);
+}
+
 // Most of the curve's input edges have a dihedral above the angle (a crease that is not
 // bevelled).
 bool sharp_edges(const TriMesh& mesh, const BorderCurve& curve, double angle_deg) {
@@ -893,6 +919,9 @@ TEST(Surfmesh, BadOptionsAndMismatchedSegmentation) {
       [](SurfMeshOptions& o) { o.fit.max_levels = 0; },
       [](SurfMeshOptions& o) { o.fit.least_squares_fine_smoothing = -1.0; },
       [](SurfMeshOptions& o) { o.fit.fine_below_edges = std::nan(""); },
+      [](SurfMeshOptions& o) { o.fit.detail_spacing_edges = -1.0; },
+      [](SurfMeshOptions& o) { o.fit.detail_above_edges = std::nan(""); },
+      [](SurfMeshOptions& o) { o.fit.detail_node_offset_edges = 0.0; },
       [](SurfMeshOptions& o) { o.smoothing_passes = -1; },
       [](SurfMeshOptions& o) { o.threads = -2; },
       [](SurfMeshOptions& o) { o.crease_angle_deg = 0.0; },

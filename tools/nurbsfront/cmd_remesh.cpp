@@ -39,6 +39,7 @@ struct RemeshArgs {
   std::optional<double> relative_size;
   std::optional<std::size_t> vertices;
   bool adaptive = false;
+  std::optional<double> detail_fit;
   double feature_size = SizingOptions{}.feature_size;
   bool feature_size_everywhere = false;
   std::optional<int> crossing_repair_rounds;
@@ -91,6 +92,7 @@ void run_remesh(RemeshArgs& args) {
   if (args.size) options.surfmesh.sizing.size = *args.size;
   if (args.relative_size) options.surfmesh.sizing.relative_size = *args.relative_size;
   options.surfmesh.sizing.adaptive = args.adaptive;
+  if (args.detail_fit) options.surfmesh.fit.detail_spacing_edges = *args.detail_fit;
   options.surfmesh.sizing.feature_size = args.feature_size;
   options.surfmesh.sizing.feature_size_everywhere = args.feature_size_everywhere;
   if (args.crossing_repair_rounds) options.crossing_repair_rounds = *args.crossing_repair_rounds;
@@ -188,6 +190,11 @@ void add_remesh_command(CLI::App& app) {
                   "(remesh_to_vertex_count; docs/pipeline.md)")
       ->check(CLI::Range(std::size_t{4}, std::numeric_limits<std::size_t>::max()));
   cmd->add_flag("--adaptive", args->adaptive, "Curvature-adaptive sizing (chord error)");
+  cmd->add_option("--detail-fit", args->detail_fit,
+                  "Refit a patch whose fit misses its input by more than 0.25 mean edges on a lattice of this many mean "
+                  "edges (e.g. 1; default 0 = off; not with a cell grid) and keep its new nodes within 0.05 mean edges "
+                  "of the input: for inputs with detail of 1-2 mean edges (scans, smoothed-image level sets), with "
+                  "--adaptive; not for label-image surfaces (it follows their terraces; docs/surfmesh.md \"Detail fit\")");
   cmd->add_option("--feature-size", args->feature_size,
                   "Size of a patch bounded mostly by feature curves at most F x its width (2 area / perimeter); "
                   "0 = off (default 1; not on marching-cubes surfaces nor where it limits under 1% of the area; "
