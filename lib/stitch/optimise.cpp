@@ -1,12 +1,9 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // Cross-border optimisation of the stitched mesh: edge flips and smoothing constrained to
-// the fitted patch surfaces. The flips run in edge order (their tests in parallel, with the
-// same flips), the smoothing colour by colour (one colour's nodes in parallel), so the
-// result depends only on the input, never on the thread count.
+// the fitted patch surfaces. Both sweeps run in index order (Gauss-Seidel), so the
+// result depends only on the input (the flips' tests run in parallel, with the same flips).
 #include <algorithm>
 #include <array>
-#include <atomic>
-#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -67,13 +64,6 @@ struct NodeInfo {
 };
 
 class Optimiser {
-  // The far corners of a smoothed vertex p's triangles (p, b, c), with their area vector
-  // and its norm at p's old position.
-  struct RingTriangle {
-    Vec b, c, n_old;
-    double l_old;
-  };
-
  public:
   Optimiser(const SurfaceMesh& surface, const StitchOptions& options, StitchResult& result,
             const std::vector<std::uint8_t>& is_feature)
@@ -111,7 +101,6 @@ class Optimiser {
       if (!passes_test || !mesh_.is_flip_ok(e)) continue;
       mesh_.flip(e);
       ++n_flips;
-      flipped_.push_back(e);
       if (!retest.empty()) {
         for (const auto h : {mesh_.halfedge_handle(e, 0), mesh_.halfedge_handle(e, 1)}) {
           for (auto g : mesh_.fh_range(mesh_.face_handle(h))) retest[static_cast<std::size_t>(mesh_.edge_handle(g).idx())] = 1;
@@ -121,159 +110,80 @@ class Optimiser {
     return n_flips;
   }
 
-  // One smoothing sweep, Gauss-Seidel in colour order: the movable vertices get a greedy
-  // colouring in index order (no two neighbours share a colour) and are moved colour by
-  // colour, in index order within a colour. A vertex's move reads only its ring, whose
-  // vertices have other colours, so the vertices of one colour are moved in parallel with
-  // the same result for any thread count. Returns {accepted, rejected}.
+  // Returns {accepted, rejected}.
   std::array<std::size_t, 2> smoothing_sweep() {
-    colour_vertices();
-    rings_.resize(std::max(options_.n_threads, 1U));
-    std::atomic<std::size_t> accepted{0}, rejected{0};
-    for (std::size_t c = 0; c + 1 < colour_start_.size(); ++c) {
-      const std::size_t begin = colour_start_[c];
-      parallel::for_chunks(colour_start_[c + 1] - begin, options_.n_threads, kVertexChunk,
-                           [&](std::size_t first, std::size_t last, unsigned worker) {
-                             std::vector<RingTriangle>& ring = rings_[worker];
-                             std::size_t n_accepted = 0, n_rejected = 0;
-                             for (std::size_t i = begin + first; i < begin + last; ++i) {
-                               const Move move = smooth_vertex(coloured_[i], ring);
-                               n_accepted += move == Move::Accepted ? 1 : 0;
-                               n_rejected += move == Move::Rejected ? 1 : 0;
-                             }
-                             accepted += n_accepted;
-                             rejected += n_rejected;
-                           });
+    std::array<std::size_t, 2> counts{0, 0};
+    for (auto v : mesh_.vertices()) {
+      const NodeInfo& info = nodes_[static_cast<std::size_t>(v.idx())];
+      if (!info.is_movable || mesh_.is_boundary(v)) continue;
+      const Vec p = point(mesh_, v);
+      // Area-weighted centroid of the incident triangles.
+      Vec centroid = Vec::Zero();
+      double total = 0.0;
+      ring_.clear();
+      for (auto h : mesh_.voh_range(v)) {
+        const auto vb = mesh_.to_vertex_handle(h);
+        const auto vc = mesh_.to_vertex_handle(mesh_.next_halfedge_handle(h));
+        const Vec b = point(mesh_, vb), c = point(mesh_, vc);
+        const Vec n = area_vector(p, b, c);
+        const double area = n.norm();
+        centroid += area * (p + b + c) / 3.0;
+        total += area;
+        ring_.push_back({b, c, n, area});
+      }
+      if (!(total > 0.0) || ring_.empty()) continue;
+      centroid /= total;
+      const Vec target = p + options_.smoothing_relaxation * (centroid - p);
+      Vec q;
+      if (info.corner_slot >= 0) {
+        const auto& patches = corner_patches_[static_cast<std::size_t>(info.corner_slot)];
+        q = Vec::Zero();
+        for (const int patch : patches) q += surface_.surfaces[static_cast<std::size_t>(patch)].project(target);
+        q /= static_cast<double>(patches.size());
+      } else if (info.curve < 0) {
+        q = surface_.surfaces[static_cast<std::size_t>(info.patch0)].project(target);
+      } else {
+        q = 0.5 * (surface_.surfaces[static_cast<std::size_t>(info.patch0)].project(target) +
+                   surface_.surfaces[static_cast<std::size_t>(info.patch1)].project(target));
+      }
+      if (!q.allFinite()) continue;
+      double new_min = 1.0, new_sine = 1.0;  // smallest alpha, sine of the smallest angle
+      bool ok = true;
+      for (const RingTriangle& t : ring_) {
+        const Vec n_new = area_vector(q, t.b, t.c);
+        const double l_new = n_new.norm();
+        if (l_new <= min_double_area_ || (t.l_old > 0.0 && n_new.dot(t.n_old) <= options_.min_normal_dot * t.l_old * l_new)) {
+          ok = false;
+          break;
+        }
+        const auto [alpha, sine] = alpha_and_min_angle_sine(q, t.b, t.c, l_new, alpha_sine_skip_);
+        new_min = std::min(new_min, alpha);
+        new_sine = std::min(new_sine, sine);
+      }
+      // Accepted when the smallest alpha stays at least min(old smallest, alpha_floor) and the
+      // smallest angle at least min(old smallest, angle_floor): the old ring is needed only
+      // below the floors.
+      if (ok && new_min < options_.alpha_floor) {
+        double old_min = 1.0;
+        for (const RingTriangle& t : ring_) old_min = std::min(old_min, alpha_with_area(p, t.b, t.c, t.l_old));
+        ok = new_min >= old_min;
+      }
+      if (ok && new_sine < sin_angle_floor_) {
+        double old_sine = 1.0;
+        for (const RingTriangle& t : ring_) old_sine = std::min(old_sine, alpha_and_min_angle_sine(p, t.b, t.c, t.l_old)[1]);
+        ok = new_sine >= old_sine;
+      }
+      if (ok) {
+        mesh_.set_point(v, to_openmesh(q));
+        ++counts[0];
+      } else {
+        ++counts[1];
+      }
     }
-    return {accepted.load(), rejected.load()};
+    return counts;
   }
 
  private:
-  enum class Move { Skipped, Accepted, Rejected };
-
-  // The movable vertices off the boundary, sorted by colour, then by index: colour c is
-  // coloured_[colour_start_[c] .. colour_start_[c + 1]). The first sweep colours greedily
-  // in index order (the smallest colour no coloured neighbour has); a later one only
-  // recolours, in flip order, the ends of edges flipped since (flipped_) that now join two
-  // vertices of one colour (the end with the larger index takes its smallest free colour).
-  void colour_vertices() {
-    if (colour_.empty()) {
-      colour_.assign(mesh_.n_vertices(), -1);
-      for (auto v : mesh_.vertices()) {
-        const NodeInfo& info = nodes_[static_cast<std::size_t>(v.idx())];
-        if (info.is_movable && !mesh_.is_boundary(v)) colour_[static_cast<std::size_t>(v.idx())] = smallest_free_colour(v);
-      }
-    } else {
-      for (const auto e : flipped_) {
-        const auto h = mesh_.halfedge_handle(e, 0);
-        const auto v = std::max(mesh_.from_vertex_handle(h), mesh_.to_vertex_handle(h));
-        const auto w = std::min(mesh_.from_vertex_handle(h), mesh_.to_vertex_handle(h));
-        int& c = colour_[static_cast<std::size_t>(v.idx())];
-        if (c >= 0 && c == colour_[static_cast<std::size_t>(w.idx())]) c = smallest_free_colour(v);
-      }
-    }
-    flipped_.clear();
-    std::vector<std::size_t> count;
-    for (const int c : colour_) {
-      if (c < 0) continue;
-      if (count.size() <= static_cast<std::size_t>(c)) count.resize(static_cast<std::size_t>(c) + 1, 0);
-      ++count[static_cast<std::size_t>(c)];
-    }
-    colour_start_.assign(1, 0);
-    for (const std::size_t k : count) colour_start_.push_back(colour_start_.back() + k);
-    coloured_.resize(colour_start_.back());
-    std::vector<std::size_t> fill(colour_start_.begin(), colour_start_.end() - 1);
-    for (auto v : mesh_.vertices()) {
-      const int c = colour_[static_cast<std::size_t>(v.idx())];
-      if (c >= 0) coloured_[fill[static_cast<std::size_t>(c)]++] = v;
-    }
-  }
-
-  // The smallest colour none of v's neighbours has.
-  int smallest_free_colour(TriMesh::VertexHandle v) const {
-    std::uint64_t used = 0;  // colours below 64
-    std::vector<int> high;   // colours from 64 on (a vertex of valence 64 or more)
-    for (auto w : mesh_.vv_range(v)) {
-      const int c = colour_[static_cast<std::size_t>(w.idx())];
-      if (c >= 0 && c < 64) used |= std::uint64_t{1} << c;
-      if (c >= 64) high.push_back(c);
-    }
-    if (~used != 0) return std::countr_one(used);
-    std::sort(high.begin(), high.end());
-    int c = 64;
-    for (const int h : high) {
-      if (h == c) ++c;
-      if (h > c) break;
-    }
-    return c;
-  }
-
-  // Moves v towards the area-weighted centroid of its ring, projected onto its patch
-  // surface(s), when the acceptance tests pass. ring: scratch.
-  Move smooth_vertex(TriMesh::VertexHandle v, std::vector<RingTriangle>& ring) {
-    const NodeInfo& info = nodes_[static_cast<std::size_t>(v.idx())];
-    const Vec p = point(mesh_, v);
-    // Area-weighted centroid of the incident triangles.
-    Vec centroid = Vec::Zero();
-    double total = 0.0;
-    ring.clear();
-    for (auto h : mesh_.voh_range(v)) {
-      const auto vb = mesh_.to_vertex_handle(h);
-      const auto vc = mesh_.to_vertex_handle(mesh_.next_halfedge_handle(h));
-      const Vec b = point(mesh_, vb), c = point(mesh_, vc);
-      const Vec n = area_vector(p, b, c);
-      const double area = n.norm();
-      centroid += area * (p + b + c) / 3.0;
-      total += area;
-      ring.push_back({b, c, n, area});
-    }
-    if (!(total > 0.0) || ring.empty()) return Move::Skipped;
-    centroid /= total;
-    const Vec target = p + options_.smoothing_relaxation * (centroid - p);
-    Vec q;
-    if (info.corner_slot >= 0) {
-      const auto& patches = corner_patches_[static_cast<std::size_t>(info.corner_slot)];
-      q = Vec::Zero();
-      for (const int patch : patches) q += surface_.surfaces[static_cast<std::size_t>(patch)].project(target);
-      q /= static_cast<double>(patches.size());
-    } else if (info.curve < 0) {
-      q = surface_.surfaces[static_cast<std::size_t>(info.patch0)].project(target);
-    } else {
-      q = 0.5 * (surface_.surfaces[static_cast<std::size_t>(info.patch0)].project(target) +
-                 surface_.surfaces[static_cast<std::size_t>(info.patch1)].project(target));
-    }
-    if (!q.allFinite()) return Move::Skipped;
-    double new_min = 1.0, new_sine = 1.0;  // smallest alpha, sine of the smallest angle
-    bool ok = true;
-    for (const RingTriangle& t : ring) {
-      const Vec n_new = area_vector(q, t.b, t.c);
-      const double l_new = n_new.norm();
-      if (l_new <= min_double_area_ || (t.l_old > 0.0 && n_new.dot(t.n_old) <= options_.min_normal_dot * t.l_old * l_new)) {
-        ok = false;
-        break;
-      }
-      const auto [alpha, sine] = alpha_and_min_angle_sine(q, t.b, t.c, l_new, alpha_sine_skip_);
-      new_min = std::min(new_min, alpha);
-      new_sine = std::min(new_sine, sine);
-    }
-    // Accepted when the smallest alpha stays at least min(old smallest, alpha_floor) and the
-    // smallest angle at least min(old smallest, angle_floor): the old ring is needed only
-    // below the floors.
-    if (ok && new_min < options_.alpha_floor) {
-      double old_min = 1.0;
-      for (const RingTriangle& t : ring) old_min = std::min(old_min, alpha_with_area(p, t.b, t.c, t.l_old));
-      ok = new_min >= old_min;
-    }
-    if (ok && new_sine < sin_angle_floor_) {
-      double old_sine = 1.0;
-      for (const RingTriangle& t : ring) old_sine = std::min(old_sine, alpha_and_min_angle_sine(p, t.b, t.c, t.l_old)[1]);
-      ok = new_sine >= old_sine;
-    }
-    if (!ok) return Move::Rejected;
-    mesh_.set_point(v, to_openmesh(q));
-    return Move::Accepted;
-  }
-
   void classify_nodes(const std::vector<int>& vertex_node) {
     nodes_.assign(mesh_.n_vertices(), NodeInfo{});
     for (auto v : mesh_.vertices()) {
@@ -380,11 +290,13 @@ class Optimiser {
   const std::vector<std::uint8_t>& is_feature_;
   std::vector<NodeInfo> nodes_;
   std::vector<std::vector<int>> corner_patches_;
-  std::vector<int> colour_;  // per vertex: its colour in the smoothing sweep (-1: none)
-  std::vector<TriMesh::VertexHandle> coloured_;
-  std::vector<TriMesh::EdgeHandle> flipped_;  // edges flipped since the last colouring
-  std::vector<std::vector<RingTriangle>> rings_;  // per worker: the ring of the vertex it moves
-  std::vector<std::size_t> colour_start_;
+  // The far corners of a smoothed vertex p's triangles (p, b, c), with their area vector
+  // and its norm at p's old position.
+  struct RingTriangle {
+    Vec b, c, n_old;
+    double l_old;
+  };
+  std::vector<RingTriangle> ring_;
   double min_double_area_ = 0.0;
   double cos_dihedral_ = 1.0;
   double sin_angle_floor_ = 0.0;
@@ -397,8 +309,6 @@ class Optimiser {
   static constexpr double kSineSkipMargin = 1e-9;
   // Edges per chunk of the parallel flip tests.
   static constexpr std::size_t kEdgeChunk = 4096;
-  // Vertices per chunk of a colour's parallel smoothing.
-  static constexpr std::size_t kVertexChunk = 64;
   double alpha_sine_skip_ = 0.0;
 };
 

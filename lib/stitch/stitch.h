@@ -173,9 +173,7 @@ struct StitchResult {
 //!       Feature nodes (nodes of feature curves, corners ending one) and boundary nodes
 //!       never move. A move is kept only if it turns
 //!       no incident triangle's normal too far and keeps their smallest alpha (bounds in
-//!       StitchOptions). The nodes move colour by colour (a greedy colouring in index
-//!       order, no two neighbours of one colour), one colour's nodes in parallel: the
-//!       same result for any thread count.
+//!       StitchOptions).
 //!    If the result has self-intersections (one exact check over the whole mesh, when
 //!    check_self_intersections) that involve a triangle the optimisation changed, the
 //!    nodes of those triangles go back to their assembled positions and the edges flips

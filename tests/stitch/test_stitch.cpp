@@ -202,9 +202,8 @@ TEST(Stitch, OptimisationImprovesAJitteredSphereAcrossBorders) {
   EXPECT_DOUBLE_EQ(raw.report.output.quality.alpha_mean, raw.report.alpha_mean_before);
 }
 
-// The flips' tests and the smoothing (one colour at a time) run in parallel and the
-// verification's signatures on helper threads: the same flips, positions and report for
-// any thread count.
+// The flips' tests run in parallel and the verification's signatures on helper threads:
+// the same flips, positions and report for any thread count.
 TEST(Stitch, SameResultForAnyThreadCount) {
   const TriangleSoup soup = jittered_sphere(3, 0.6);
   const SurfaceMesh surface = cube_map_surface(soup);
@@ -213,7 +212,6 @@ TEST(Stitch, SameResultForAnyThreadCount) {
   one.n_threads = 1;
   const StitchResult r1 = stitch(surface, input, one);
   ASSERT_GT(r1.report.n_flips, 0u);
-  ASSERT_GT(r1.mesh.n_vertices(), 8 * 64u);  // several chunks of smoothing per colour
   for (const unsigned n : {2u, 3u}) {
     StitchOptions options;
     options.n_threads = n;
@@ -490,12 +488,11 @@ TEST(Stitch, SmoothingMakesNoNewTriangleBelowTheAngleFloor) {
     face_patch[t] = (sheet.points[tri[0]] + sheet.points[tri[1]] + sheet.points[tri[2]]).x() < 1.5 ? 0 : 1;
   }
   SurfaceMesh surface = make_surface(sheet, face_patch, 2);
-  // Patch 1's fit planted as a plane tilted by 70 deg about the curve's direction (y),
-  // through (0.5, 0.5, 0.1): 0.8 edges off the sheet along its axis (whether the unguarded
-  // smoothing makes a small angle depends on the order of the moves; asserted below).
+  // Patch 1's fit planted as a plane tilted by 30 deg about the curve's direction (y),
+  // through (0.5, 0.5, -0.05): 0.4 edges off the sheet along its axis.
   PatchSurface& planted = surface.surfaces[1];
-  planted.frame.axes = Eigen::AngleAxisd(70.0 * M_PI / 180.0, Eigen::Vector3d::UnitY()).toRotationMatrix();
-  const double local_z = planted.frame.to_local(Eigen::Vector3d(0.5, 0.5, 0.1)).z();
+  planted.frame.axes = Eigen::AngleAxisd(M_PI / 6.0, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  const double local_z = planted.frame.to_local(Eigen::Vector3d(0.5, 0.5, -0.05)).z();
   for (double& c : planted.field.mutable_coefficients()) c = local_z;
   const TriMesh input = to_trimesh(sheet);
   StitchOptions unguarded;
