@@ -17,53 +17,22 @@
 #include <Eigen/Geometry>
 
 #include "nurbsfront/core/mesh_types.h"
+#include "nurbsfront/core/parallel.h"
 #include "nurbsfront/segment/segment.h"
 
 namespace nurbsfront::segment_detail {
 
 //! The worker count of SegmentOptions::threads (0: all hardware threads).
-[[nodiscard]] inline unsigned worker_count(int threads) {
-  return threads > 0 ? static_cast<unsigned>(threads) : std::max(1U, std::thread::hardware_concurrency());
-}
+[[nodiscard]] inline unsigned worker_count(int threads) { return parallel::thread_count(threads); }
 
-//! Runs task(begin, end, worker) over [0, n) in chunks of `chunk` indices on up to `workers`
-//! threads (the calling thread is worker 0; worker < workers). Each index is in exactly one
-//! call, but which worker runs it varies: a task writes only the results of its own indices,
-//! and per-worker state must not change them (results never depend on the thread count).
-//! A task's exception is rethrown here once every thread has stopped.
+//! parallel::for_chunks without a monitor: task(begin, end, worker) over [0, n) in chunks
+//! of `chunk` indices on up to `workers` threads (the calling thread is worker 0; worker <
+//! workers). A task writes only the results of its own indices, and per-worker state must
+//! not change them (results never depend on the thread count). A task's exception is
+//! rethrown here once every thread has stopped.
 template <class Task>
 void parallel_chunks(std::size_t n, unsigned workers, std::size_t chunk, const Task& task) {
-  if (n == 0) return;
-  chunk = std::max<std::size_t>(chunk, 1);
-  const std::size_t n_chunks = (n + chunk - 1) / chunk;
-  const auto n_workers = static_cast<unsigned>(std::min<std::size_t>(workers, n_chunks));
-  if (n_workers <= 1) {
-    task(std::size_t{0}, n, 0U);
-    return;
-  }
-  std::atomic<std::size_t> next{0};
-  std::atomic<bool> failed{false};
-  std::mutex mutex;
-  std::exception_ptr error;
-  auto run = [&](unsigned worker) {
-    try {
-      for (;;) {
-        const std::size_t c = next.fetch_add(1);
-        if (c >= n_chunks || failed.load()) return;
-        task(c * chunk, std::min(n, (c + 1) * chunk), worker);
-      }
-    } catch (...) {
-      const std::lock_guard lock(mutex);
-      if (!error) error = std::current_exception();
-      failed = true;
-    }
-  };
-  std::vector<std::thread> pool;
-  pool.reserve(n_workers - 1);
-  for (unsigned w = 1; w < n_workers; ++w) pool.emplace_back(run, w);
-  run(0);
-  for (auto& t : pool) t.join();
-  if (error) std::rethrow_exception(error);
+  parallel::for_chunks(n, workers, chunk, task);
 }
 
 //! Faces as flat arrays: edge i of face f joins vertices[f][i] -> vertices[f][(i + 1) % 3]

@@ -8,11 +8,11 @@
 #include <cstdint>
 #include <limits>
 #include <numbers>
-#include <thread>
 #include <vector>
 
 #include <Eigen/Geometry>
 
+#include "nurbsfront/core/parallel.h"
 #include "nurbsfront/core/tolerances.h"
 #include "nurbsfront/stitch/stitch_internal.h"
 
@@ -90,15 +90,9 @@ class Optimiser {
     if (n_threads >= 2) {
       passes.assign(n_edges, 0);
       retest.assign(n_edges, 0);
-      const std::size_t chunk = (n_edges + n_threads - 1) / n_threads;
-      auto test_range = [this, &passes](std::size_t begin, std::size_t end) {
+      parallel::for_chunks(n_edges, n_threads, kEdgeChunk, [this, &passes](std::size_t begin, std::size_t end, unsigned) {
         for (std::size_t i = begin; i < end; ++i) passes[i] = passes_flip_test(TriMesh::EdgeHandle(static_cast<int>(i))) ? 1 : 0;
-      };
-      std::vector<std::thread> workers;
-      for (unsigned t = 1; t < n_threads && t * chunk < n_edges; ++t)
-        workers.emplace_back(test_range, t * chunk, std::min(n_edges, (t + 1) * chunk));
-      test_range(0, std::min(n_edges, chunk));
-      for (auto& w : workers) w.join();
+      });
     }
     std::size_t n_flips = 0;
     for (auto e : mesh_.edges()) {
@@ -313,6 +307,8 @@ class Optimiser {
   // computed (1 in its place). new_sine is compared only with the floor, and below the
   // floor it is the smallest computed sine: the same decisions as with every sine.
   static constexpr double kSineSkipMargin = 1e-9;
+  // Edges per chunk of the parallel flip tests.
+  static constexpr std::size_t kEdgeChunk = 4096;
   double alpha_sine_skip_ = 0.0;
 };
 

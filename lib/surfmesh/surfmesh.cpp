@@ -15,6 +15,7 @@
 #include <thread>
 
 #include "nurbsfront/core/error.h"
+#include "nurbsfront/core/parallel.h"
 #include "nurbsfront/core/soup.h"
 #include "nurbsfront/surfmesh/surfmesh_internal.h"
 
@@ -32,68 +33,23 @@ constexpr std::size_t kSplitCheckStride = 4;
 // SizingOptions::chord_error = 0: this fraction of the uniform h.
 constexpr double kDefaultChordRelative = 0.05;
 
-// Runs task(i) for every i in [0, n) on `threads` workers pulling indices from an atomic
-// counter. Progress is reported from the calling thread (fraction f0 .. f1); returning
-// false from the callback stops the workers and throws Cancelled. The task must not throw
-// (an escaping exception is rethrown here after the workers joined).
+// Runs task(i) for every i in [0, n) on `threads` workers (parallel::for_chunks, one index
+// per chunk). Progress is reported from the calling thread (fraction f0 .. f1); returning
+// false from the callback stops the workers and throws Cancelled. A task's exception is
+// rethrown here after the workers joined.
 template <class Task>
 void run_parallel(std::size_t n, unsigned threads, const ProgressCallback& progress, double f0, double f1, const Task& task) {
   constexpr std::string_view kStage = "surfmesh: patches";
-  auto fraction = [&](std::size_t done) { return f0 + (f1 - f0) * static_cast<double>(done) / static_cast<double>(n); };
-  if (threads <= 1 || n <= 1) {
-    for (std::size_t i = 0; i < n; ++i) {
-      task(i);
-      report_progress(progress, kStage, fraction(i + 1));
-    }
-    return;
-  }
-  std::atomic<std::size_t> next{0};
-  std::atomic<bool> stop{false};
-  std::mutex mutex;
-  std::condition_variable changed;
-  std::size_t done = 0;
-  std::exception_ptr error;
-  auto worker = [&] {
-    while (!stop.load()) {
-      const std::size_t i = next.fetch_add(1);
-      if (i >= n) return;
-      try {
-        task(i);
-      } catch (...) {
-        const std::lock_guard lock(mutex);
-        if (!error) error = std::current_exception();
-        stop = true;
-      }
-      {
-        const std::lock_guard lock(mutex);
-        ++done;
-      }
-      changed.notify_one();
-    }
-  };
-  const unsigned n_workers = static_cast<unsigned>(std::min<std::size_t>(threads, n));
-  std::vector<std::thread> pool;
-  pool.reserve(n_workers);
-  for (unsigned t = 0; t < n_workers; ++t) pool.emplace_back(worker);
-  bool cancelled = false;
-  {
-    std::unique_lock lock(mutex);
-    std::size_t reported = 0;
-    while (reported < n && !stop.load()) {
-      changed.wait(lock, [&] { return done > reported || stop.load(); });
-      reported = done;
-      lock.unlock();
-      const bool go_on = !progress || progress(kStage, fraction(reported));
-      lock.lock();
-      if (!go_on) {
-        cancelled = true;
-        stop = true;
-      }
-    }
-  }
-  for (auto& t : pool) t.join();
-  if (error) std::rethrow_exception(error);
-  if (cancelled) throw Cancelled();
+  if (n == 0) return;
+  const bool finished = parallel::for_chunks(
+      n, threads, 1,
+      [&](std::size_t begin, std::size_t end, unsigned) {
+        for (std::size_t i = begin; i < end; ++i) task(i);
+      },
+      [&](std::size_t done) {
+        return !progress || progress(kStage, f0 + (f1 - f0) * static_cast<double>(done) / static_cast<double>(n));
+      });
+  if (!finished) throw Cancelled();
 }
 
 // Moves each border node to the mean of its vertical projections onto the fitted surfaces

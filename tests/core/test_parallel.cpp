@@ -1,0 +1,138 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "nurbsfront/core/parallel.h"
+
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <mutex>
+#include <stdexcept>
+#include <system_error>
+#include <thread>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+namespace nurbsfront {
+namespace {
+
+// A result per index that takes a little work (so chunks overlap in time).
+double value_of(std::size_t i) {
+  double x = static_cast<double>(i);
+  for (int k = 0; k < 50; ++k) x = std::sin(x) + 0.5 * x;
+  return x;
+}
+
+std::vector<double> run(unsigned threads, std::size_t n, std::size_t chunk, std::vector<int>& calls_per_index,
+                        unsigned& max_worker) {
+  std::vector<double> out(n, 0.0);
+  calls_per_index.assign(n, 0);
+  std::atomic<unsigned> highest{0};
+  const bool finished = parallel::for_chunks(n, threads, chunk, [&](std::size_t begin, std::size_t end, unsigned worker) {
+    unsigned seen = highest.load();
+    while (worker > seen && !highest.compare_exchange_weak(seen, worker)) {
+    }
+    for (std::size_t i = begin; i < end; ++i) {
+      out[i] = value_of(i);
+      ++calls_per_index[i];
+    }
+  });
+  EXPECT_TRUE(finished);
+  max_worker = highest.load();
+  return out;
+}
+
+TEST(Parallel, EveryIndexOnceAndTheSameResultsForAnyThreadCount) {
+  for (const std::size_t chunk : {std::size_t{1}, std::size_t{7}, std::size_t{1000}}) {
+    std::vector<int> calls;
+    unsigned max_worker = 0;
+    const auto reference = run(1, 2001, chunk, calls, max_worker);
+    EXPECT_EQ(max_worker, 0U);
+    for (const unsigned threads : {2U, 3U, 8U}) {
+      const auto out = run(threads, 2001, chunk, calls, max_worker);
+      EXPECT_EQ(out, reference) << "threads " << threads << " chunk " << chunk;
+      for (const int c : calls) ASSERT_EQ(c, 1);
+      EXPECT_LT(max_worker, threads);
+    }
+  }
+  // Nothing to do: no call.
+  int n_calls = 0;
+  EXPECT_TRUE(parallel::for_chunks(0, 4, 1, [&](std::size_t, std::size_t, unsigned) { ++n_calls; }));
+  EXPECT_EQ(n_calls, 0);
+}
+
+TEST(Parallel, WorkerExceptionReachesTheCaller) {
+  // With a monitor every chunk runs on a started thread, never on the calling one.
+  const auto caller = std::this_thread::get_id();
+  std::atomic<bool> thrown_off_caller{false};
+  auto task = [&](std::size_t begin, std::size_t end, unsigned) {
+    for (std::size_t i = begin; i < end; ++i) {
+      if (i == 37) {
+        thrown_off_caller = std::this_thread::get_id() != caller;
+        throw std::runtime_error("index 37");
+      }
+    }
+  };
+  EXPECT_THROW(parallel::for_chunks(100, 2, 1, task, [](std::size_t) { return true; }), std::runtime_error);
+  EXPECT_TRUE(thrown_off_caller.load());
+  // Without a monitor (the calling thread works too) and on one thread.
+  for (const unsigned threads : {1U, 2U, 4U}) {
+    EXPECT_THROW(parallel::for_chunks(100, threads, 3, task), std::runtime_error) << threads;
+  }
+}
+
+TEST(Parallel, MonitorSeesProgressAndMayStop) {
+  for (const unsigned threads : {1U, 2U}) {
+    std::vector<std::size_t> seen;
+    std::atomic<std::size_t> n_run{0};
+    const bool finished = parallel::for_chunks(
+        50, threads, 2, [&](std::size_t begin, std::size_t end, unsigned) { n_run += end - begin; },
+        [&](std::size_t done) {
+          seen.push_back(done);  // always on the calling thread
+          return true;
+        });
+    EXPECT_TRUE(finished);
+    EXPECT_EQ(n_run.load(), 50U);
+    ASSERT_FALSE(seen.empty());
+    EXPECT_EQ(seen.back(), 50U);
+    for (std::size_t k = 1; k < seen.size(); ++k) EXPECT_LT(seen[k - 1], seen[k]);
+    // Stopping after the first report: false returned, not every index run.
+    n_run = 0;
+    const bool stopped = !parallel::for_chunks(
+        1000, threads, 1,
+        [&](std::size_t begin, std::size_t end, unsigned) {
+          n_run += end - begin;
+          std::this_thread::sleep_for(std::chrono::microseconds(200));
+        },
+        [](std::size_t) { return false; });
+    EXPECT_TRUE(stopped);
+    EXPECT_LT(n_run.load(), 1000U);
+  }
+}
+
+TEST(Parallel, FailedThreadStartLeavesTheWorkToTheRunningThreads) {
+  for (const int n_starts : {0, 1}) {  // threads that start before the failure
+    for (const bool with_monitor : {false, true}) {
+      int started = 0;
+      auto start = [&](auto&& f) {
+        if (started >= n_starts) throw std::system_error(std::make_error_code(std::errc::resource_unavailable_try_again));
+        ++started;
+        return std::thread(std::forward<decltype(f)>(f));
+      };
+      std::vector<int> calls(500, 0);
+      std::mutex mutex;
+      auto task = [&](std::size_t begin, std::size_t end, unsigned worker) {
+        EXPECT_LT(worker, 4U);
+        const std::lock_guard lock(mutex);
+        for (std::size_t i = begin; i < end; ++i) ++calls[i];
+      };
+      const parallel::Monitor monitor = with_monitor ? parallel::Monitor([](std::size_t) { return true; }) : nullptr;
+      EXPECT_TRUE(parallel::for_chunks_started_by(start, calls.size(), 4, 5, task, monitor));
+      EXPECT_EQ(started, n_starts);
+      for (const int c : calls) ASSERT_EQ(c, 1) << n_starts << " " << with_monitor;
+    }
+  }
+}
+
+}  // namespace
+}  // namespace nurbsfront
