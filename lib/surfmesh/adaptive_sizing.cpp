@@ -161,7 +161,7 @@ double lattice_edge_vertex_share(const TriMesh& mesh) {
       const TriMesh::EdgeHandle e(static_cast<int>(i));
       const auto h = mesh.halfedge_handle(e, 0);
       const double x = std::abs(mesh.point(mesh.to_vertex_handle(h))[axis] - mesh.point(mesh.from_vertex_handle(h))[axis]);
-      if (x >= shortest) extent.emplace_back(x, e.idx());
+      if (x >= shortest && x > 0.0) extent.emplace_back(x, e.idx());
     }
     std::sort(extent.begin(), extent.end());
     // Spacing: the extent most edges share (to 1e-6): marching cubes joins two points of one
@@ -184,7 +184,7 @@ double lattice_edge_vertex_share(const TriMesh& mesh) {
     const double reference = end_value(group, 0);
     const auto phase_bin = [&](double x) {
       const double t = (x - reference) / spacing;
-      return std::min(999, static_cast<int>((t - std::floor(t)) * 1000.0));
+      return std::isfinite(t) ? std::min(999, static_cast<int>((t - std::floor(t)) * 1000.0)) : 0;
     };
     std::array<std::uint32_t, 1000> votes{};
     for (std::size_t k = group; k < group + group_size; ++k)

@@ -884,6 +884,9 @@ TEST(Surfmesh, FeatureSizingOnlyWhereItHelps) {
   for (const char* scene : {"sphere", "torus", "trench", "dram"})
     for (const SampleMode mode : {SampleMode::LevelSet, SampleMode::Occupancy})
       EXPECT_TRUE(surfmesh_detail::vertices_on_lattice_edges(scene_mesh(scene, 24, mode))) << scene;
+  // Every vertex of a marching-cubes surface is on a lattice edge; an empty mesh has none.
+  EXPECT_EQ(surfmesh_detail::lattice_edge_vertex_share(scene_mesh("sphere", 24, SampleMode::LevelSet)), 1.0);
+  EXPECT_EQ(surfmesh_detail::lattice_edge_vertex_share(TriMesh()), 0.0);
   const TriMesh rotor = prepare_mesh(read_soup(test::test_data("meshes/rotor.off"))).mesh;
   EXPECT_FALSE(surfmesh_detail::vertices_on_lattice_edges(rotor));
   EXPECT_FALSE(surfmesh_detail::vertices_on_lattice_edges(prepare_mesh(read_soup(test::test_data("meshes/cheese.off"))).mesh));
