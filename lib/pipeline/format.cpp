@@ -79,6 +79,7 @@ std::string to_json(const RemeshReport& r) {
   for (const auto& e : r.errors) errors.push_back(json::string(e));
   json::Object all;
   all.flag("ok", r.ok()).num("target_size", r.target_size).num("input_mean_edge", r.input_mean_edge);
+  all.flag("feature_sizing_applied", r.feature_sizing_applied);
   all.add("counts", counts.str()).add("seconds", seconds.str()).add("patches", patches.str());
   all.add("stitch", stitch.str()).add("output", to_json(r.output)).add("errors", json::array(errors));
   return all.str();

@@ -67,6 +67,9 @@ struct RemeshReport {
   //! surface meshed and stitched again; RemeshOptions::crossing_repair_rounds; 0 on a run
   //! without crossings).
   std::size_t n_crossing_repairs = 0;
+  //! Feature sizing set the sizes (SurfaceMesh::feature_sizing_applied): false on inputs
+  //! taken for marching-cubes surfaces and where no crease-bounded patch is narrow enough.
+  bool feature_sizing_applied = false;
   double target_size = 0.0;       //!< resolved uniform target edge length (length units)
   double input_mean_edge = 0.0;   //!< mean edge length of the input
   double seconds_segment = 0.0;

@@ -6,6 +6,7 @@
 // vertices of crease-bounded patches.
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cstddef>
 #include <cmath>
@@ -143,26 +144,68 @@ SizeAt adaptive_sizing(const TriMesh& mesh, const Segmentation& segmentation, co
   return graded_sizing(mesh, std::move(sizes), gradation);
 }
 
-bool vertices_on_axis_lattice(const TriMesh& mesh) {
+double lattice_edge_vertex_share(const TriMesh& mesh) {
   const std::size_t n = mesh.n_vertices();
-  if (n == 0) return false;
-  constexpr std::size_t kShared = 4;  // vertices sharing a lattice value, at least
-  std::vector<std::uint8_t> on_lattice(n, 0);  // per vertex: coordinates shared by >= kShared
-  std::vector<std::pair<double, std::uint32_t>> values(n);
+  const std::size_t m = mesh.n_edges();
+  if (n == 0 || m == 0) return 0.0;
+  // A cell is not much smaller than an edge: shorter extents are rounding or slivers.
+  const double shortest = 0.2 * mean_edge_length(mesh);
+  std::vector<std::uint8_t> on_lattice(n, 0);  // per vertex: axes on which it is a lattice value
+  // The spacing is found from at most ~64k edges (evenly spread over the indices).
+  const std::size_t stride = std::max<std::size_t>(1, m / 65536);
+  std::vector<std::pair<double, int>> extent;  // per sampled edge: extent along the axis, edge
+  extent.reserve(m / stride + 1);
   for (int axis = 0; axis < 3; ++axis) {
-    for (std::size_t v = 0; v < n; ++v) values[v] = {mesh.point(TriMesh::VertexHandle(static_cast<int>(v)))[axis], static_cast<std::uint32_t>(v)};
-    std::sort(values.begin(), values.end());
-    for (std::size_t i = 0; i < n;) {
+    extent.clear();
+    for (std::size_t i = 0; i < m; i += stride) {
+      const TriMesh::EdgeHandle e(static_cast<int>(i));
+      const auto h = mesh.halfedge_handle(e, 0);
+      const double x = std::abs(mesh.point(mesh.to_vertex_handle(h))[axis] - mesh.point(mesh.from_vertex_handle(h))[axis]);
+      if (x >= shortest && x > 0.0) extent.emplace_back(x, e.idx());
+    }
+    std::sort(extent.begin(), extent.end());
+    // Spacing: the extent most edges share (to 1e-6): marching cubes joins two points of one
+    // cell, and every edge between points on two opposite lattice planes spans one spacing.
+    std::size_t group = 0, group_size = 0;
+    for (std::size_t i = 0; i < extent.size();) {
       std::size_t j = i + 1;
-      while (j < n && values[j].first == values[i].first) ++j;
-      if (j - i >= kShared)
-        for (std::size_t k = i; k < j; ++k) ++on_lattice[values[k].second];
+      while (j < extent.size() && extent[j].first <= extent[i].first * (1.0 + 1e-6)) ++j;
+      if (j - i > group_size) group = i, group_size = j - i;
       i = j;
+    }
+    if (group_size < 2) continue;
+    const double spacing = extent[group].first;
+    // Origin: the lattice's phase is the one most of the group's ends share (to 1e-3 spacing;
+    // marching cubes: both ends of most, on lattice planes), the origin an end of that phase.
+    const auto end_value = [&](std::size_t k, int side) {
+      const auto h = mesh.halfedge_handle(TriMesh::EdgeHandle(extent[k].second), 0);
+      return mesh.point(side == 0 ? mesh.from_vertex_handle(h) : mesh.to_vertex_handle(h))[axis];
+    };
+    const double reference = end_value(group, 0);
+    const auto phase_bin = [&](double x) {
+      const double t = (x - reference) / spacing;
+      return std::isfinite(t) ? std::min(999, static_cast<int>((t - std::floor(t)) * 1000.0)) : 0;
+    };
+    std::array<std::uint32_t, 1000> votes{};
+    for (std::size_t k = group; k < group + group_size; ++k)
+      for (int side = 0; side < 2; ++side) ++votes[static_cast<std::size_t>(phase_bin(end_value(k, side)))];
+    const int bin = static_cast<int>(std::max_element(votes.begin(), votes.end()) - votes.begin());
+    double origin = reference;
+    for (std::size_t k = group; k < group + group_size; ++k)
+      if (phase_bin(end_value(k, 0)) == bin || phase_bin(end_value(k, 1)) == bin) {
+        origin = phase_bin(end_value(k, 0)) == bin ? end_value(k, 0) : end_value(k, 1);
+        break;
+      }
+    for (std::size_t w = 0; w < n; ++w) {
+      const double t = (mesh.point(TriMesh::VertexHandle(static_cast<int>(w)))[axis] - origin) / spacing;
+      if (std::abs(t - std::round(t)) < 1e-3) ++on_lattice[w];
     }
   }
   const auto count = static_cast<std::size_t>(std::count_if(on_lattice.begin(), on_lattice.end(), [](std::uint8_t c) { return c >= 2; }));
-  return 10 * count >= 9 * n;
+  return static_cast<double>(count) / static_cast<double>(n);
 }
+
+bool vertices_on_lattice_edges(const TriMesh& mesh) { return lattice_edge_vertex_share(mesh) >= 0.5; }
 
 FeatureSizing feature_sizing(const TriMesh& mesh, const Segmentation& segmentation,
                              const std::vector<std::uint8_t>& curve_is_feature, const SizeAt& base, double factor,

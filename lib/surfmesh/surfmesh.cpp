@@ -260,11 +260,12 @@ SurfaceMesh surfmesh_detail::mesh_surface(const TriMesh& input, const Segmentati
   out.curve_is_feature = feature_curves(input, segmentation, options.crease_angle_deg, &crease_angles);
   // Feature sizing where it helps (SizingOptions::feature_size): not on marching-cubes
   // surfaces, not for a few thin parts.
-  if (options.sizing.feature_size > 0.0 && (options.sizing.feature_size_everywhere || !vertices_on_axis_lattice(input))) {
+  if (options.sizing.feature_size > 0.0 && (options.sizing.feature_size_everywhere || !vertices_on_lattice_edges(input))) {
     FeatureSizing feature = feature_sizing(input, segmentation, out.curve_is_feature, size_at, options.sizing.feature_size,
                                            options.sizing.min_size_fraction * h, options.sizing.gradation,
                                            options.sizing.feature_size_everywhere ? 0.0 : kFeatureSizingMinAreaShare);
     if (feature.size_at) {
+      out.feature_sizing_applied = true;
       size_at = std::move(feature.size_at);
       front_size = size_at;
       feature_limited = std::move(feature.patch_limited);

@@ -53,8 +53,9 @@ struct SizingOptions {
   //! input's edges (`gradation`) and used for the borders and the 2D fronts: with the uniform
   //! h of the input's mean edge, a CAD input's narrow faces and small holes were one row of
   //! triangles of border nodes (pinion, rotor). Applied only where it helps (see
-  //! feature_size_everywhere): not on a marching-cubes surface (its vertices on an axis
-  //! lattice: there the crease-bounded strips are voxel staircases, and the finer sizes made
+  //! feature_size_everywhere): not on a marching-cubes surface (its vertices on the edges of
+  //! a regular axis lattice, its edges inside one cell: there the crease-bounded strips are
+  //! voxel staircases, and the finer sizes made
   //! headsq and the occupancy DRAM cell worse), and not when the patches it would limit hold
   //! less than kFeatureSizingMinAreaShare (1%) of the input's area (a few thin organic parts:
   //! armadillo, fandisk, mech-holes-shark got slightly worse). 0 = off. Default 1
@@ -300,6 +301,10 @@ struct SurfaceMesh {
   //! (or a patch and a border curve) both had, split in the later patch, plus triangles of
   //! three border nodes that two patches both had, given a centre node.
   std::size_t n_shared_chords_resolved = 0;
+  //! True when feature sizing (SizingOptions::feature_size) set the sizes: the option is on,
+  //! the input is not taken for a marching-cubes surface (or feature_size_everywhere), and
+  //! the width-limited patches hold enough of the area for a size below the uniform one.
+  bool feature_sizing_applied = false;
 };
 
 //! Splits the patches whose fitted surface does not represent their input: every patch is

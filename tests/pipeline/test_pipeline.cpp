@@ -173,6 +173,11 @@ TEST(Pipeline, LevelSetDramCellMinAngleAwayFromFeatures) {
   EXPECT_EQ(*t.n_self_intersecting_pairs, 0u);
   EXPECT_GT(r.report.stitch.n_collapses, 0u);
   expect_min_angle_away_from_features(r);
+  // A marching-cubes surface: no feature sizing, although its crease-bounded strips (voxel
+  // steps) hold more than the 1% of the area that would apply it to another input (DRAM 64:
+  // 2.1%, docs/surfmesh.md "Feature sizing by default").
+  EXPECT_FALSE(r.report.feature_sizing_applied);
+  EXPECT_NE(to_json(r.report).find("\"feature_sizing_applied\": false"), std::string::npos);
 }
 
 TEST(Pipeline, ReportCountsTimesAndJson) {
@@ -423,6 +428,8 @@ TEST(Pipeline, CreaseBoundedNarrowFacesSizedFromTheirWidth) {
   EXPECT_GE(q.alpha_mean, 0.9);
   EXPECT_LE(q.obtuse_fraction, 0.08);
   EXPECT_GE(q.min_angle_deg, 20.0);
+  EXPECT_TRUE(rep.feature_sizing_applied);
+  EXPECT_NE(to_json(rep).find("\"feature_sizing_applied\": true"), std::string::npos);
 }
 
 // The marching-cubes surface of VTK's head CT at iso 500 (the skin), padded.

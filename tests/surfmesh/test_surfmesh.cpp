@@ -869,20 +869,66 @@ TEST(Surfmesh, BevelledBoxEdgesAreFeatures) {
   EXPECT_GE(n_edges_found, 3);
 }
 
+// A closed box [lines.front(), lines.back()]^3 whose faces are split into triangles along
+// the grid lines at `lines` on every axis (outward oriented).
+TriMesh grid_box(const std::vector<double>& lines) {
+  TriangleSoup soup;
+  const auto n = lines.size();
+  for (int a = 0; a < 3; ++a)
+    for (const bool high : {false, true}) {
+      const int u = (a + 1) % 3, v = (a + 2) % 3;
+      const auto point = [&](std::size_t i, std::size_t j) {
+        Eigen::Vector3d x;
+        x[a] = high ? lines.back() : lines.front();
+        x[u] = lines[i];
+        x[v] = lines[j];
+        soup.points.push_back(x);
+        return static_cast<std::uint32_t>(soup.points.size() - 1);
+      };
+      for (std::size_t i = 0; i + 1 < n; ++i)
+        for (std::size_t j = 0; j + 1 < n; ++j) {
+          const std::uint32_t p00 = point(i, j), p10 = point(i + 1, j), p11 = point(i + 1, j + 1), p01 = point(i, j + 1);
+          if (high) {
+            soup.triangles.push_back({p00, p10, p11});
+            soup.triangles.push_back({p00, p11, p01});
+          } else {
+            soup.triangles.push_back({p00, p11, p10});
+            soup.triangles.push_back({p00, p01, p11});
+          }
+        }
+    }
+  return prepare_mesh(soup).mesh;
+}
+
 // Feature sizing applies only where it helps (SizingOptions::feature_size): a marching-cubes
-// surface (every vertex on a lattice edge) is recognised and left alone, CGAL's rotor (a CAD
-// mesh of fan triangles) is not; on the rotor the narrow crease-bounded faces hold about a
-// tenth of the area (measured 11%), above the 1% gate and below a 50% one.
+// surface (every vertex on a lattice edge, edges spanning one cell) is recognised and left
+// alone, CAD meshes are not, also those whose vertices share coordinates (cheese: most
+// vertices have all three on values other vertices share, but on no regular lattice); on
+// the rotor the narrow crease-bounded faces hold about a tenth of the area (measured 11%),
+// above the 1% gate and below a 50% one.
 TEST(Surfmesh, FeatureSizingOnlyWhereItHelps) {
-  EXPECT_TRUE(surfmesh_detail::vertices_on_axis_lattice(scene_mesh("sphere", 24, SampleMode::LevelSet)));
-  EXPECT_TRUE(surfmesh_detail::vertices_on_axis_lattice(scene_mesh("trench", 24, SampleMode::Occupancy)));
+  for (const char* scene : {"sphere", "torus", "trench", "dram"})
+    for (const SampleMode mode : {SampleMode::LevelSet, SampleMode::Occupancy})
+      EXPECT_TRUE(surfmesh_detail::vertices_on_lattice_edges(scene_mesh(scene, 24, mode))) << scene;
+  // Every vertex of a marching-cubes surface is on a lattice edge; an empty mesh has none.
+  EXPECT_EQ(surfmesh_detail::lattice_edge_vertex_share(scene_mesh("sphere", 24, SampleMode::LevelSet)), 1.0);
+  EXPECT_EQ(surfmesh_detail::lattice_edge_vertex_share(TriMesh()), 0.0);
   const TriMesh rotor = prepare_mesh(read_soup(test::test_data("meshes/rotor.off"))).mesh;
-  EXPECT_FALSE(surfmesh_detail::vertices_on_axis_lattice(rotor));
-  // The same marching-cubes sphere moved off its lattice by a rotation is no longer one.
-  TriMesh turned = scene_mesh("sphere", 24, SampleMode::LevelSet);
+  EXPECT_FALSE(surfmesh_detail::vertices_on_lattice_edges(rotor));
+  EXPECT_FALSE(surfmesh_detail::vertices_on_lattice_edges(prepare_mesh(read_soup(test::test_data("meshes/cheese.off"))).mesh));
+  // The same marching-cubes sphere moved off its lattice by a rotation is no longer one; a
+  // shift keeps it one (the lattice's origin comes from the vertices).
+  TriMesh turned = scene_mesh("sphere", 24, SampleMode::LevelSet), shifted = turned;
   const Eigen::Matrix3d rotation = Eigen::AngleAxisd(0.3, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
   for (const auto v : turned.vertices()) turned.set_point(v, to_openmesh(rotation * to_eigen(turned.point(v))));
-  EXPECT_FALSE(surfmesh_detail::vertices_on_axis_lattice(turned));
+  EXPECT_FALSE(surfmesh_detail::vertices_on_lattice_edges(turned));
+  for (const auto v : shifted.vertices()) shifted.set_point(v, shifted.point(v) + TriMesh::Point(0.123, -0.0456, 0.0789));
+  EXPECT_TRUE(surfmesh_detail::vertices_on_lattice_edges(shifted));
+  // A box split along irregular grid lines: every vertex has its three coordinates on values
+  // that many vertices share (the former gate took it for marching cubes), but no lattice.
+  EXPECT_FALSE(surfmesh_detail::vertices_on_lattice_edges(grid_box({0.0, 0.13, 0.29, 0.5, 0.77, 1.0})));
+  // On a regular grid it is what marching cubes makes of a box on lattice planes.
+  EXPECT_TRUE(surfmesh_detail::vertices_on_lattice_edges(grid_box({0.0, 0.2, 0.4, 0.6, 0.8, 1.0})));
 
   const Segmentation seg = segment(rotor);
   const std::vector<std::uint8_t> features = surfmesh_detail::feature_curves(rotor, seg, 80.0);
