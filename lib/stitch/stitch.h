@@ -45,6 +45,13 @@ struct StitchOptions {
   //! triangles does not drop below min(its old value, angle_floor_deg), in [0, 60): a move
   //! never makes a triangle below issue 5's bound that was not there. Default 25.
   double angle_floor_deg = kAwayFromFeaturesAngleBoundDeg;
+  //! Sweeps of the obtuse repair after the optimisation passes (>= 0; 0 switches it off):
+  //! flips that leave fewer obtuse angles in their two triangles, then each movable node of
+  //! an obtuse triangle moves towards the ideal apex of one of its obtuse triangles when
+  //! that leaves fewer obtuse triangles around it and passes the smoothing tests above, the
+  //! angle floor raised by 2.5 deg (counted in StitchReport::n_flips and n_smoothing_moves;
+  //! docs/stitch.md "Obtuse repair"). Default 2.
+  int obtuse_repair_rounds = 2;
   //! Triangles whose smallest angle (deg) is below this get their shortest edge collapsed
   //! before the optimisation, when the merge is allowed and improves the worst triangle
   //! around it (feature nodes never moved, and removed only into a feature corner less
