@@ -212,8 +212,8 @@ class Optimiser {
     return n_moves;
   }
 
-  // Flips of edges that are the longest edge of an obtuse triangle, in edge order, when
-  // the two new triangles hold fewer obtuse angles than the old ones and the flip passes
+  // Flips of the edges of obtuse triangles, in edge order, when the two new triangles
+  // hold fewer obtuse angles than the old ones and the flip passes
   // every test of flip_sweep() but the alpha gain (the smaller new alpha must stay at least
   // min(the smaller old one, alpha_floor), the smaller smallest angle at least min(the old
   // one, angle_floor_deg + kObtuseAngleMarginDeg)). Serial. Returns the number of flips.
