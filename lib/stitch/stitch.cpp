@@ -23,6 +23,7 @@ namespace nurbsfront {
 void StitchOptions::validate() const {
   auto fail = [](const std::string& what) { throw InvalidInput("stitch: " + what); };
   if (optimisation_passes < 0) fail("optimisation_passes must be >= 0");
+  if (obtuse_repair_rounds < 0) fail("obtuse_repair_rounds must be >= 0");
   if (!(max_flip_dihedral_deg >= 0.0 && max_flip_dihedral_deg < 180.0)) fail("max_flip_dihedral_deg must be in [0, 180)");
   if (!(flip_gain >= 0.0) || !std::isfinite(flip_gain)) fail("flip_gain must be finite and >= 0");
   if (!(smoothing_relaxation > 0.0 && smoothing_relaxation <= 1.0)) fail("smoothing_relaxation must be in (0, 1]");

@@ -53,6 +53,13 @@ struct StitchOptions {
   //! input's mean edge has (the input's own chords; SurfaceMesh::input_mean_edge), at most
   //! 0.1 of its edges. In [0, 2]; 0 switches it off. Default 1.
   double chord_compensation = 1.0;
+  //! Sweeps of the obtuse repair after the optimisation passes (>= 0; 0 switches it off):
+  //! flips that leave fewer obtuse angles in their two triangles, then each movable node of
+  //! an obtuse triangle moves towards the ideal apex of one of its obtuse triangles when
+  //! that leaves fewer obtuse triangles around it and passes the smoothing tests above, the
+  //! angle floor raised by 2.5 deg (counted in StitchReport::n_flips and n_smoothing_moves;
+  //! docs/stitch.md "Obtuse repair"). Default 2.
+  int obtuse_repair_rounds = 2;
   //! Triangles whose smallest angle (deg) is below this get their shortest edge collapsed
   //! before the optimisation, when the merge is allowed and improves the worst triangle
   //! around it (feature nodes never moved, and removed only into a feature corner less

@@ -202,6 +202,36 @@ TEST(Stitch, OptimisationImprovesAJitteredSphereAcrossBorders) {
   EXPECT_DOUBLE_EQ(raw.report.output.quality.alpha_mean, raw.report.alpha_mean_before);
 }
 
+// Issue 5 (obtuse triangles): the obtuse repair after the optimisation leaves fewer obtuse
+// triangles than the optimisation alone, with no new triangle below the floors: the
+// smallest angle away from features and the smallest alpha stay at least the smaller of
+// their values without the repair and the floors.
+TEST(Stitch, ObtuseRepairLeavesFewerObtuseTriangles) {
+  for (const double jitter : {0.2, 0.35}) {
+    SCOPED_TRACE(jitter);
+    const TriangleSoup soup = jittered_sphere(3, jitter);
+    const SurfaceMesh surface = cube_map_surface(soup);
+    const TriMesh input = to_trimesh(soup);
+    StitchOptions plain;
+    plain.obtuse_repair_rounds = 0;
+    const StitchResult before = stitch(surface, input, plain);
+    ASSERT_TRUE(before.report.ok()) << joined(before.report.errors);
+    ASSERT_GT(before.report.output.quality.obtuse_fraction, 0.0);  // something to repair
+    const StitchResult r = stitch(surface, input);
+    EXPECT_TRUE(r.report.ok()) << joined(r.report.errors);
+    EXPECT_EQ(r.report.output.topology.euler_characteristic, 2);
+    EXPECT_EQ(r.report.output.topology.n_faces, before.report.output.topology.n_faces);
+    EXPECT_LT(r.report.output.quality.obtuse_fraction, before.report.output.quality.obtuse_fraction);
+    EXPECT_GE(r.report.min_angle_away_from_features_deg,
+              std::min(before.report.min_angle_away_from_features_deg, kAwayFromFeaturesAngleBoundDeg));
+    EXPECT_GE(r.report.output.quality.alpha_min, std::min(before.report.output.quality.alpha_min, plain.alpha_floor));
+    for (auto v : r.mesh.vertices()) EXPECT_NEAR(to_eigen(r.mesh.point(v)).norm(), 1.0, 0.02);
+  }
+  StitchOptions bad;
+  bad.obtuse_repair_rounds = -1;
+  EXPECT_THROW((void)stitch(cube_map_surface(test::icosphere(1)), bad), InvalidInput);
+}
+
 // The flips' tests run in parallel and the verification's signatures on helper threads:
 // the same flips, positions and report for any thread count.
 TEST(Stitch, SameResultForAnyThreadCount) {
