@@ -111,11 +111,15 @@ SizeAt graded_sizing(const TriMesh& mesh, std::shared_ptr<VertexSizes> sizes, do
 
 }  // namespace
 
-double max_abs_curvature(const PatchSurface& surface, const Eigen::Vector3d& world) {
-  const Eigen::Vector3d local = surface.frame.to_local(world);
-  const SurfaceCurvature c = curvature_from_derivatives(surface.field.derivatives(local.x(), local.y()));
+double max_abs_curvature(const BicubicHeightField& field, double x, double y) {
+  const SurfaceCurvature c = curvature_from_derivatives(field.derivatives(x, y));
   const double k = std::max(std::abs(c.k1), std::abs(c.k2));
   return std::isfinite(k) ? k : 0.0;
+}
+
+double max_abs_curvature(const PatchSurface& surface, const Eigen::Vector3d& world) {
+  const Eigen::Vector3d local = surface.frame.to_local(world);
+  return max_abs_curvature(surface.field, local.x(), local.y());
 }
 
 SizeAt adaptive_sizing(const TriMesh& mesh, const Segmentation& segmentation, const std::vector<PatchResult>& fits,

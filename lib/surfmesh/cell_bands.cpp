@@ -2,6 +2,7 @@
 // Bands of a cell-based (0/1 occupancy) input's marching-cubes vertices and the band fit of
 // a patch (docs/surfmesh.md, "Cell-based inputs").
 
+#include <algorithm>
 #include <cmath>
 
 #include "nurbsfront/surfmesh/surfmesh_internal.h"
@@ -57,6 +58,25 @@ BandFitResult fit_cell_bands(const std::vector<Eigen::Vector3d>& world, const Pa
   options.start = start;
   options.skip_passes_max_miss = skip_passes_max_miss;
   return fit_height_field_to_bands(cell_band_samples(world, frame, grid), options);
+}
+
+double curved_smoothing_cells(const BicubicHeightField& field, std::span<const Eigen::Vector3d> local,
+                              const CellGrid& grid) {
+  if (grid.curved_smoothing <= 0.0 || local.empty()) return grid.smoothing_cells;
+  std::vector<double> kappa;
+  kappa.reserve(local.size());
+  for (const auto& q : local) kappa.push_back(max_abs_curvature(field, q.x(), q.y()));
+  const auto middle = kappa.begin() + static_cast<std::ptrdiff_t>(kappa.size() / 2);
+  std::nth_element(kappa.begin(), middle, kappa.end());
+  const double median = *middle;
+  const double radius = 1.0 / (median * grid.spacing.minCoeff());  // cells
+  if (!(radius >= kMinCurvedRadiusCells)) return grid.smoothing_cells;
+  // A surface curved alike over the patch, not a flat patch with a rounded edge in it: the
+  // upper quartile of the curvature at most kCurvedQuartileRatio times the median.
+  const auto upper = middle + static_cast<std::ptrdiff_t>((kappa.end() - middle) / 2);
+  std::nth_element(middle, upper, kappa.end());
+  if (*upper > kCurvedQuartileRatio * median) return grid.smoothing_cells;
+  return std::min(grid.curved_smoothing * std::sqrt(2.0 * radius), grid.smoothing_cells);
 }
 
 }  // namespace nurbsfront::surfmesh_detail

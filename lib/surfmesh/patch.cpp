@@ -354,7 +354,7 @@ void fit_patch(const TriMesh& mesh, const Segmentation& seg, int p, const Border
     bool plain = !options.cell_grid.enabled;
     if (!plain) {
       // Cell-based input: fit the bands of the vertices (docs/surfmesh.md, "Cell-based inputs").
-      const CellGrid& grid = options.cell_grid;
+      const CellGrid& grid_in = options.cell_grid;
       // A patch whose fit meets its bands closely is smooth there: it is refitted with more
       // rings of its neighbours' faces, which carry their curvature over a wide terrace that
       // one ring leaves to the prior (the top ring of the occupancy torus's tube sat 0.4 voxel
@@ -362,9 +362,18 @@ void fit_patch(const TriMesh& mesh, const Segmentation& seg, int p, const Border
       // rounded the occupancy DRAM cell's edges off, volume -0.35% -> -0.9%). The test is
       // made on the fit before its curvature passes, which such a patch then skips (the wide
       // refit does them), and the wide refit starts from that fit.
-      const bool wide = grid.wide_overlap_rings > kFitOverlapRings;
-      const double gate = grid.wide_overlap_max_miss_cells * grid.spacing.minCoeff();
-      BandFitResult fitted = fit_cell_bands(points, frame, grid, *fit.domain, nullptr, wide ? gate : -1.0);
+      const bool wide = grid_in.wide_overlap_rings > kFitOverlapRings;
+      const double gate = grid_in.wide_overlap_max_miss_cells * grid_in.spacing.minCoeff();
+      BandFitResult fitted = fit_cell_bands(points, frame, grid_in, *fit.domain, nullptr, wide ? gate : -1.0);
+      // A curved patch is fitted again with a shorter smoothing length: 2.25 cells flattened
+      // the tube of the occupancy torus at 48 and 64 cells (radius 6 and 8 cells; docs/surfmesh.md,
+      // "Smoothing length of curved patches").
+      CellGrid grid = grid_in;
+      grid.smoothing_cells = curved_smoothing_cells(fitted.field, std::span(local.data(), n_own), grid_in);
+      if (grid.smoothing_cells < grid_in.smoothing_cells) {
+        const BicubicHeightField first = std::move(fitted.field);
+        fitted = fit_cell_bands(points, frame, grid, *fit.domain, &first, wide ? gate : -1.0);
+      }
       // A patch whose band fit still misses a band by more than plain_fit_miss_cells holds
       // a sharp (bevelled) edge that the smooth fit rounds off: it gets the plain fit of its
       // vertices instead (occupancy DRAM cell at 128: Hausdorff to the input 1.18 -> 0.91

@@ -186,6 +186,8 @@ void CellGrid::validate() const {
     bad_option("cell_grid.wide_overlap_max_miss_cells must be finite and > 0, got " + std::to_string(wide_overlap_max_miss_cells));
   if (!(std::isfinite(plain_fit_miss_cells) && plain_fit_miss_cells >= 0.0))
     bad_option("cell_grid.plain_fit_miss_cells must be finite and >= 0, got " + std::to_string(plain_fit_miss_cells));
+  if (!(std::isfinite(curved_smoothing) && curved_smoothing >= 0.0))
+    bad_option("cell_grid.curved_smoothing must be finite and >= 0, got " + std::to_string(curved_smoothing));
 }
 
 void SurfMeshOptions::validate() const {

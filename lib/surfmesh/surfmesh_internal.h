@@ -6,6 +6,7 @@
 #include <array>
 #include <cstdint>
 #include <functional>
+#include <span>
 #include <vector>
 
 #include <Eigen/Core>
@@ -132,6 +133,22 @@ struct PatchBorder {
                                            const CellGrid& grid, const Rectangle& domain,
                                            const BicubicHeightField* start = nullptr, double skip_passes_max_miss = -1.0);
 
+//! Smallest radius of curvature (cells) that CellGrid::curved_smoothing takes for a curved
+//! surface: below it the curvature is that of a rounded sharp edge (the bevels of the
+//! occupancy trench and DRAM cell, 1-4 cells), and the patch keeps smoothing_cells.
+inline constexpr double kMinCurvedRadiusCells = 5.0;
+//! Largest ratio of the upper quartile to the median of a patch's curvature for which
+//! CellGrid::curved_smoothing applies: the occupancy torus's patches 1.04-1.24 (48 cells), a
+//! flat trench patch holding a rounded edge 2.1.
+inline constexpr double kCurvedQuartileRatio = 1.5;
+
+//! The band-fit smoothing length (cells) of a patch whose first band fit is `field` (frame
+//! coordinates): grid.smoothing_cells, or less on a curved patch (CellGrid::curved_smoothing),
+//! from the median over `local` (the patch's own vertices, frame coordinates) of the largest
+//! |principal curvature| of the field.
+[[nodiscard]] double curved_smoothing_cells(const BicubicHeightField& field, std::span<const Eigen::Vector3d> local,
+                                            const CellGrid& grid);
+
 //! One patch's result before global numbering.
 struct PatchResult {
   PatchMeshReport report;
@@ -178,6 +195,8 @@ void mesh_patch(const Segmentation& segmentation, int p, const BorderNodes& bord
 //! Largest |principal curvature| of a patch surface at the vertical projection of a world
 //! point (0 where it is not finite).
 [[nodiscard]] double max_abs_curvature(const PatchSurface& surface, const Eigen::Vector3d& world);
+//! The same for a height field at (x, y) (frame coordinates).
+[[nodiscard]] double max_abs_curvature(const BicubicHeightField& field, double x, double y);
 
 //! Curvature-adaptive sizing (SizingOptions::adaptive): at every input vertex
 //! h = max(min(base(x), sqrt(8 chord_error / kappa_max)), min(min_size, base(x))), kappa_max

@@ -976,6 +976,8 @@ TEST(Surfmesh, BadOptionsAndMismatchedSegmentation) {
       [](SurfMeshOptions& o) { o.cell_grid = {true, Eigen::Vector3d::Zero(), Eigen::Vector3d::Ones()}; o.cell_grid.wide_overlap_max_miss_cells = 0.0; },
       [](SurfMeshOptions& o) { o.cell_grid = {true, Eigen::Vector3d::Zero(), Eigen::Vector3d::Ones()}; o.cell_grid.plain_fit_miss_cells = -1.0; },
       [](SurfMeshOptions& o) { o.cell_grid = {true, Eigen::Vector3d::Zero(), Eigen::Vector3d::Ones()}; o.cell_grid.plain_fit_miss_cells = std::nan(""); },
+      [](SurfMeshOptions& o) { o.cell_grid = {true, Eigen::Vector3d::Zero(), Eigen::Vector3d::Ones()}; o.cell_grid.curved_smoothing = -0.1; },
+      [](SurfMeshOptions& o) { o.cell_grid = {true, Eigen::Vector3d::Zero(), Eigen::Vector3d::Ones()}; o.cell_grid.curved_smoothing = std::nan(""); },
   };
   for (const auto& spoil : bad) {
     SurfMeshOptions options;
