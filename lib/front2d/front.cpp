@@ -71,15 +71,18 @@ double alpha_in_metric(const Vec& a, const Vec& b, const Vec& c, const Mat& M) {
 }
 
 // Largest cosine of the three angles of abc measured in M (the cosine of its smallest angle).
+// Each edge's length serves the angles at both its ends (3 square roots, not 6): an edge
+// vector and its negation give the same length bit for bit, so the result is the one of
+// the angle-by-angle evaluation.
 double max_cos_in_metric(const Vec& a, const Vec& b, const Vec& c, const Mat& M) {
-  const std::array<const Vec*, 3> p{&a, &b, &c};
+  const Vec ab = b - a, bc = c - b, ca = a - c;
+  const double l_ab = std::sqrt(ab.dot(M * ab)), l_bc = std::sqrt(bc.dot(M * bc)), l_ca = std::sqrt(ca.dot(M * ca));
+  // Angle at a between ab and ac = -ca, at b between bc and ba = -ab, at c between ca and cb = -bc.
+  const std::array<double, 3> n{l_ab * l_ca, l_bc * l_ab, l_ca * l_bc};  // = |u| |w| exactly for M = I
+  const std::array<const Vec*, 3> u{&ab, &bc, &ca};
+  const std::array<Vec, 3> w{c - a, a - b, b - c};
   double m = -1.0;
-  for (int i = 0; i < 3; ++i) {
-    const Vec u = *p[static_cast<std::size_t>((i + 1) % 3)] - *p[static_cast<std::size_t>(i)];
-    const Vec w = *p[static_cast<std::size_t>((i + 2) % 3)] - *p[static_cast<std::size_t>(i)];
-    const double n = std::sqrt(u.dot(M * u)) * std::sqrt(w.dot(M * w));  // = |u| |w| exactly for M = I
-    m = std::max(m, n > 0 ? u.dot(M * w) / n : 1.0);
-  }
+  for (std::size_t i = 0; i < 3; ++i) m = std::max(m, n[i] > 0 ? u[i]->dot(M * w[i]) / n[i] : 1.0);
   return m;
 }
 
@@ -887,7 +890,9 @@ class Optimiser {
       // The star's quality: the largest cosine of its angles (smaller is better), or
       // +inf if a triangle is not positively oriented.
       int n_good = -1;  // good triangles of the star at the start (keep_good)
-      auto star = [&]() {
+      // A candidate is kept only if its star beats `bound`: the evaluation stops as soon as
+      // one triangle's cosine reaches it (the candidate is rejected either way).
+      auto star = [&](double bound) {
         double worst = -1.0;
         int good = 0;
         for (int k = b0; k < b1; ++k) {
@@ -895,13 +900,14 @@ class Optimiser {
           if (orient2d(pt(t[0]), pt(t[1]), pt(t[2])) <= 0) return std::numeric_limits<double>::infinity();
           const double mc = max_cos(t);
           worst = std::max(worst, mc);
+          if (worst >= bound) return worst;
           good += mc <= target;
         }
         if (keep_good && good < n_good) return std::numeric_limits<double>::infinity();
         if (n_good < 0) n_good = good;
         return worst;
       };
-      double best = star();
+      double best = star(std::numeric_limits<double>::infinity());
       double step = std::numeric_limits<double>::infinity();
       for (int k = b0; k < b1; ++k)
         for (int x : T_[static_cast<std::size_t>(inc.tri[static_cast<std::size_t>(k)])])
@@ -930,7 +936,7 @@ class Optimiser {
             const double ang = d * std::numbers::pi / 4.0;
             move(vtx, old + step * Vec(std::cos(ang), std::sin(ang)));
           }
-          const double q = star();
+          const double q = star(best);
           if (q < best) {
             best = q;
             t_cur = t_new;

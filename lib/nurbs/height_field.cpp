@@ -25,6 +25,27 @@ inline void cubic_derivative_weights(double s, double* d1, double* d2) {
   d2[3] = s;
 }
 
+// The weights of the value and of the first and second derivatives along each axis at (x, y),
+// and the first of its cell's 4 x 4 coefficients (jet() and gradient()).
+struct JetWeights {
+  double bx[4], by[4], dx1[4], dx2[4], dy1[4], dy2[4];
+  std::size_t stride;
+  const double* c;
+};
+inline JetWeights jet_weights(double x, double y, const Eigen::Vector2d& min, double inv_h_x, double inv_h_y, int n_x,
+                              int n_y, const double* coefficients) {
+  const Cell cx = locate_cell(x, min.x(), inv_h_x, n_x);
+  const Cell cy = locate_cell(y, min.y(), inv_h_y, n_y);
+  JetWeights w{};
+  detail::cubic_weights(cx.s, w.bx);
+  detail::cubic_weights(cy.s, w.by);
+  cubic_derivative_weights(cx.s, w.dx1, w.dx2);
+  cubic_derivative_weights(cy.s, w.dy1, w.dy2);
+  w.stride = static_cast<std::size_t>(n_x) + 3;
+  w.c = coefficients + static_cast<std::size_t>(cy.index) * w.stride + static_cast<std::size_t>(cx.index);
+  return w;
+}
+
 // Knot insertion in integer knot space turns the uniform (unclamped) knots -3 .. n+3
 // into the clamped vector 0^4, 1, ..., n-1, n^4; rows are the coefficients along one axis.
 Eigen::MatrixXd clamp_uniform(const Eigen::MatrixXd& rows, int n) {
@@ -75,20 +96,10 @@ double BicubicHeightField::value(double x, double y) const {
 }
 
 HeightJet BicubicHeightField::jet(double x, double y) const {
-  const Cell cx = locate_cell(x, domain_.min.x(), inv_h_x_, n_x_);
-  const Cell cy = locate_cell(y, domain_.min.y(), inv_h_y_, n_y_);
-  double bx[4];
-  double by[4];
-  double dx1[4];
-  double dx2[4];
-  double dy1[4];
-  double dy2[4];
-  detail::cubic_weights(cx.s, bx);
-  detail::cubic_weights(cy.s, by);
-  cubic_derivative_weights(cx.s, dx1, dx2);
-  cubic_derivative_weights(cy.s, dy1, dy2);
-  const std::size_t stride = static_cast<std::size_t>(n_x_) + 3;
-  const double* c = coefficients_.data() + static_cast<std::size_t>(cy.index) * stride + static_cast<std::size_t>(cx.index);
+  const JetWeights w = jet_weights(x, y, domain_.min, inv_h_x_, inv_h_y_, n_x_, n_y_, coefficients_.data());
+  const double *bx = w.bx, *by = w.by, *dx1 = w.dx1, *dx2 = w.dx2, *dy1 = w.dy1, *dy2 = w.dy2;
+  const std::size_t stride = w.stride;
+  const double* c = w.c;
   HeightJet j;
   for (int l = 0; l < 4; ++l, c += stride) {
     double r0 = 0.0;
@@ -115,8 +126,25 @@ HeightJet BicubicHeightField::jet(double x, double y) const {
 }
 
 Eigen::Vector2d BicubicHeightField::gradient(double x, double y) const {
-  const HeightJet j = jet(x, y);
-  return {j.zx, j.zy};
+  // jet()'s first derivatives alone, with the same operations in the same order (the same
+  // numbers bit for bit): the front2d metric asks for them at every step.
+  const JetWeights w = jet_weights(x, y, domain_.min, inv_h_x_, inv_h_y_, n_x_, n_y_, coefficients_.data());
+  const double *bx = w.bx, *by = w.by, *dx1 = w.dx1, *dy1 = w.dy1;
+  const std::size_t stride = w.stride;
+  const double* c = w.c;
+  double zx = 0.0;
+  double zy = 0.0;
+  for (int l = 0; l < 4; ++l, c += stride) {
+    double r0 = 0.0;
+    double r1 = 0.0;
+    for (int k = 0; k < 4; ++k) {
+      r0 += bx[k] * c[k];
+      r1 += dx1[k] * c[k];
+    }
+    zx += by[l] * r1;
+    zy += dy1[l] * r0;
+  }
+  return {zx * inv_h_x_, zy * inv_h_y_};
 }
 
 Eigen::Matrix2d BicubicHeightField::metric(double x, double y) const {

@@ -3,7 +3,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <tuple>
 #include <utility>
@@ -199,16 +201,13 @@ void scatter_points(const PointWeights& weights, const std::vector<double>* y, c
   }
 }
 
-// out += mu * D^T D x for the thin-plate second differences D of a (n_x + 3) x (n_y + 3)
+// out += mu * diag(D^T D) for the thin-plate second differences D of a (n_x + 3) x (n_y + 3)
 // coefficient lattice: xx and yy differences of three neighbours, and the mixed one of a
-// 2 x 2 block weighted by 2. With x = null, adds mu * diag(D^T D) instead.
-void add_thin_plate(const std::vector<double>* x, std::size_t nx, std::size_t ny, double mu, std::vector<double>& out) {
+// 2 x 2 block weighted by 2 (the product D^T D x: add_thin_plate_product).
+void add_thin_plate_diagonal(std::size_t nx, std::size_t ny, double mu, std::vector<double>& out) {
   auto at = [nx](std::size_t i, std::size_t j) { return j * nx + i; };
   auto stencil = [&](const std::size_t* idx, const double* coef, int size, double weight) {
-    double d = 0.0;
-    if (x != nullptr)
-      for (int k = 0; k < size; ++k) d += coef[k] * (*x)[idx[k]];
-    for (int k = 0; k < size; ++k) out[idx[k]] += weight * mu * (x != nullptr ? coef[k] * d : coef[k] * coef[k]);
+    for (int k = 0; k < size; ++k) out[idx[k]] += weight * mu * (coef[k] * coef[k]);
   };
   constexpr double kSecond[3] = {1.0, -2.0, 1.0};
   constexpr double kMixed[4] = {1.0, -1.0, -1.0, 1.0};
@@ -230,6 +229,135 @@ void add_thin_plate(const std::vector<double>* x, std::size_t nx, std::size_t ny
   }
 }
 
+// B^T B of the points at one lattice resolution, stored as the 7 x 7 band of each coefficient
+// that a point touches (the other rows are zero): the polishes' conjugate gradients apply it
+// at every iteration, 49 products per touched coefficient instead of 32 per point (a finest
+// cell holds several points), and both polishes of a fit share it. Built from the upper half
+// (each pair of a point's 16 coefficients once) and mirrored.
+class NormalMatrix {
+ public:
+  static constexpr std::size_t kBand = 7;
+  static constexpr std::size_t kEntries = kBand * kBand;
+  NormalMatrix(const PointWeights& weights, std::size_t nx, std::size_t ny) : nx_(nx), ny_(ny) {
+    row_of_.assign(nx * ny, -1);
+    WeightBlock scratch;
+    for (std::size_t b = 0; b < weights.n_blocks(); ++b) {
+      const WeightBlock& w = weights.block(b, scratch);
+      for (std::size_t q = 0; q < weights.size(b); ++q)
+        for (std::size_t l = 0; l < 4; ++l)
+          for (std::size_t k = 0; k < 4; ++k) row_of_[w.offset[q] + l * nx + k] = 0;
+    }
+    for (std::size_t c = 0; c < row_of_.size(); ++c) {
+      if (row_of_[c] < 0) continue;
+      row_of_[c] = static_cast<int>(touched_.size());
+      touched_.push_back(c);
+    }
+  }
+  //! Rows that some point touches: the matrix is worth building when these are few.
+  [[nodiscard]] std::size_t n_rows() const { return touched_.size(); }
+  [[nodiscard]] bool built() const { return !band_.empty(); }
+  void build(const PointWeights& weights) {
+    band_.assign(touched_.size() * kEntries, 0.0);
+    WeightBlock scratch;
+    for (std::size_t b = 0; b < weights.n_blocks(); ++b) {
+      const WeightBlock& w = weights.block(b, scratch);
+      for (std::size_t q = 0; q < weights.size(b); ++q) {
+        // Local copies: the band's stores cannot alias them.
+        const double bx[4] = {w.bx[0][q], w.bx[1][q], w.bx[2][q], w.bx[3][q]};
+        const double by[4] = {w.by[0][q], w.by[1][q], w.by[2][q], w.by[3][q]};
+        for (std::size_t l1 = 0; l1 < 4; ++l1) {
+          // The four coefficients of a lattice row are touched together: consecutive rows.
+          double* row = band_.data() + static_cast<std::size_t>(row_of_[w.offset[q] + l1 * nx_]) * kEntries;
+          for (std::size_t k1 = 0; k1 < 4; ++k1, row += kEntries) {
+            const double w1 = by[l1] * bx[k1];
+            // Coefficients (l2, k2) after (l1, k1) in lattice order: the rest of row l1, rows below.
+            const double w11 = w1 * by[l1];
+            for (std::size_t k2 = k1; k2 < 4; ++k2) row[3 * kBand + 3 + k2 - k1] += w11 * bx[k2];
+            for (std::size_t l2 = l1 + 1; l2 < 4; ++l2) {
+              const double w12 = w1 * by[l2];
+              double* at = row + (3 + l2 - l1) * kBand + 3 - k1;
+              for (std::size_t k2 = 0; k2 < 4; ++k2) at[k2] += w12 * bx[k2];
+            }
+          }
+        }
+      }
+    }
+    // The lower half: entry (c, c + d) of row c is entry (c + d, c) of row c + d.
+    const std::ptrdiff_t snx = static_cast<std::ptrdiff_t>(nx_);
+    for (std::size_t r = 0; r < touched_.size(); ++r) {
+      const std::ptrdiff_t c = static_cast<std::ptrdiff_t>(touched_[r]);
+      for (std::size_t m = kEntries / 2 + 1; m < kEntries; ++m) {
+        const double v = band_[r * kEntries + m];
+        if (v == 0.0) continue;
+        const std::ptrdiff_t dj = static_cast<std::ptrdiff_t>(m / kBand) - 3, di = static_cast<std::ptrdiff_t>(m % kBand) - 3;
+        const auto other = static_cast<std::size_t>(row_of_[static_cast<std::size_t>(c + dj * snx + di)]);
+        band_[other * kEntries + (kEntries - 1 - m)] = v;
+      }
+    }
+    padded_.assign((nx_ + 6) * (ny_ + 6), 0.0);
+  }
+  //! out = B^T B x (x and out: the nx x ny coefficients).
+  void apply(const std::vector<double>& x, std::vector<double>& out) {
+    const std::size_t pnx = nx_ + 6;
+    for (std::size_t j = 0; j < ny_; ++j) std::copy_n(x.data() + j * nx_, nx_, padded_.data() + (j + 3) * pnx + 3);
+    std::fill(out.begin(), out.end(), 0.0);
+    for (std::size_t r = 0; r < touched_.size(); ++r) {
+      const std::size_t c = touched_[r], i = c % nx_, j = c / nx_;
+      const double* a = band_.data() + r * kEntries;
+      double sum = 0.0;
+      for (std::size_t dj = 0; dj < kBand; ++dj) {
+        const double* xr = padded_.data() + (j + dj) * pnx + i;
+        for (std::size_t di = 0; di < kBand; ++di) sum += a[dj * kBand + di] * xr[di];
+      }
+      out[c] = sum;
+    }
+  }
+
+ private:
+  std::size_t nx_, ny_;
+  std::vector<int> row_of_;
+  std::vector<std::size_t> touched_;
+  std::vector<double> band_;
+  std::vector<double> padded_;
+};
+
+// out += mu * D^T D x (add_thin_plate_diagonal's D) by whole lattice rows: each second
+// difference into a scratch row first, then its three or four spreads (loops that vectorise).
+void add_thin_plate_product(const std::vector<double>& x, std::size_t nx, std::size_t ny, double mu, std::vector<double>& out,
+                            std::vector<double>& d) {
+  d.resize(nx);
+  if (nx >= 3) {  // xx differences
+    for (std::size_t j = 0; j < ny; ++j) {
+      const double* xr = x.data() + j * nx;
+      double* o = out.data() + j * nx;
+      const std::size_t n = nx - 2;
+      for (std::size_t i = 0; i < n; ++i) d[i] = mu * (xr[i] - 2.0 * xr[i + 1] + xr[i + 2]);
+      for (std::size_t i = 0; i < n; ++i) o[i] += d[i];
+      for (std::size_t i = 0; i < n; ++i) o[i + 1] -= 2.0 * d[i];
+      for (std::size_t i = 0; i < n; ++i) o[i + 2] += d[i];
+    }
+  }
+  for (std::size_t j = 0; j + 2 < ny; ++j) {  // yy differences
+    const double *x0 = x.data() + j * nx, *x1 = x0 + nx, *x2 = x1 + nx;
+    double *o0 = out.data() + j * nx, *o1 = o0 + nx, *o2 = o1 + nx;
+    for (std::size_t i = 0; i < nx; ++i) d[i] = mu * (x0[i] - 2.0 * x1[i] + x2[i]);
+    for (std::size_t i = 0; i < nx; ++i) o0[i] += d[i];
+    for (std::size_t i = 0; i < nx; ++i) o1[i] -= 2.0 * d[i];
+    for (std::size_t i = 0; i < nx; ++i) o2[i] += d[i];
+  }
+  if (nx < 2) return;
+  for (std::size_t j = 0; j + 1 < ny; ++j) {  // mixed differences, weight 2
+    const double *x0 = x.data() + j * nx, *x1 = x0 + nx;
+    double *o0 = out.data() + j * nx, *o1 = o0 + nx;
+    const std::size_t n = nx - 1;
+    for (std::size_t i = 0; i < n; ++i) d[i] = 2.0 * mu * (x0[i] - x0[i + 1] - x1[i] + x1[i + 1]);
+    for (std::size_t i = 0; i < n; ++i) o0[i] += d[i];
+    for (std::size_t i = 0; i < n; ++i) o0[i + 1] -= d[i];
+    for (std::size_t i = 0; i < n; ++i) o1[i] -= d[i];
+    for (std::size_t i = 0; i < n; ++i) o1[i + 1] += d[i];
+  }
+}
+
 // The least-squares polish (FitOptions::least_squares_iterations): the change delta of the
 // n_x x n_y lattice's coefficients minimising |B delta - r|^2 + mu |D delta|^2 + eps |delta|^2
 // by Jacobi-preconditioned conjugate gradients on the normal equations (matrix-free: B is
@@ -237,7 +365,7 @@ void add_thin_plate(const std::vector<double>* x, std::size_t nx, std::size_t ny
 // coefficient with data; eps = 1e-9 of it keeps coefficients without data at 0 change.
 // `n_data` (optional) receives the number of coefficients with data.
 Lattice least_squares_polish(const PointWeights& weights, const std::vector<double>& r, int n_x, int n_y, int iterations,
-                             double smoothing, std::size_t* n_data = nullptr) {
+                             double smoothing, std::unique_ptr<NormalMatrix>& normal, std::size_t* n_data = nullptr) {
   Lattice delta{n_x, n_y, {}};
   const std::size_t nx = delta.stride(), ny = static_cast<std::size_t>(n_y) + 3, size = nx * ny;
   delta.phi.assign(size, 0.0);
@@ -255,13 +383,26 @@ Lattice least_squares_polish(const PointWeights& weights, const std::vector<doub
   if (n_with_data == 0) return delta;
   data_weight /= static_cast<double>(n_with_data);
   const double mu = smoothing * data_weight, eps = 1e-9 * data_weight;
-  add_thin_plate(nullptr, nx, ny, mu, diagonal);
+  add_thin_plate_diagonal(nx, ny, mu, diagonal);
   for (double& d : diagonal) d += eps;
 
   std::vector<double> residual = b, z(size), a_p(size);
+  // B^T B as a stored band when a touched coefficient has more than a few points (49
+  // products a row against 32 a point), else by a sweep over the points.
+  if (!normal) {
+    normal = std::make_unique<NormalMatrix>(weights, nx, ny);
+    constexpr std::size_t kMinPointsPerRow = 3;
+    if (normal->n_rows() * kMinPointsPerRow <= r.size()) normal->build(weights);
+  }
+  const bool banded = normal->built();
+  std::vector<double> scratch;
   auto apply = [&](const std::vector<double>& x, std::vector<double>& out) {  // out = A x
-    scatter_points(weights, nullptr, &x, nx, out, nullptr);
-    add_thin_plate(&x, nx, ny, mu, out);
+    if (banded) {
+      normal->apply(x, out);
+    } else {
+      scatter_points(weights, nullptr, &x, nx, out, nullptr);
+    }
+    add_thin_plate_product(x, nx, ny, mu, out, scratch);
     for (std::size_t k = 0; k < size; ++k) out[k] += eps * x[k];
   };
   for (std::size_t k = 0; k < size; ++k) z[k] = residual[k] / diagonal[k];
@@ -564,8 +705,9 @@ FitResult fit_height_field(const std::vector<Eigen::Vector3d>& points, const Fit
     }
     if (options.least_squares_iterations > 0 && max_residual > result.tolerance) {
       std::size_t n_data = 0;
+      std::unique_ptr<NormalMatrix> normal;  // shared by both polishes
       const Lattice delta = least_squares_polish(weights, r, n_x, n_y, options.least_squares_iterations,
-                                                 options.least_squares_smoothing, &n_data);
+                                                 options.least_squares_smoothing, normal, &n_data);
       max_residual = subtract_level(delta, weights, r).first;
       auto& coefficients = field.mutable_coefficients();
       for (std::size_t k = 0; k < coefficients.size(); ++k) coefficients[k] += delta.phi[k];
@@ -573,7 +715,7 @@ FitResult fit_height_field(const std::vector<Eigen::Vector3d>& points, const Fit
       if (options.least_squares_fine_smoothing > 0.0 && max_residual <= options.least_squares_fine_below &&
           pts.size() >= n_data) {
         const Lattice fine = least_squares_polish(weights, r, n_x, n_y, options.least_squares_iterations,
-                                                  options.least_squares_fine_smoothing);
+                                                  options.least_squares_fine_smoothing, normal);
         max_residual = subtract_level(fine, weights, r).first;
         for (std::size_t k = 0; k < coefficients.size(); ++k) coefficients[k] += fine.phi[k];
         result.final_pass_max_residual.push_back(max_residual);

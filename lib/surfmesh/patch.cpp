@@ -440,12 +440,13 @@ PatchInputHeights::PatchInputHeights(const TriMesh& mesh, const std::vector<int>
   lo_ = Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity());
   Eigen::Vector2d hi = -lo_;
   for (std::size_t i = 0; i < faces.size(); ++i) {
-    std::size_t k = 0;
-    for (const auto v : mesh.fv_range(TriMesh::FaceHandle(faces[i]))) {
-      local_[i][k] = frame.to_local(to_eigen(mesh.point(v)));
+    // The face's vertices in fv_range's order (the halfedge's head, then on along the face)
+    // without its circulator.
+    TriMesh::HalfedgeHandle h = mesh.halfedge_handle(TriMesh::FaceHandle(faces[i]));
+    for (std::size_t k = 0; k < 3; ++k, h = mesh.next_halfedge_handle(h)) {
+      local_[i][k] = frame.to_local(to_eigen(mesh.point(mesh.to_vertex_handle(h))));
       lo_ = lo_.cwiseMin(local_[i][k].head<2>());
       hi = hi.cwiseMax(local_[i][k].head<2>());
-      ++k;
     }
   }
   if (faces.empty()) return;
