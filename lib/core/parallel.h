@@ -22,8 +22,8 @@ namespace nurbsfront::parallel {
   return threads > 0 ? static_cast<unsigned>(threads) : std::max(1U, std::thread::hardware_concurrency());
 }
 
-//! Called on the calling thread with the number of indices done so far (after each chunk,
-//! and once more with n at the end); returning false stops the loop.
+//! Called on the calling thread with the number of indices done so far (after chunks were
+//! finished; the last call reports n); returning false stops the loop.
 using Monitor = std::function<bool(std::size_t done)>;
 
 //! Runs task(begin, end, worker) over [0, n) in chunks of `chunk` indices (the last one may
@@ -41,7 +41,8 @@ using Monitor = std::function<bool(std::size_t done)>;
 //! running, the calling thread at least (it then works even with a monitor, calling it
 //! after each of its chunks). The first exception a task throws is rethrown here once every
 //! thread has stopped; the chunks not yet started are skipped.
-//! Returns true when every index was run.
+//! Returns false when the monitor said stop (even at its last call, when every index ran),
+//! true otherwise.
 //! for_chunks_started_by takes the function that starts a thread (start(f) returns a
 //! std::thread running f(); tests make it fail), for_chunks uses std::thread's constructor.
 template <class Start, class Task>
@@ -118,6 +119,15 @@ bool for_chunks_started_by(const Start& start, std::size_t n, unsigned threads, 
       const std::lock_guard lock(mutex);
       --running;
       break;  // no more threads: the ones running (and the calling thread) do the rest
+    } catch (...) {
+      // Anything else (e.g. std::bad_alloc): stop, join the running threads below and
+      // rethrow it there; never leave with threads that reference this frame.
+      {
+        const std::lock_guard lock(mutex);
+        --running;
+      }
+      fail(std::current_exception());
+      break;
     }
   }
   bool stopped_by_monitor = false;

@@ -8,6 +8,7 @@
 #include <thread>
 
 #include "nurbsfront/core/error.h"
+#include "nurbsfront/core/parallel.h"
 
 namespace nurbsfront {
 namespace {
@@ -273,10 +274,11 @@ ScalarGrid sample_scene(const Scene& scene, int resolution, SampleMode mode) {
   };
   // Each sample depends only on its own position, so the thread count cannot change the result.
   const int n_threads = std::clamp(static_cast<int>(std::thread::hardware_concurrency()), 1, std::min(16, nz));
-  std::vector<std::thread> threads;
-  for (int t = 1; t < n_threads; ++t) threads.emplace_back(fill, nz * t / n_threads, nz * (t + 1) / n_threads);
-  fill(0, nz / n_threads);
-  for (auto& th : threads) th.join();
+  const auto slabs = static_cast<std::size_t>(nz);
+  const std::size_t chunk = (slabs + static_cast<std::size_t>(n_threads) - 1) / static_cast<std::size_t>(n_threads);
+  parallel::for_chunks(slabs, static_cast<unsigned>(n_threads), chunk, [&](std::size_t begin, std::size_t end, unsigned) {
+    fill(static_cast<int>(begin), static_cast<int>(end));
+  });
   return grid;
 }
 

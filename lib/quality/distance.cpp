@@ -10,6 +10,7 @@
 #include <Eigen/Geometry>
 
 #include "nurbsfront/core/error.h"
+#include "nurbsfront/core/parallel.h"
 #include "nurbsfront/quality/aabb_tree.h"
 #include "nurbsfront/quality/internal.h"
 #include "nurbsfront/quality/report.h"
@@ -81,14 +82,8 @@ OneSided one_sided(const std::vector<Eigen::Vector3d>& samples, const quality_de
     }
   };
   const std::size_t n = samples.size();
-  std::vector<std::thread> workers;
   const std::size_t chunk = (n + n_threads - 1) / n_threads;
-  for (unsigned t = 1; t < n_threads; ++t) {
-    const std::size_t begin = std::min(n, t * chunk), end = std::min(n, (t + 1) * chunk);
-    if (begin < end) workers.emplace_back(work, begin, end);
-  }
-  work(0, std::min(n, chunk));
-  for (auto& w : workers) w.join();
+  parallel::for_chunks(n, n_threads, chunk, [&](std::size_t begin, std::size_t end, unsigned) { work(begin, end); });
   // Reduced in sample order: the result does not depend on the thread count.
   OneSided r;
   double sum = 0.0;

@@ -13,6 +13,7 @@
 #include <Eigen/Geometry>
 
 #include "nurbsfront/core/error.h"
+#include "nurbsfront/core/parallel.h"
 #include "nurbsfront/core/tolerances.h"
 #include "nurbsfront/quality/aabb_tree.h"
 #include "nurbsfront/quality/internal.h"
@@ -386,18 +387,12 @@ std::size_t count_self_intersections_with(const TriangleSoup& soup, const AabbTr
   // Independent subtree pairs, handed out dynamically; the total does not depend on
   // which thread counted which pair (listed pairs are sorted by the caller).
   const std::vector<NodePair> tasks = counter.split(256 * static_cast<std::size_t>(n_threads));
-  std::atomic<std::size_t> next{0};
   std::vector<std::size_t> counts(n_threads, 0);
   std::vector<std::vector<FacePair>> found(n_threads);
-  auto work = [&](unsigned thread) {
-    for (std::size_t k = next++; k < tasks.size(); k = next++) {
-      counts[thread] += counter.run(tasks[k], pairs != nullptr ? &found[thread] : nullptr);
-    }
-  };
-  std::vector<std::thread> workers;
-  for (unsigned t = 1; t < n_threads; ++t) workers.emplace_back(work, t);
-  work(0);
-  for (auto& w : workers) w.join();
+  parallel::for_chunks(tasks.size(), n_threads, 1, [&](std::size_t begin, std::size_t end, unsigned worker) {
+    for (std::size_t k = begin; k < end; ++k)
+      counts[worker] += counter.run(tasks[k], pairs != nullptr ? &found[worker] : nullptr);
+  });
   if (pairs != nullptr) {
     for (const auto& f : found) pairs->insert(pairs->end(), f.begin(), f.end());
   }

@@ -465,15 +465,16 @@ StitchResult stitch_impl(const SurfaceMesh& surface, const TriMesh* input, const
 
   // 2. Cross-border optimisation.
   watch.restart();
-  const bool optimise = options.optimisation_passes > 0 && mesh.n_faces() > 0;
+  const bool optimise = mesh.n_faces() > 0 && (options.optimisation_passes > 0 || options.obtuse_repair_rounds > 0 ||
+                                                options.chord_compensation > 0.0);
   TriMesh assembled;
   std::vector<int> assembled_patch;
   if (optimise) {
     assembled = mesh;
     assembled_patch = result.face_patch;
     stitch_detail::optimise(surface, options, feature, result, report);
-    stitch_detail::compensate_chords(mesh, result.vertex_node, feature, options.chord_compensation,
-                                     surface.input_mean_edge);
+    report.n_chord_compensation_moves = stitch_detail::compensate_chords(mesh, result.vertex_node, feature,
+                                                                         options.chord_compensation, surface.input_mean_edge);
   }
   report.seconds_optimise = watch.seconds();
 

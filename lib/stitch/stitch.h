@@ -25,7 +25,8 @@ inline constexpr double kAwayFromFeaturesAngleBoundDeg = 25.0;
 //! Options of stitch().
 struct StitchOptions {
   //! Rounds of the cross-border optimisation; each round is one sweep of edge flips and
-  //! one of smoothing (>= 0; 0 switches the optimisation off). Default 3.
+  //! one of smoothing (>= 0; 0 switches these sweeps off; the obtuse repair and the chord
+  //! compensation below have their own switches). Default 3.
   int optimisation_passes = 3;
   //! Largest angle (deg) between the normals of the two triangles of an edge, before and
   //! after a flip, for the flip to be allowed, in [0, 180). Default 30.
@@ -110,6 +111,7 @@ struct StitchReport {
   std::size_t n_flips = 0;             //!< edge flips made
   std::size_t n_smoothing_moves = 0;   //!< node moves accepted
   std::size_t n_smoothing_rejected = 0;  //!< node moves refused by the quality/normal bounds
+  std::size_t n_chord_compensation_moves = 0;  //!< nodes moved by the chord compensation
   //! Nodes moved back to their assembled position because a triangle of theirs intersected
   //! another after the optimisation.
   std::size_t n_reverted_moves = 0;

@@ -193,11 +193,23 @@ double lattice_edge_vertex_share(const TriMesh& mesh) {
     std::array<std::uint32_t, 1000> votes{};
     for (std::size_t k = group; k < group + group_size; ++k)
       for (int side = 0; side < 2; ++side) ++votes[static_cast<std::size_t>(phase_bin(end_value(k, side)))];
-    const int bin = static_cast<int>(std::max_element(votes.begin(), votes.end()) - votes.begin());
+    // The phase is circular: a lattice value's ends fall into bins 0 and 999 by round-off,
+    // so a bin's score also counts its two neighbours (modulo 1000).
+    const auto score = [&](int b) {
+      return votes[static_cast<std::size_t>((b + 999) % 1000)] + votes[static_cast<std::size_t>(b)] +
+             votes[static_cast<std::size_t>((b + 1) % 1000)];
+    };
+    int bin = 0;
+    for (int b = 1; b < 1000; ++b)
+      if (score(b) > score(bin)) bin = b;
+    const auto near_bin = [&](double x) {
+      const int d = std::abs(phase_bin(x) - bin);
+      return std::min(d, 1000 - d) <= 1;
+    };
     double origin = reference;
     for (std::size_t k = group; k < group + group_size; ++k)
-      if (phase_bin(end_value(k, 0)) == bin || phase_bin(end_value(k, 1)) == bin) {
-        origin = phase_bin(end_value(k, 0)) == bin ? end_value(k, 0) : end_value(k, 1);
+      if (near_bin(end_value(k, 0)) || near_bin(end_value(k, 1))) {
+        origin = near_bin(end_value(k, 0)) ? end_value(k, 0) : end_value(k, 1);
         break;
       }
     for (std::size_t w = 0; w < n; ++w) {

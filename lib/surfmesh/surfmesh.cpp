@@ -165,6 +165,9 @@ void PatchFitOptions::validate() const {
     bad_option("fit.large_face_edges must be finite and >= 0, got " + std::to_string(large_face_edges));
   if (!(std::isfinite(detail_spacing_edges) && detail_spacing_edges >= 0.0))
     bad_option("fit.detail_spacing_edges must be finite and >= 0, got " + std::to_string(detail_spacing_edges));
+  if (detail_spacing_edges > 0.0 && min_spacing_edges > 0.0 && !(detail_spacing_edges < min_spacing_edges))
+    bad_option("fit.detail_spacing_edges must be below fit.min_spacing_edges (" + std::to_string(min_spacing_edges) +
+               ": the detail lattice is the finer one), got " + std::to_string(detail_spacing_edges));
   if (!(std::isfinite(detail_above_edges) && detail_above_edges >= 0.0))
     bad_option("fit.detail_above_edges must be finite and >= 0, got " + std::to_string(detail_above_edges));
   if (!finite_positive(detail_node_offset_edges))

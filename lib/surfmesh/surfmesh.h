@@ -123,7 +123,7 @@ struct PatchFitOptions {
   //! edges (range scans, smoothed-image level sets: bunny, brain), with adaptive sizing at
   //! equal vertex count; the 2.5-edge lattice is there to average marching-cubes staircases,
   //! which the detail fit would follow (label images: liver Hausdorff 0.96 -> 1.86 with it;
-  //! docs/surfmesh.md "Detail fit"). Default 0.
+  //! docs/surfmesh.md "Detail fit"). 0 (off) or below min_spacing_edges. Default 0.
   double detail_spacing_edges = 0.0;
   //! See detail_spacing_edges (mean input edges, >= 0). Default 0.25.
   double detail_above_edges = 0.25;

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <random>
 #include <set>
@@ -196,6 +197,8 @@ TEST(Stitch, OptimisationImprovesAJitteredSphereAcrossBorders) {
   // Without optimisation and collapses the quality stays that of the assembly.
   StitchOptions none;
   none.optimisation_passes = 0;
+  none.obtuse_repair_rounds = 0;
+  none.chord_compensation = 0.0;
   none.collapse_below_angle_deg = 0.0;
   const StitchResult raw = stitch(surface, to_trimesh(soup), none);
   EXPECT_EQ(raw.report.n_flips + raw.report.n_smoothing_moves, 0u);
@@ -230,6 +233,32 @@ TEST(Stitch, ObtuseRepairLeavesFewerObtuseTriangles) {
   StitchOptions bad;
   bad.obtuse_repair_rounds = -1;
   EXPECT_THROW((void)stitch(cube_map_surface(test::icosphere(1)), bad), InvalidInput);
+}
+
+// The obtuse repair and the chord compensation have their own switches: they run with the
+// flip and smoothing sweeps off, and nothing moves with all three off. Bad strengths are
+// refused.
+TEST(Stitch, ObtuseRepairAndChordCompensationRunWithoutTheSweeps) {
+  const TriangleSoup soup = jittered_sphere(3, 0.35);
+  const SurfaceMesh surface = cube_map_surface(soup);
+  const TriMesh input = to_trimesh(soup);
+  StitchOptions options;
+  options.optimisation_passes = 0;
+  const StitchResult r = stitch(surface, input, options);
+  EXPECT_TRUE(r.report.ok()) << joined(r.report.errors);
+  EXPECT_GT(r.report.n_chord_compensation_moves, 0U);
+  EXPECT_GT(r.report.n_flips + r.report.n_smoothing_moves, 0U);  // the obtuse repair's
+  options.obtuse_repair_rounds = 0;
+  options.chord_compensation = 0.0;
+  const StitchResult still = stitch(surface, input, options);
+  EXPECT_TRUE(still.report.ok()) << joined(still.report.errors);
+  EXPECT_EQ(still.report.n_chord_compensation_moves, 0U);
+  EXPECT_EQ(still.report.n_flips + still.report.n_smoothing_moves, 0U);
+  for (const double bad : {-0.5, 2.5, std::numeric_limits<double>::quiet_NaN()}) {
+    StitchOptions o;
+    o.chord_compensation = bad;
+    EXPECT_THROW((void)stitch(surface, input, o), InvalidInput) << bad;
+  }
 }
 
 // The flips' tests run in parallel and the verification's signatures on helper threads:
@@ -531,6 +560,8 @@ TEST(Stitch, SmoothingMakesNoNewTriangleBelowTheAngleFloor) {
   EXPECT_GT(bad.report.n_small_angle_away_from_features, 0u);  // the planted defect works
   StitchOptions assembled_only;
   assembled_only.optimisation_passes = 0;
+  assembled_only.obtuse_repair_rounds = 0;
+  assembled_only.chord_compensation = 0.0;
   const StitchResult assembled = stitch(surface, input, assembled_only);
   ASSERT_EQ(assembled.report.n_small_angle_away_from_features, 0u);
   const StitchResult r = stitch(surface, input);
@@ -747,6 +778,8 @@ TEST(Stitch, SettleFlipsAValleyOutOfASmallSheet) {
   ASSERT_GT(count_self_intersections(valley), 0u);
   StitchOptions options;
   options.optimisation_passes = 0;
+  options.obtuse_repair_rounds = 0;
+  options.chord_compensation = 0.0;
   options.collapse_below_angle_deg = 0.0;
   const StitchResult r = stitch(make_surface(valley, face_patch, 2), to_trimesh(ridge), options);
   EXPECT_TRUE(r.report.ok()) << joined(r.report.errors);

@@ -223,7 +223,7 @@ void add_remesh_command(CLI::App& app) {
                   "triangles; 180 = never; docs/surfmesh.md)");
   cmd->add_option("--chord-compensation", args->chord_compensation,
                   "Move the nodes along their normals by this times the chords' mean gap to the surface, so the "
-                  "triangles do not lose volume over convex parts (default 1; 0 = off; docs/stitch.md)");
+                  "triangles do not lose volume over convex parts (in [0, 2]; default 1; 0 = off; docs/stitch.md)");
   cmd->add_option("--tiny-curve-merge", args->tiny_curve_merge,
                   "Merge the two corners of a one-edge border curve shorter than this many target edges "
                   "(default 0.3; 0 = never; not with a cell grid; docs/surfmesh.md)");
