@@ -113,6 +113,9 @@ void run_remesh(RemeshArgs& args) {
     const double spacing = args.cell_grid[3];
     options.surfmesh.cell_grid = {true, {args.cell_grid[0], args.cell_grid[1], args.cell_grid[2]}, {spacing, spacing, spacing}};
   }
+  if (args.detail_fit && *args.detail_fit > 0.0 && ((args.occupancy && !args.no_cell_grid) || !args.cell_grid.empty()))
+    throw InvalidInput("remesh: --detail-fit refits the plain fit; with a cell grid (--occupancy, --cell-grid) the band fit "
+                       "is used instead: drop one of them (--no-cell-grid keeps an occupancy scene on the plain fit)");
   options.progress = terminal_progress(args.quiet);
   options.validate();
   // Fail on an unwritable or unsupported output before the work.
