@@ -207,32 +207,23 @@ class Optimiser {
   }
 
   // Flips of the edges of obtuse triangles, in edge order, when the two new triangles
-  // hold fewer obtuse angles than the old ones and the flip passes
-  // every test of flip_sweep() but the alpha gain (the smaller new alpha must stay at least
+  // hold fewer obtuse angles than the old ones and the flip passes flip_keeps_shape()
+  // and, instead of flip_sweep()'s alpha gain, floors (the smaller new alpha must stay at least
   // min(the smaller old one, alpha_floor), the smaller smallest angle at least min(the old
   // one, angle_floor_deg + kObtuseAngleMarginDeg)). Serial. Returns the number of flips.
   std::size_t obtuse_flip_sweep() {
     std::size_t n_flips = 0;
+    FlipQuad q;
     for (auto e : mesh_.edges()) {
-      if (mesh_.is_boundary(e) || is_locked(e)) continue;
-      const auto h0 = mesh_.halfedge_handle(e, 0);
-      const auto h1 = mesh_.halfedge_handle(e, 1);
-      const Vec a = point(mesh_, mesh_.from_vertex_handle(h0)), b = point(mesh_, mesh_.to_vertex_handle(h0));
-      const Vec c = point(mesh_, mesh_.to_vertex_handle(mesh_.next_halfedge_handle(h0)));
-      const Vec d = point(mesh_, mesh_.to_vertex_handle(mesh_.next_halfedge_handle(h1)));
+      if (!flip_quad(e, q)) continue;
+      const Vec &a = q.a, &b = q.b, &c = q.c, &d = q.d;
       const int old_obtuse = int(is_obtuse(a, b, c)) + int(is_obtuse(b, a, d));
       if (old_obtuse == 0 || int(is_obtuse(a, d, c)) + int(is_obtuse(d, b, c)) >= old_obtuse) continue;
-      const Vec n0 = area_vector(a, b, c), n1 = area_vector(b, a, d);
-      const Vec n2 = area_vector(a, d, c), n3 = area_vector(d, b, c);
-      const double l0 = n0.norm(), l1 = n1.norm(), l2 = n2.norm(), l3 = n3.norm();
-      if (l2 <= min_double_area_ || l3 <= min_double_area_) continue;
-      if (!within_dihedral(n0, n1, l0, l1) || !within_dihedral(n2, n3, l2, l3)) continue;
-      const Vec old_normal = (l0 > 0.0 ? Vec(n0 / l0) : n0) + (l1 > 0.0 ? Vec(n1 / l1) : n1);
-      if (n2.dot(old_normal) <= 0.0 || n3.dot(old_normal) <= 0.0) continue;
-      const double bound = std::min(options_.alpha_floor, std::min(alpha_with_area(a, b, c, l0), alpha_with_area(b, a, d, l1)));
-      if (std::min(alpha_with_area(a, d, c, l2), alpha_with_area(d, b, c, l3)) < bound) continue;
-      const double sine_bound = std::min(sin_obtuse_floor_, std::min(alpha_and_min_angle_sine(a, b, c, l0)[1], alpha_and_min_angle_sine(b, a, d, l1)[1]));
-      if (std::min(alpha_and_min_angle_sine(a, d, c, l2)[1], alpha_and_min_angle_sine(d, b, c, l3)[1]) < sine_bound) continue;
+      if (!flip_keeps_shape(q)) continue;
+      const double bound = std::min(options_.alpha_floor, std::min(alpha_with_area(a, b, c, q.l0), alpha_with_area(b, a, d, q.l1)));
+      if (std::min(alpha_with_area(a, d, c, q.l2), alpha_with_area(d, b, c, q.l3)) < bound) continue;
+      const double sine_bound = std::min(sin_obtuse_floor_, std::min(alpha_and_min_angle_sine(a, b, c, q.l0)[1], alpha_and_min_angle_sine(b, a, d, q.l1)[1]));
+      if (std::min(alpha_and_min_angle_sine(a, d, c, q.l2)[1], alpha_and_min_angle_sine(d, b, c, q.l3)[1]) < sine_bound) continue;
       if (!mesh_.is_flip_ok(e)) continue;
       mesh_.flip(e);
       ++n_flips;
@@ -347,29 +338,47 @@ class Optimiser {
   // asked last: few edges pass the quality test). c and d may be one vertex here; the area
   // test then refuses. Reads the mesh only.
   bool passes_flip_test(TriMesh::EdgeHandle e) const {
-    if (mesh_.is_boundary(e) || is_locked(e)) return false;
-    const auto h0 = mesh_.halfedge_handle(e, 0);
-    const auto h1 = mesh_.halfedge_handle(e, 1);
-    const auto va = mesh_.from_vertex_handle(h0);
-    const auto vb = mesh_.to_vertex_handle(h0);
-    const auto vc = mesh_.to_vertex_handle(mesh_.next_halfedge_handle(h0));
-    const auto vd = mesh_.to_vertex_handle(mesh_.next_halfedge_handle(h1));
-    const Vec a = point(mesh_, va), b = point(mesh_, vb), c = point(mesh_, vc), d = point(mesh_, vd);
-    // Old triangles (a, b, c), (b, a, d); new ones (a, d, c), (d, b, c).
-    const Vec n0 = area_vector(a, b, c), n1 = area_vector(b, a, d);
-    const Vec n2 = area_vector(a, d, c), n3 = area_vector(d, b, c);
-    const double l2 = n2.norm(), l3 = n3.norm();
-    if (l2 <= min_double_area_ || l3 <= min_double_area_) return false;
-    const double l0 = n0.norm(), l1 = n1.norm();
-    if (!within_dihedral(n0, n1, l0, l1) || !within_dihedral(n2, n3, l2, l3)) return false;
-    // n / |n| as Eigen's normalized() (a zero vector stays zero).
-    const Vec old_normal = (l0 > 0.0 ? Vec(n0 / l0) : n0) + (l1 > 0.0 ? Vec(n1 / l1) : n1);
-    if (n2.dot(old_normal) <= 0.0 || n3.dot(old_normal) <= 0.0) return false;
+    FlipQuad q;
+    if (!flip_quad(e, q) || !flip_keeps_shape(q)) return false;
     // The smaller new alpha must exceed the bound: the second new triangle is measured
     // only when the first does.
     const double bound =
-        (1.0 + options_.flip_gain) * std::min(alpha_with_area(a, b, c, l0), alpha_with_area(b, a, d, l1));
-    return alpha_with_area(a, d, c, l2) > bound && alpha_with_area(d, b, c, l3) > bound;
+        (1.0 + options_.flip_gain) * std::min(alpha_with_area(q.a, q.b, q.c, q.l0), alpha_with_area(q.b, q.a, q.d, q.l1));
+    return alpha_with_area(q.a, q.d, q.c, q.l2) > bound && alpha_with_area(q.d, q.b, q.c, q.l3) > bound;
+  }
+
+  // The two triangles of an edge (a, b) and their far corners c, d: old triangles
+  // (a, b, c), (b, a, d), after a flip (a, d, c), (d, b, c); n0..n3 their area vectors,
+  // l0..l3 the norms (set by flip_keeps_shape).
+  struct FlipQuad {
+    Vec a, b, c, d, n0, n1, n2, n3;
+    double l0 = 0.0, l1 = 0.0, l2 = 0.0, l3 = 0.0;
+  };
+
+  // The corners of e's flip; false for a boundary or locked edge.
+  bool flip_quad(TriMesh::EdgeHandle e, FlipQuad& q) const {
+    if (mesh_.is_boundary(e) || is_locked(e)) return false;
+    const auto h0 = mesh_.halfedge_handle(e, 0);
+    const auto h1 = mesh_.halfedge_handle(e, 1);
+    q.a = point(mesh_, mesh_.from_vertex_handle(h0));
+    q.b = point(mesh_, mesh_.to_vertex_handle(h0));
+    q.c = point(mesh_, mesh_.to_vertex_handle(mesh_.next_halfedge_handle(h0)));
+    q.d = point(mesh_, mesh_.to_vertex_handle(mesh_.next_halfedge_handle(h1)));
+    return true;
+  }
+
+  // The shape tests every flip passes: the new triangles are not degenerate, old and new
+  // pairs are within max_flip_dihedral_deg, and the new triangles keep the old side.
+  bool flip_keeps_shape(FlipQuad& q) const {
+    q.n0 = area_vector(q.a, q.b, q.c), q.n1 = area_vector(q.b, q.a, q.d);
+    q.n2 = area_vector(q.a, q.d, q.c), q.n3 = area_vector(q.d, q.b, q.c);
+    q.l2 = q.n2.norm(), q.l3 = q.n3.norm();
+    if (q.l2 <= min_double_area_ || q.l3 <= min_double_area_) return false;
+    q.l0 = q.n0.norm(), q.l1 = q.n1.norm();
+    if (!within_dihedral(q.n0, q.n1, q.l0, q.l1) || !within_dihedral(q.n2, q.n3, q.l2, q.l3)) return false;
+    // n / |n| as Eigen's normalized() (a zero vector stays zero).
+    const Vec old_normal = (q.l0 > 0.0 ? Vec(q.n0 / q.l0) : q.n0) + (q.l1 > 0.0 ? Vec(q.n1 / q.l1) : q.n1);
+    return q.n2.dot(old_normal) > 0.0 && q.n3.dot(old_normal) > 0.0;
   }
 
   // An edge between two patches lies on a border curve; it may flip only when the curve
