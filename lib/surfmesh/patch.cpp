@@ -409,13 +409,9 @@ void fit_patch(const TriMesh& mesh, const Segmentation& seg, int p, const Border
       // is refitted on the finer one.
       const PatchFitOptions& o = options.fit;
       if (o.detail_spacing_edges > 0.0 && !options.cell_grid.enabled && fitted.max_residual() > o.detail_above_edges * mean_edge) {
-        FitOptions fine = fit;
-        const double margin = fit_margin(mean_edge, lo, hi);
-        fine.domain = Rectangle{lo - Eigen::Vector2d::Constant(margin), hi + Eigen::Vector2d::Constant(margin)};
-        fine.base_cells = FitOptions{}.base_cells;
-        fine.min_spacing = o.detail_spacing_edges * mean_edge;
-        fit_lattice_to_spacing(fine);
-        fitted = fit_height_field(local, fine);
+        SurfMeshOptions detail = options;
+        detail.fit.min_spacing_edges = o.detail_spacing_edges;
+        fitted = fit_height_field(local, plain_fit_options(detail, mean_edge, lo, hi));
         result.detail_fit = true;
       }
       result.surface.field = std::move(fitted.field);
