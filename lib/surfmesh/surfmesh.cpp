@@ -12,7 +12,6 @@
 #include <memory>
 #include <mutex>
 #include <string>
-#include <thread>
 
 #include "nurbsfront/core/error.h"
 #include "nurbsfront/core/parallel.h"
@@ -250,8 +249,7 @@ SurfaceMesh surfmesh_detail::mesh_surface(const TriMesh& input, const Segmentati
     front_size = size_at;
   }
   const std::size_t n_patches = segmentation.patches.size();
-  const unsigned threads = options.threads > 0 ? static_cast<unsigned>(options.threads)
-                                               : std::max(1U, std::thread::hardware_concurrency());
+  const unsigned threads = parallel::thread_count(options.threads);
   std::vector<PatchResult> results(n_patches);
   auto fit_all = [&](const BorderNodes& nodes) {
     run_parallel(n_patches, threads, options.progress, 0.0, 0.5, [&](std::size_t p) {
@@ -451,8 +449,7 @@ Segmentation surfmesh_detail::split_unfitted_patches(const TriMesh& input, const
   if (input.n_faces() == 0 || options.fit.split_above_edges <= 0.0 || options.fit.split_rounds == 0) return segmentation;
   if (!(mean_edge > 0.0)) throw InvalidInput("split_unfitted_patches: the mesh has no edge of positive length");
   const double bound = options.fit.split_above_edges * mean_edge;
-  const unsigned threads = options.threads > 0 ? static_cast<unsigned>(options.threads)
-                                               : std::max(1U, std::thread::hardware_concurrency());
+  const unsigned threads = parallel::thread_count(options.threads);
   Segmentation seg = segmentation;
   std::unique_ptr<PatchSplitter> own_splitter;  // made at the first split when none is given
   std::vector<int> candidates(seg.patches.size());
