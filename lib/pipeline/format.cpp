@@ -46,6 +46,7 @@ std::string to_json(const RemeshReport& r) {
   counts.count("curves", r.n_curves).count("corners", r.n_corners).count("crease_edges", r.n_crease_edges);
   counts.count("nodes", r.n_nodes).count("triangles", r.n_triangles).count("failed_patches", r.n_failed_patches);
   counts.count("crossing_repairs", r.n_crossing_repairs);
+  counts.count("narrow_patches_merged", r.n_narrow_merged);
   json::Object seconds;
   seconds.num("segment", r.seconds_segment).num("surfmesh", r.seconds_surfmesh).num("stitch", r.seconds_stitch);
   seconds.num("distance", r.seconds_distance).num("total", r.seconds_total);

@@ -31,6 +31,8 @@ void RemeshOptions::validate() const {
   stitch.validate();
   if (compute_distances) distance.validate();
   if (crossing_repair_rounds < 0) throw InvalidInput("remesh: crossing_repair_rounds must be >= 0");
+  if (!(std::isfinite(narrow_patch_merge) && narrow_patch_merge >= 0.0))
+    throw InvalidInput("remesh: narrow_patch_merge must be finite and >= 0");
 }
 
 const char* to_string(PatchStatus status) {
@@ -142,9 +144,20 @@ RemeshResult remesh(const TriMesh& input, const RemeshOptions& options) {
   const double mean_edge = mean_edge_length(input);
   // segment()'s face graph and normals, kept for the splits of split_unfitted_patches.
   segment_detail::SplitterPtr splitter;
-  const Segmentation first_segmentation = segment_detail::segment(input, segment_options, mean_edge, &splitter);
-  report.seconds_segment = watch.seconds();
+  Segmentation first_segmentation = segment_detail::segment(input, segment_options, mean_edge, &splitter);
   report.n_crease_edges = first_segmentation.n_crease_edges;
+  // Narrow patches (one-voxel fins and strips of marching-cubes surfaces) join a neighbour.
+  if (options.narrow_patch_merge > 0.0) {
+    const double h = surfmesh_options.sizing.size > 0.0 ? surfmesh_options.sizing.size
+                                                         : surfmesh_options.sizing.relative_size * mean_edge;
+    const std::vector<int> narrow = narrow_patches(input, first_segmentation, options.narrow_patch_merge * h);
+    if (!narrow.empty() && surfmesh_detail::vertices_on_lattice_edges(input)) {
+      const std::size_t n_before = first_segmentation.patches.size();
+      first_segmentation = segment_detail::merge_into_neighbours(*splitter, first_segmentation, narrow);
+      report.n_narrow_merged = n_before - first_segmentation.patches.size();
+    }
+  }
+  report.seconds_segment = watch.seconds();
 
   watch.restart();
   // Patches whose fit leaves their input (sharp bends inside) are split and refitted.

@@ -32,6 +32,13 @@ struct RemeshOptions {
   //! neighbour or bisected and the surface meshed and stitched again, kept only when it
   //! crosses less. Runs without crossings never pay it. 0 = off. Default 4.
   int crossing_repair_rounds = 4;
+  //! On marching-cubes inputs (surfmesh's lattice gate), patches narrower than this many
+  //! target edges (width 2 x area / border length, segment's narrow_patches) join a neighbour
+  //! after segmentation, across creases, where the union meets the slope bounds and projects
+  //! simply (merge_patches_into_neighbours): one-voxel fins and strips otherwise become
+  //! patches of a few triangles, most of them obtuse (docs/segment.md "Narrow patches").
+  //! 0 = off. Default 0.5.
+  double narrow_patch_merge = 0.5;
   //! Measure the two-sided distance of the output to the input (Hausdorff, mean,
   //! relative volume change) into the report. Default true.
   bool compute_distances = true;
@@ -67,6 +74,8 @@ struct RemeshReport {
   //! surface meshed and stitched again; RemeshOptions::crossing_repair_rounds; 0 on a run
   //! without crossings).
   std::size_t n_crossing_repairs = 0;
+  //! Narrow patches joined to a neighbour after segmentation (RemeshOptions::narrow_patch_merge).
+  std::size_t n_narrow_merged = 0;
   //! Feature sizing set the sizes (SurfaceMesh::feature_sizing_applied): false on inputs
   //! taken for marching-cubes surfaces and where no crease-bounded patch is narrow enough.
   bool feature_sizing_applied = false;

@@ -1477,6 +1477,49 @@ Segmentation merge_patches_into_neighbours(const TriMesh& mesh, const Segmentati
   return segment_detail::merge_into_neighbours(splitter, segmentation, which);
 }
 
+std::vector<int> narrow_patches(const TriMesh& mesh, const Segmentation& segmentation, double max_width) {
+  if (!std::isfinite(max_width)) throw InvalidInput("narrow_patches: max_width must be finite");
+  if (segmentation.face_patch.size() != mesh.n_faces())
+    throw InvalidInput("narrow_patches: the segmentation is not one of this mesh");
+  const std::size_t n_patches = segmentation.patches.size();
+  std::vector<double> area(n_patches, 0.0);
+  std::vector<double> border(n_patches, 0.0);
+  const auto patch_of = [&](OpenMesh::SmartHalfedgeHandle h) {
+    if (h.is_boundary()) return -1;
+    const int p = segmentation.face_patch[static_cast<std::size_t>(h.face().idx())];
+    if (p < 0 || static_cast<std::size_t>(p) >= n_patches) throw InvalidInput("narrow_patches: a face has no valid patch");
+    return p;
+  };
+  for (const auto f : mesh.faces()) area[static_cast<std::size_t>(patch_of(f.halfedge()))] += mesh.calc_face_area(f);
+  for (const auto e : mesh.edges()) {
+    const int a = patch_of(e.h0()), b = patch_of(e.h1());
+    if (a == b) continue;
+    const double length = mesh.calc_edge_length(e);
+    if (a >= 0) border[static_cast<std::size_t>(a)] += length;
+    if (b >= 0) border[static_cast<std::size_t>(b)] += length;
+  }
+  std::vector<double> width(n_patches, std::numeric_limits<double>::infinity());
+  for (std::size_t p = 0; p < n_patches; ++p)
+    if (border[p] > 0.0) width[p] = 2.0 * area[p] / border[p];
+  // Only a narrow patch next to a wide one: a small closed shape whose every side is narrow
+  // (a box smaller than max_width) would collapse if its sides joined one another.
+  std::vector<std::uint8_t> wide_neighbour(n_patches, 0);
+  for (const auto e : mesh.edges()) {
+    const int a = patch_of(e.h0()), b = patch_of(e.h1());
+    if (a < 0 || b < 0 || a == b) continue;
+    if (width[static_cast<std::size_t>(b)] >= max_width) wide_neighbour[static_cast<std::size_t>(a)] = 1;
+    if (width[static_cast<std::size_t>(a)] >= max_width) wide_neighbour[static_cast<std::size_t>(b)] = 1;
+  }
+  std::vector<std::pair<double, int>> narrow;
+  for (std::size_t p = 0; p < n_patches; ++p)
+    if (width[p] < max_width && wide_neighbour[p] != 0) narrow.emplace_back(width[p], static_cast<int>(p));
+  std::sort(narrow.begin(), narrow.end());
+  std::vector<int> result;
+  result.reserve(narrow.size());
+  for (const auto& entry : narrow) result.push_back(entry.second);
+  return result;
+}
+
 Segmentation split_patches(const TriMesh& mesh, const Segmentation& segmentation, const std::vector<int>& which,
                            const SegmentOptions& options) {
   return PatchSplitter(mesh, options).split(segmentation, which);

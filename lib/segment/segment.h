@@ -229,6 +229,15 @@ struct Segmentation {
                                                          const std::vector<int>& which,
                                                          const SegmentOptions& options = {});
 
+//! The patches narrower than max_width that share an edge with a patch at least max_width
+//! wide, narrowest first (ties: lower id). A patch's width is 2 x its area / its border
+//! length (the border shared with other patches and the input's boundary): the width of a
+//! long strip. A patch without border (a whole closed component) is never narrow; patches
+//! whose neighbours are all narrow (the sides of a box smaller than max_width) are not listed. The pipeline merges these into neighbours on marching-cubes inputs
+//! (RemeshOptions::narrow_patch_merge; docs/segment.md "Narrow patches").
+//! \throw InvalidInput for a segmentation of another mesh or a max_width that is not finite.
+[[nodiscard]] std::vector<int> narrow_patches(const TriMesh& mesh, const Segmentation& segmentation, double max_width);
+
 //! split_patches() in rounds on one mesh (surfmesh's split_unfitted_patches): the face
 //! graph, creases and normals are computed once (at the first split), and when a round is
 //! given the previous round's result, only the parts of the patches it splits go through

@@ -4,9 +4,11 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <numbers>
 #include <set>
 #include <string>
 
@@ -430,6 +432,66 @@ TEST(Pipeline, CreaseBoundedNarrowFacesSizedFromTheirWidth) {
   EXPECT_GE(q.min_angle_deg, 20.0);
   EXPECT_TRUE(rep.feature_sizing_applied);
   EXPECT_NE(to_json(rep).find("\"feature_sizing_applied\": true"), std::string::npos);
+}
+
+// A hand-made volume: a slab with two crossing fins one voxel thick on top (their rims and
+// ends are strips about one voxel wide: patches narrower than half a target edge). Its
+// marching-cubes surface passes the lattice gate, so narrow patches join a neighbour
+// (RemeshOptions::narrow_patch_merge, docs/segment.md "Narrow patches"): fewer patches, the
+// contract and topology kept, no crossing, mean alpha and obtuse share not worse. The same
+// surface turned by 30 deg is not taken for marching cubes and is left alone.
+TriMesh slab_with_fins() {
+  ScalarGrid grid;
+  grid.dims = {24, 24, 24};
+  grid.values.assign(grid.size(), 0.0F);
+  for (int k = 0; k < 24; ++k) {
+    for (int j = 0; j < 24; ++j) {
+      for (int i = 0; i < 24; ++i) {
+        const bool slab = i >= 3 && i <= 20 && j >= 3 && j <= 20 && k >= 3 && k <= 10;
+        const bool fin_x = i == 11 && j >= 5 && j <= 18 && k >= 11 && k <= 17;
+        const bool fin_y = j == 8 && i >= 5 && i <= 18 && k >= 11 && k <= 15;
+        if (slab || fin_x || fin_y) grid.values[grid.index(i, j, k)] = 1.0F;
+      }
+    }
+  }
+  MarchingCubesOptions mc;
+  mc.iso = 0.5;
+  mc.inside_above = true;
+  mc.pad = true;
+  return prepare_mesh(marching_cubes(grid, mc)).mesh;
+}
+
+TEST(Pipeline, NarrowFinPatchesJoinANeighbour) {
+  const TriMesh mesh = slab_with_fins();
+  RemeshOptions options = fast_options();
+  options.compute_distances = false;
+  const RemeshResult with = remesh(mesh, options);
+  options.narrow_patch_merge = 0.0;
+  const RemeshResult without = remesh(mesh, options);
+  EXPECT_EQ(without.report.n_narrow_merged, 0u);
+  const RemeshReport& rep = with.report;
+  EXPECT_TRUE(rep.ok()) << errors_of(rep);
+  EXPECT_GE(rep.n_narrow_merged, 1u);
+  EXPECT_EQ(rep.n_patches + rep.n_narrow_merged, without.report.n_patches);
+  const TopologyReport& t = rep.output.topology;
+  EXPECT_TRUE(t.is_closed && t.is_manifold && t.is_consistently_oriented);
+  EXPECT_EQ(t.euler_characteristic, 2);
+  EXPECT_EQ(count_self_intersections(to_soup(with.mesh)), 0u);
+  EXPECT_GE(rep.output.quality.alpha_mean, without.report.output.quality.alpha_mean);
+  EXPECT_LE(rep.output.quality.obtuse_fraction, without.report.output.quality.obtuse_fraction);
+  EXPECT_NE(to_json(rep).find("\"narrow_patches_merged\": " + std::to_string(rep.n_narrow_merged)), std::string::npos);
+
+  TriMesh turned = mesh;
+  const Eigen::Matrix3d rotation = Eigen::AngleAxisd(std::numbers::pi / 6.0, Eigen::Vector3d(1.0, 2.0, 3.0).normalized()).toRotationMatrix();
+  for (const auto v : turned.vertices()) {
+    const auto p = turned.point(v);
+    const Eigen::Vector3d q = rotation * Eigen::Vector3d(p[0], p[1], p[2]);
+    turned.set_point(v, {q.x(), q.y(), q.z()});
+  }
+  options.narrow_patch_merge = 0.5;
+  EXPECT_EQ(remesh(turned, options).report.n_narrow_merged, 0u);
+  options.narrow_patch_merge = -1.0;
+  EXPECT_THROW((void)remesh(mesh, options), InvalidInput);
 }
 
 // The marching-cubes surface of VTK's head CT at iso 500 (the skin), padded.

@@ -5,6 +5,7 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <numbers>
 #include <set>
@@ -530,6 +531,69 @@ TEST(MergePatchesIntoNeighbours, CubeSideJoinsANeighbourAcrossItsCrease) {
   Segmentation bad_list = seg;
   bad_list.patches[1].faces.push_back(seg.patches[0].faces.front());
   EXPECT_THROW((void)merge_patches_into_neighbours(mesh, bad_list, {1}, options), InvalidInput);
+}
+
+// narrow_patches: width 2 x area / border length, exact on a hand-made strip. An open 4 x 3
+// grid whose rows are 2, 0.5 and 2 high (x from 0 to 4), one patch per row: the middle row
+// has area 2 and border 4 + 4 (its neighbours) + 2 x 0.5 (the input's boundary), width 4/9;
+// the outer rows area 8, border 4 + 4 + 2 x 2, width 4/3. A whole closed surface as one
+// patch has no border and is never narrow.
+TEST(NarrowPatches, StripWidthIsTwiceAreaOverBorder) {
+  TriangleSoup soup = test::grid_patch(4, 3);
+  for (auto& p : soup.points) {
+    const int row = static_cast<int>(std::lround(p.y() * 3.0));
+    p.x() *= 4.0;
+    p.y() = std::array<double, 4>{0.0, 2.0, 2.5, 4.5}[static_cast<std::size_t>(row)];
+  }
+  const TriMesh mesh = to_trimesh(soup);
+  Segmentation seg;
+  seg.patches.resize(3);
+  for (const auto f : mesh.faces()) {
+    const double y = mesh.calc_face_centroid(f)[1];
+    const int p = y < 2.0 ? 0 : (y < 2.5 ? 1 : 2);
+    seg.face_patch.push_back(p);
+    seg.patches[static_cast<std::size_t>(p)].faces.push_back(f.idx());
+  }
+  EXPECT_EQ(narrow_patches(mesh, seg, 4.0 / 9.0 + 1e-9), std::vector<int>{1});
+  EXPECT_TRUE(narrow_patches(mesh, seg, 4.0 / 9.0 - 1e-9).empty());
+  EXPECT_EQ(narrow_patches(mesh, seg, 4.0 / 3.0 - 1e-9), std::vector<int>{1});
+  // Every row narrow: none has a wide neighbour, none is listed.
+  EXPECT_TRUE(narrow_patches(mesh, seg, 4.0 / 3.0 + 1e-9).empty());
+  // Two strips of width 4/9 between the outer rows: both listed, narrowest first.
+  Segmentation two = seg;
+  two.patches.resize(4);
+  for (auto& patch : two.patches) patch.faces.clear();
+  for (const auto f : mesh.faces()) {
+    const auto c = mesh.calc_face_centroid(f);
+    int& p = two.face_patch[static_cast<std::size_t>(f.idx())];
+    if (p == 1 && c[0] > 3.0) p = 3;  // the strip's last unit: width 2 x 0.5 / (1 + 1 + 0.5 + 0.5)
+    two.patches[static_cast<std::size_t>(p)].faces.push_back(f.idx());
+  }
+  EXPECT_EQ(narrow_patches(mesh, two, 0.5), (std::vector<int>{3, 1}));
+
+  const TriMesh cube = to_trimesh(test::cube());
+  Segmentation whole;
+  whole.patches.resize(1);
+  for (const auto f : cube.faces()) {
+    whole.face_patch.push_back(0);
+    whole.patches[0].faces.push_back(f.idx());
+  }
+  EXPECT_TRUE(narrow_patches(cube, whole, 1e9).empty());
+  // A box smaller than max_width, one patch per side: every side narrow, none listed.
+  Segmentation sides;
+  sides.patches.resize(6);
+  for (const auto f : cube.faces()) {
+    const auto n = cube.calc_face_normal(f);
+    int axis = 0;
+    for (int i = 1; i < 3; ++i)
+      if (std::abs(n[i]) > std::abs(n[axis])) axis = i;
+    const int p = 2 * axis + (n[axis] > 0.0 ? 1 : 0);
+    sides.face_patch.push_back(p);
+    sides.patches[static_cast<std::size_t>(p)].faces.push_back(f.idx());
+  }
+  EXPECT_TRUE(narrow_patches(cube, sides, 10.0).empty());
+  EXPECT_THROW((void)narrow_patches(mesh, seg, std::nan("")), InvalidInput);
+  EXPECT_THROW((void)narrow_patches(cube, seg, 1.0), InvalidInput);  // another mesh's segmentation
 }
 
 // The pipeline's other remedy against crossings: segment_detail::bisect_patches cuts a patch

@@ -43,6 +43,7 @@ struct RemeshArgs {
   double feature_size = SizingOptions{}.feature_size;
   bool feature_size_everywhere = false;
   std::optional<int> crossing_repair_rounds;
+  std::optional<double> narrow_merge;
   std::optional<int> obtuse_repair_rounds;
   std::optional<double> chord;
   std::optional<double> max_slope;
@@ -97,6 +98,7 @@ void run_remesh(RemeshArgs& args) {
   options.surfmesh.sizing.feature_size = args.feature_size;
   options.surfmesh.sizing.feature_size_everywhere = args.feature_size_everywhere;
   if (args.crossing_repair_rounds) options.crossing_repair_rounds = *args.crossing_repair_rounds;
+  if (args.narrow_merge) options.narrow_patch_merge = *args.narrow_merge;
   if (args.obtuse_repair_rounds) options.stitch.obtuse_repair_rounds = *args.obtuse_repair_rounds;
   if (args.chord) options.surfmesh.sizing.chord_error = *args.chord;
   if (args.max_slope) options.segment.max_slope_deg = *args.max_slope;
@@ -209,6 +211,10 @@ void add_remesh_command(CLI::App& app) {
   cmd->add_option("--crossing-repair-rounds", args->crossing_repair_rounds,
                   "Rounds of re-segmenting the patches of crossings the stitch left (default 4; 0 = off; "
                   "docs/segment.md \"Re-segmenting crossing patches\")");
+  cmd->add_option("--narrow-merge", args->narrow_merge,
+                  "On marching-cubes inputs, patches narrower than this many target edges join a neighbour "
+                  "(default 0.5; 0 = off; docs/segment.md \"Narrow patches\")")
+      ->check(CLI::NonNegativeNumber);
   cmd->add_option("--obtuse-repair-rounds", args->obtuse_repair_rounds,
                   "Sweeps of the stitch's obtuse repair after its optimisation (default 2; 0 = off; "
                   "docs/stitch.md \"Obtuse repair\")");
