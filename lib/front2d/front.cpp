@@ -36,6 +36,8 @@ constexpr double kSnapRadius = 0.6;        // existing nodes this close to the i
 constexpr double kWideRadius = 1.2;        // existing nodes considered at all
 constexpr double kNodeClearance = 0.5;     // a new point keeps this distance from front nodes
 constexpr double kEdgeClearance = 0.35;    // ... and this distance from front edges
+constexpr int kCornerMinLoop = 6;          // the corner rule adds no node in a front loop of fewer nodes
+constexpr double kCornerMaxAngleDeg = 80.0; // ... nor one that would make an angle above this in either half of the corner
 constexpr double kSmoothAcceptAlpha = 0.6; // smoothing may lower the worst alpha down to this
 constexpr double kMinAngleTargetDeg = 30.0; // relocation treats new points of triangles below this angle
 constexpr double kRelocateFirstStep = 0.1;  // first compass step, times the shortest star edge
@@ -360,8 +362,9 @@ struct FrontEdge {
 
 class AdvancingFront {
  public:
-  AdvancingFront(std::vector<Vec>& pts, const Sizing& size, const Metric* metric, EdgeGrid grid)
-      : P_(pts), size_(size), metric_(metric), grid_(std::move(grid)) {}
+  AdvancingFront(std::vector<Vec>& pts, const Sizing& size, const Metric* metric, EdgeGrid grid, double corner_split_angle_deg)
+      : P_(pts), size_(size), metric_(metric), grid_(std::move(grid)), first_new_(static_cast<int>(pts.size())),
+        corner_cos_(corner_split_angle_deg >= 180.0 ? -2.0 : std::cos(corner_split_angle_deg * std::numbers::pi / 180.0)) {}
 
   //! Boundary edges never cancel: both sides of an interior segment are on the front.
   void add_boundary_edge(int a, int b) {
@@ -590,6 +593,67 @@ class AdvancingFront {
     }
   }
 
+  // The only front edge leaving x, or -1 when there is none or more than one (touching loops).
+  [[nodiscard]] int single_out_edge(int x) const {
+    if (static_cast<std::size_t>(x) >= out_head_.size()) return -1;
+    const int e = out_head_[static_cast<std::size_t>(x)];
+    return e >= 0 && E_[static_cast<std::size_t>(e)].next_out < 0 ? e : -1;
+  }
+
+  // Corner rule. Triangle (a, b, v) is valid; when it closes the front corner at b (front edge
+  // (b, v)) or at a (front edge (v, a)) whose inner angle in the metric is over the
+  // threshold, it would have that angle: a new node on the corner's bisector, at the mean
+  // metric length of its two legs, makes triangle (a, b, q) now and leaves the corner's other
+  // half (half the angle) to the front. Not in a loop of under kCornerMinLoop nodes (the new
+  // node would have too few neighbours to be free of obtuse angles). Returns true when the
+  // new node passed the usual tests (clearances included) and was accepted.
+  bool split_corner(int e, int a, int b, int v, bool allow_new, FrontReport& report) {
+    if (!allow_new || corner_cos_ < -1.0) return false;
+    const bool at_b = find_edge(b, v) >= 0;
+    const bool at_a = find_edge(v, a) >= 0;
+    if (at_a == at_b) return false;  // no corner, or the last triangle of a 3-node loop
+    int x = b;
+    for (int nodes = 2; nodes < kCornerMinLoop; ++nodes) {
+      const int out = single_out_edge(x);
+      if (out < 0) break;
+      x = E_[static_cast<std::size_t>(out)].b;
+      if (x == a) return false;
+    }
+    const int c = at_b ? b : a;
+    const int n1 = at_b ? a : v, n2 = at_b ? v : b;
+    if (c >= first_new_ || n1 >= first_new_ || n2 >= first_new_) return false;  // not a corner of the input border
+    const Vec& C = pt(c);
+    const Vec d1 = pt(n1) - C, d2 = pt(n2) - C;
+    Eigen::Matrix2d R = Eigen::Matrix2d::Identity();
+    if (metric_) R = metric_->tensor(C).llt().matrixU();
+    const Vec u1 = R * d1, u2 = R * d2;
+    const double l1 = u1.norm(), l2 = u2.norm();
+    if (!(l1 > 0 && l2 > 0) || u1.dot(u2) >= corner_cos_ * l1 * l2) return false;
+    const Vec bisector = u1 / l1 + u2 / l2;
+    const double lb = bisector.norm();
+    if (!(lb > 0)) return false;
+    // At the geometric mean of the legs; both halves (c, n1, q) and (c, q, n2) must have every
+    // angle under kCornerMaxAngleDeg in the metric (with legs of ratio over about 2 at a right
+    // corner no point on the bisector does: then the old closure).
+    const Vec w = bisector * (std::sqrt(l1 * l2) / lb);
+    const double max_cos = std::cos(kCornerMaxAngleDeg * std::numbers::pi / 180.0);
+    for (const Vec& u : {u1, u2}) {  // angles at u and at w of the half (0, u, w); the one at 0 is half the corner
+      const Vec uw = w - u;
+      const double luw = uw.norm();
+      if (!(luw > 0) || (-u).dot(uw) < max_cos * u.norm() * luw || (-w).dot(-uw) < max_cos * w.norm() * luw) return false;
+    }
+    Vec offset = w;
+    if (metric_) offset = R.triangularView<Eigen::Upper>().solve(offset);
+    const Vec q = C + offset;
+    const double r = offset.norm();
+    if (!valid(a, b, -1, q, kNodeClearance * r, kEdgeClearance * r)) return false;
+    P_.push_back(q);
+    ++report.n_new_points;
+    ++report.n_corner_points;
+    accept(e, static_cast<int>(P_.size() - 1));
+    return true;
+  }
+
   bool advance(int e, bool allow_new, FrontReport& report) {
     const int a = E_[static_cast<std::size_t>(e)].a;
     const int b = E_[static_cast<std::size_t>(e)].b;
@@ -629,7 +693,7 @@ class AdvancingFront {
     for (const auto& [dist, v] : near_) {
       if (dist >= kSnapRadius * side) break;
       if (valid(a, b, v, pt(v), 0, 0)) {
-        accept(e, v);
+        if (!split_corner(e, a, b, v, allow_new, report)) accept(e, v);
         return true;
       }
     }
@@ -643,7 +707,7 @@ class AdvancingFront {
     std::sort(near_.begin(), near_.end());
     for (const auto& [key, v] : near_) {
       if (valid(a, b, v, pt(v), 0, 0)) {
-        accept(e, v);
+        if (!split_corner(e, a, b, v, allow_new, report)) accept(e, v);
         return true;
       }
     }
@@ -692,6 +756,8 @@ class AdvancingFront {
   Vec local_lo_ = Vec::Zero(), local_hi_ = Vec::Zero();
   bool local_ok_ = false;
   std::vector<std::pair<double, int>> near_;
+  int first_new_;      // points from here on are created by the front
+  double corner_cos_;  // cosine of the corner rule's angle; < -1 = off
 };
 
 // What the Delaunay refinement (Optimiser::refine) reads and updates besides the mesh.
@@ -1488,6 +1554,8 @@ void FrontOptions::validate() const {
     throw InvalidInput("FrontOptions: work_budget_factor must be >= 1");
   if (smoothing_passes < 0) throw InvalidInput("FrontOptions: smoothing_passes must be >= 0");
   if (!(hull_gap_fraction >= 0.0 && hull_gap_fraction < 1.0)) throw InvalidInput("FrontOptions: hull_gap_fraction must be in [0, 1)");
+  if (!(corner_split_angle_deg > 0.0 && corner_split_angle_deg <= 180.0))
+    throw InvalidInput("FrontOptions: corner_split_angle_deg must be in (0, 180]");
 }
 
 double triangle_alpha_2d(const Vec& a, const Vec& b, const Vec& c) { return alpha(a, b, c); }
@@ -1615,7 +1683,7 @@ Mesh2d mesh_pslg(const Pslg& pslg, const FrontOptions& options) {
   const auto budget = static_cast<std::size_t>(options.work_budget_factor * (expected + 10.0 * static_cast<double>(front0.size())) + 1000.0);
   {  // the front's grid, heap and edges are released before the optimisation
     EdgeGrid grid(lo - Vec::Constant(margin), hi + Vec::Constant(margin), typical);
-    AdvancingFront front(P, size, metric, std::move(grid));
+    AdvancingFront front(P, size, metric, std::move(grid), options.corner_split_angle_deg);
     // About `expected` triangles and half as many points: reserve so that the arrays are not
     // copied while they grow (capped, in case the estimate is far off).
     const auto hint = static_cast<std::size_t>(std::min(1.05 * expected + 16.0, 1e8));

@@ -603,6 +603,7 @@ void mesh_patch(const Segmentation& seg, int p, const BorderNodes& borders, cons
     front.metric = std::make_shared<HeightFieldMetric>(field);
     front.split_segments = false;
     front.smoothing_passes = options.smoothing_passes;
+    front.corner_split_angle_deg = options.corner_split_angle_deg;
     const Mesh2d mesh2d = mesh_pslg(pslg, front);
     if (mesh2d.report.status != FrontStatus::Ok)
       throw std::runtime_error("the 2D front did not close: " + mesh2d.report.message);

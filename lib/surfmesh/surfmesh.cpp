@@ -197,6 +197,8 @@ void SurfMeshOptions::validate() const {
   fit.validate();
   cell_grid.validate();
   if (smoothing_passes < 0) bad_option("smoothing_passes must be >= 0, got " + std::to_string(smoothing_passes));
+  if (!(corner_split_angle_deg > 0.0 && corner_split_angle_deg <= 180.0))
+    bad_option("corner_split_angle_deg must be in (0, 180], got " + std::to_string(corner_split_angle_deg));
   if (!(crease_angle_deg > 0.0 && crease_angle_deg <= 180.0))
     bad_option("crease_angle_deg must be in (0, 180], got " + std::to_string(crease_angle_deg));
   if (!(unsmoothed_crease_angle_deg >= 0.0 && unsmoothed_crease_angle_deg <= 180.0))

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <limits>
@@ -281,6 +282,53 @@ TEST(Front2d, PreDiscretisedBoundaryIsNotSplit) {
   EXPECT_EQ(check_mesh(p, m, area, &s), "");
   for (const auto& ch : m.segment_chains) EXPECT_EQ(ch.size(), 2u);
   EXPECT_GE(s.mean_alpha, 0.9);
+}
+
+// A sheared strip 1 x 0.31 with fixed border nodes (6 pieces along, 2 across: the surface
+// mesher's narrow patch), two corners of 95 deg and two of 85 deg. The old rule closes each
+// 95-deg corner with one triangle (obtuse at the corner); the corner rule puts a node on its
+// bisector instead and the mesh has no obtuse triangle at all.
+TEST(Front2d, ObtuseBorderCornerGetsANodeOnItsBisector) {
+  const double shear = std::tan(5.0 * std::numbers::pi / 180.0), w = 0.31;
+  const std::vector<Vec> corners{{0, 0}, {1, 0}, {1 + w * shear, w}, {w * shear, w}};
+  Pslg p;
+  std::vector<int> corner_index;
+  for (std::size_t i = 0; i < 4; ++i) {
+    const Vec a = corners[i], b = corners[(i + 1) % 4];
+    const int n = i % 2 == 0 ? 6 : 2;
+    corner_index.push_back(static_cast<int>(p.points.size()));
+    for (int k = 0; k < n; ++k) p.points.push_back(a + (b - a) * (static_cast<double>(k) / n));
+  }
+  const auto n = static_cast<int>(p.points.size());
+  for (int i = 0; i < n; ++i) p.segments.push_back({i, (i + 1) % n});
+  // Obtuse triangles in all, and those with the obtuse angle at one of the four corners.
+  auto obtuse = [&](const Mesh2d& m) {
+    std::pair<int, int> count{0, 0};
+    for (const auto& t : m.triangles)
+      for (int i = 0; i < 3; ++i) {
+        const Vec& a = m.points[t[i]];
+        if ((m.points[t[(i + 1) % 3]] - a).dot(m.points[t[(i + 2) % 3]] - a) >= 0) continue;
+        ++count.first;
+        if (std::find(corner_index.begin(), corner_index.end(), t[i]) != corner_index.end()) ++count.second;
+      }
+    return count;
+  };
+  FrontOptions o = uniform(0.167);
+  o.split_segments = false;
+  o.corner_split_angle_deg = 180.0;  // off: the old closure
+  const Mesh2d before = mesh_pslg(p, o);
+  EXPECT_EQ(check_mesh(p, before, w), "");
+  EXPECT_EQ(before.report.n_corner_points, 0u);
+  EXPECT_EQ(obtuse(before).second, 2) << "the domain no longer exercises the rule";
+  o.corner_split_angle_deg = 89.5;
+  const Mesh2d after = mesh_pslg(p, o);
+  Stats s;
+  EXPECT_EQ(check_mesh(p, after, w, &s), "");
+  EXPECT_EQ(after.report.n_corner_points, 2u);
+  EXPECT_EQ(obtuse(after), std::make_pair(0, 0));
+  EXPECT_GE(s.min_angle_deg, 30.0);
+  o.corner_split_angle_deg = 0.0;  // out of (0, 180]
+  EXPECT_THROW((void)mesh_pslg(p, o), InvalidInput);
 }
 
 TEST(Front2d, GradedAndAnisotropicSizing) {

@@ -613,6 +613,9 @@ TEST(PipelineSlow, FemurCrossingsResegmented) {
   options.compute_distances = false;
   options.surfmesh.sizing.feature_size = 0.0;
   options.surfmesh.tiny_curve_merge_size = 0.0;
+  // The front's corner rule (on by default) meshes femur without this crossing; the test
+  // needs one to exercise the re-segmentation.
+  options.surfmesh.corner_split_angle_deg = 180.0;
   const RemeshResult without = remesh_unrepaired(mesh, options);
   const RemeshResult with = remesh(mesh, options);
   const RemeshReport& rep = with.report;

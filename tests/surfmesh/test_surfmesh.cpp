@@ -969,6 +969,8 @@ TEST(Surfmesh, BadOptionsAndMismatchedSegmentation) {
       [](SurfMeshOptions& o) { o.fit.detail_above_edges = std::nan(""); },
       [](SurfMeshOptions& o) { o.fit.detail_node_offset_edges = 0.0; },
       [](SurfMeshOptions& o) { o.smoothing_passes = -1; },
+      [](SurfMeshOptions& o) { o.corner_split_angle_deg = 0.0; },
+      [](SurfMeshOptions& o) { o.corner_split_angle_deg = std::nan(""); },
       [](SurfMeshOptions& o) { o.threads = -2; },
       [](SurfMeshOptions& o) { o.crease_angle_deg = 0.0; },
       [](SurfMeshOptions& o) { o.cell_grid = {true, Eigen::Vector3d::Zero(), Eigen::Vector3d::Ones()}; o.cell_grid.curvature_passes = -1; },

@@ -31,6 +31,7 @@ struct Mesh2dArgs {
   int smoothing_passes = FrontOptions{}.smoothing_passes;
   bool no_swaps = false;
   bool no_refine = false;
+  double corner_angle = FrontOptions{}.corner_split_angle_deg;
   bool json = false;
   bool quiet = false;
 };
@@ -62,6 +63,10 @@ void add_mesh2d_command(CLI::App& app) {
   cmd->add_option("--smooth", args->smoothing_passes, "Smoothing passes")->capture_default_str();
   cmd->add_flag("--no-swaps", args->no_swaps, "No edge swaps after the front");
   cmd->add_flag("--no-refine", args->no_refine, "No Delaunay refinement of the triangles below 30 deg");
+  cmd->add_option("--corner-angle", args->corner_angle,
+                  "A front corner wider than this (deg) gets a node on its bisector instead of one closing triangle (180 = off)")
+      ->check(CLI::Range(1e-9, 180.0))
+      ->capture_default_str();
   cmd->add_flag("--json", args->json, "Print the quality report as JSON");
   cmd->add_flag("--quiet", args->quiet, "No progress on stderr");
   cmd->callback([args] {
@@ -81,6 +86,7 @@ void add_mesh2d_command(CLI::App& app) {
     options.smoothing_passes = args->smoothing_passes;
     options.swap_edges = !args->no_swaps;
     options.refine_min_angle = !args->no_refine;
+    options.corner_split_angle_deg = args->corner_angle;
     options.progress = terminal_progress(args->quiet);
     Mesh2d mesh;
     try {
@@ -109,7 +115,7 @@ void add_mesh2d_command(CLI::App& app) {
       std::cout << to_json(report) << "\n";
     } else {
       std::cout << "triangles " << mesh.triangles.size() << ", points " << mesh.points.size() << " (new "
-                << mesh.report.n_new_points << ", refinement " << mesh.report.n_refinement_points << "), hull edges followed by the input " << mesh.report.n_hull_edges_followed
+                << mesh.report.n_new_points << ", corner " << mesh.report.n_corner_points << ", refinement " << mesh.report.n_refinement_points << "), hull edges followed by the input " << mesh.report.n_hull_edges_followed
                 << " (area left out " << mesh.report.hull_gap_area << "), repairs " << mesh.report.n_repairs << ", swaps " << mesh.report.n_swaps
                 << ", domain area " << mesh.report.domain_area << ", front " << mesh.report.seconds_front << " s, optimise "
                 << mesh.report.seconds_optimise << " s\n"
