@@ -419,7 +419,9 @@ TEST(Pipeline, ThinDiscFlatRingsSampledKeepVolume) {
     in_lo = std::min(in_lo, static_cast<double>(mesh.point(v)[0]));
     in_hi = std::max(in_hi, static_cast<double>(mesh.point(v)[0]));
   }
-  const RemeshResult r = remesh(mesh, fast_options());
+  RemeshOptions options = fast_options();
+  options.compute_distances = false;  // the planes and the volume are the point (ASan time)
+  const RemeshResult r = remesh(mesh, options);
   const RemeshReport& rep = r.report;
   EXPECT_TRUE(rep.ok()) << errors_of(rep);
   double lo = 0.0, hi = 0.0;
@@ -429,9 +431,8 @@ TEST(Pipeline, ThinDiscFlatRingsSampledKeepVolume) {
   }
   EXPECT_GE(lo, in_lo - 0.25 * rep.input_mean_edge);
   EXPECT_LE(hi, in_hi + 0.25 * rep.input_mean_edge);
-  ASSERT_TRUE(rep.output.distance.has_value());
-  ASSERT_TRUE(rep.output.distance->relative_volume_change.has_value());
-  EXPECT_LT(std::abs(*rep.output.distance->relative_volume_change), 0.015);
+  const double volume_in = enclosed_volume(to_soup(mesh));
+  EXPECT_LT(std::abs(enclosed_volume(to_soup(r.mesh)) - volume_in), 0.015 * volume_in);
 }
 
 // CGAL's rotor by default (feature sizing, SizingOptions::feature_size, applies: a CAD mesh,
