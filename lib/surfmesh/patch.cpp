@@ -48,6 +48,8 @@ constexpr int kFitOverlapRings = 1;
 // Relative tolerance between the meshed area and the area inside the border (round-off).
 constexpr double kAreaTolerance = 1e-9;
 constexpr double kFitOverlapMinNormalDot = 0.5;
+// Faces whose normals differ by at most this (deg) lie in one plane (flat_face_edges).
+constexpr double kFlatFaceDeg = 1.0;
 // A patch with fewer input faces fits its own vertices only: on thin sheets and sharp folds
 // (many patches of a few faces) the ring around it is mostly the other sheet or the steep
 // side of the fold and pulled its surface across its neighbours' (self-intersecting pairs,
@@ -85,15 +87,33 @@ void fit_lattice_to_spacing(FitOptions& fit) {
 // to 7.5 mean edges long (5335 of its faces exceed 2), and its fit bulged up to one mean edge
 // off them between their corners (docs/surfmesh.md, "Large input faces"). Marching-cubes
 // surfaces have none (longest edges 1.6-1.9 mean edges).
+// Also (flat_edges > 0, below large_edges) over the faces above flat_edges mean edges that lie
+// in one plane with at least two of their neighbours (PatchFitOptions::flat_face_edges).
 void add_large_face_samples(const TriMesh& mesh, const std::vector<int>& faces, double mean_edge, double large_edges,
-                            std::vector<Eigen::Vector3d>& points) {
-  if (!(mean_edge > 0.0) || !(large_edges > 0.0)) return;
+                            double flat_edges, std::vector<Eigen::Vector3d>& points) {
+  if (!(mean_edge > 0.0)) return;
+  if (!(large_edges > 0.0)) large_edges = std::numeric_limits<double>::infinity();
+  if (!(flat_edges > 0.0 && flat_edges < large_edges)) flat_edges = large_edges;
+  if (std::isinf(flat_edges)) return;
+  auto unit_normal = [&mesh](TriMesh::FaceHandle f) {
+    std::array<Eigen::Vector3d, 3> y;
+    int k = 0;
+    for (const auto v : mesh.fv_range(f)) y[k++] = to_eigen(mesh.point(v));
+    return (y[1] - y[0]).cross(y[2] - y[0]).normalized();
+  };
+  const double min_dot = std::cos(kFlatFaceDeg * std::numbers::pi / 180.0);
   for (const int f : faces) {
     std::array<Eigen::Vector3d, 3> x;
     int k = 0;
     for (const auto v : mesh.fv_range(TriMesh::FaceHandle(f))) x[k++] = to_eigen(mesh.point(v));
     const double longest = std::max({(x[1] - x[0]).norm(), (x[2] - x[1]).norm(), (x[0] - x[2]).norm()});
-    if (!(longest > large_edges * mean_edge)) continue;
+    if (!(longest > flat_edges * mean_edge)) continue;
+    if (!(longest > large_edges * mean_edge)) {
+      const Eigen::Vector3d n = (x[1] - x[0]).cross(x[2] - x[0]).normalized();
+      int n_flat = 0;
+      for (const auto g : mesh.ff_range(TriMesh::FaceHandle(f))) n_flat += unit_normal(g).dot(n) >= min_dot ? 1 : 0;
+      if (n_flat < 2) continue;
+    }
     const int n = static_cast<int>(std::ceil(longest / mean_edge));
     for (int i = 0; i <= n; ++i) {
       for (int j = 0; i + j <= n; ++j) {
@@ -334,7 +354,8 @@ void fit_patch(const TriMesh& mesh, const Segmentation& seg, int p, const Border
     const std::size_t n_own = points.size();
     for (const int v : overlap_vertices(mesh, seg, p, kFitOverlapRings)) points.push_back(to_eigen(mesh.point(TriMesh::VertexHandle(v))));
     // The band fit (cell_grid) takes bands at vertices only; plain points on faces would bias it.
-    if (!options.cell_grid.enabled) add_large_face_samples(mesh, patch.faces, mean_edge, options.fit.large_face_edges, points);
+    if (!options.cell_grid.enabled)
+      add_large_face_samples(mesh, patch.faces, mean_edge, options.fit.large_face_edges, options.fit.flat_face_edges, points);
     std::vector<Eigen::Vector3d> local = frame.to_local(points);
 
     // The rectangle covers the vertices and the border nodes, slightly enlarged, so every
@@ -398,7 +419,7 @@ void fit_patch(const TriMesh& mesh, const Segmentation& seg, int p, const Border
         result.report.fit_max_residual = fitted.max_miss;
         result.report.fit_levels = 1;
       } else {
-        add_large_face_samples(mesh, patch.faces, mean_edge, options.fit.large_face_edges, points);
+        add_large_face_samples(mesh, patch.faces, mean_edge, options.fit.large_face_edges, options.fit.flat_face_edges, points);
         local = frame.to_local(points);
         if (fit.min_spacing > 0.0) fit_lattice_to_spacing(fit);
       }

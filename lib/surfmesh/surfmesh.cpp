@@ -162,6 +162,8 @@ void PatchFitOptions::validate() const {
   if (split_rounds < 0 || split_rounds > 20) bad_option("fit.split_rounds must be in [0, 20], got " + std::to_string(split_rounds));
   if (!(std::isfinite(large_face_edges) && large_face_edges >= 0.0))
     bad_option("fit.large_face_edges must be finite and >= 0, got " + std::to_string(large_face_edges));
+  if (!(std::isfinite(flat_face_edges) && flat_face_edges >= 0.0))
+    bad_option("fit.flat_face_edges must be finite and >= 0, got " + std::to_string(flat_face_edges));
   if (!(std::isfinite(detail_spacing_edges) && detail_spacing_edges >= 0.0))
     bad_option("fit.detail_spacing_edges must be finite and >= 0, got " + std::to_string(detail_spacing_edges));
   if (detail_spacing_edges > 0.0 && min_spacing_edges > 0.0 && !(detail_spacing_edges < min_spacing_edges))
@@ -252,10 +254,16 @@ SurfaceMesh surfmesh_detail::mesh_surface(const TriMesh& input, const Segmentati
   }
   const std::size_t n_patches = segmentation.patches.size();
   const unsigned threads = parallel::thread_count(options.threads);
+  // The marching-cubes gate (lattice edges): no feature sizing there, and no flat-face
+  // samples (PatchFitOptions::flat_face_edges).
+  const bool feature_sizing_gate = options.sizing.feature_size > 0.0 && !options.sizing.feature_size_everywhere;
+  const bool marching_cubes = (feature_sizing_gate || options.fit.flat_face_edges > 0.0) && vertices_on_lattice_edges(input);
+  SurfMeshOptions fit_options = options;
+  if (marching_cubes) fit_options.fit.flat_face_edges = 0.0;
   std::vector<PatchResult> results(n_patches);
   auto fit_all = [&](const BorderNodes& nodes) {
     run_parallel(n_patches, threads, options.progress, 0.0, 0.5, [&](std::size_t p) {
-      fit_patch(input, segmentation, static_cast<int>(p), nodes, options, mean_edge, results[p]);
+      fit_patch(input, segmentation, static_cast<int>(p), nodes, fit_options, mean_edge, results[p]);
     });
   };
   double sizing_grid = 0.0;  // > 0: the front's sizes are sampled on a grid (adaptive, feature)
@@ -265,7 +273,7 @@ SurfaceMesh surfmesh_detail::mesh_surface(const TriMesh& input, const Segmentati
   out.curve_is_feature = feature_curves(input, segmentation, options.crease_angle_deg, &crease_angles);
   // Feature sizing where it helps (SizingOptions::feature_size): not on marching-cubes
   // surfaces, not for a few thin parts.
-  if (options.sizing.feature_size > 0.0 && (options.sizing.feature_size_everywhere || !vertices_on_lattice_edges(input))) {
+  if (options.sizing.feature_size > 0.0 && (options.sizing.feature_size_everywhere || !marching_cubes)) {
     FeatureSizing feature = feature_sizing(input, segmentation, out.curve_is_feature, size_at, options.sizing.feature_size,
                                            options.sizing.min_size_fraction * h, options.sizing.gradation,
                                            options.sizing.feature_size_everywhere ? 0.0 : kFeatureSizingMinAreaShare);

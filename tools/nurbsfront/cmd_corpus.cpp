@@ -104,6 +104,9 @@ std::string outcome_json(const OneArgs& a, const std::string& outcome, const std
     o.num("alpha_mean", out.quality.alpha_mean).num("alpha_min", out.quality.alpha_min);
     o.num("min_angle_deg", out.quality.min_angle_deg).num("max_angle_deg", out.quality.max_angle_deg);
     o.num("obtuse_fraction", out.quality.obtuse_fraction);
+    // Issue 5's angle bound applies away from creases and corners (StitchReport).
+    o.num("min_angle_away_from_features_deg", report->stitch.min_angle_away_from_features_deg);
+    o.count("small_angle_away_from_features", report->stitch.n_small_angle_away_from_features);
     o.add("self_intersecting_pairs", out.topology.n_self_intersecting_pairs
                                          ? std::to_string(*out.topology.n_self_intersecting_pairs)
                                          : "null");
@@ -134,22 +137,28 @@ std::string fixed(double x, int digits) {
 }
 
 // The figures of the Markdown table row: input faces, output faces, alpha mean, min angle,
-// obtuse %, self-intersecting pairs, crossing repairs, Hausdorff / input mean edge, relative
+// min angle away from features, triangles away from features below 25 deg, obtuse %,
+// self-intersecting pairs, crossing repairs, Hausdorff / input mean edge, relative
 // volume change % (closed inputs).
 std::string markdown_cells(const TriMesh* input, const RemeshReport* report, const PlanarRun* planar) {
   if (planar != nullptr) {
     const MeshReport& out = planar->report;
     return std::to_string(planar->n_segments) + " segments | " + std::to_string(out.topology.n_faces) + " | " +
-           fixed(out.quality.alpha_mean, 3) + " | " + fixed(out.quality.min_angle_deg, 1) + " | " +
+           fixed(out.quality.alpha_mean, 3) + " | " + fixed(out.quality.min_angle_deg, 1) + " | - | - | " +
            fixed(100.0 * out.quality.obtuse_fraction, 2) + " | " +
            (out.topology.n_self_intersecting_pairs ? std::to_string(*out.topology.n_self_intersecting_pairs) : "-") +
            " | - | - | -";
   }
   std::string row = (input != nullptr ? std::to_string(input->n_faces()) : "-") + " | ";
-  if (report == nullptr) return row + "- | - | - | - | - | - | - | -";
+  if (report == nullptr) return row + "- | - | - | - | - | - | - | - | - | -";
   const MeshReport& out = report->output;
   row += std::to_string(out.topology.n_faces) + " | " + fixed(out.quality.alpha_mean, 3) + " | " +
-         fixed(out.quality.min_angle_deg, 1) + " | " + fixed(100.0 * out.quality.obtuse_fraction, 2) + " | ";
+         fixed(out.quality.min_angle_deg, 1) + " | ";
+  const StitchReport& stitch = report->stitch;
+  row += stitch.n_away_from_features > 0 ? fixed(stitch.min_angle_away_from_features_deg, 1) + " | " +
+                                               std::to_string(stitch.n_small_angle_away_from_features)
+                                         : std::string("- | -");
+  row += " | " + fixed(100.0 * out.quality.obtuse_fraction, 2) + " | ";
   row += (out.topology.n_self_intersecting_pairs ? std::to_string(*out.topology.n_self_intersecting_pairs) : "-") + " | ";
   row += std::to_string(report->n_crossing_repairs) + " | ";
   row += out.distance && report->input_mean_edge > 0.0 ? fixed(out.distance->hausdorff / report->input_mean_edge, 2) : "-";
@@ -467,10 +476,10 @@ void run_corpus(const CorpusArgs& a) {
   }
   std::map<std::string, int> counts;
   std::ostringstream md;
-  md << "| input | outcome | input faces | output faces | alpha mean | min angle | obtuse % | self-int. | "
-        "crossing repairs | Hausdorff / input mean edge | volume change % | wall s | peak RSS MB | input repairs | "
-        "first error |\n"
-        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+  md << "| input | outcome | input faces | output faces | alpha mean | min angle | min angle away from features | "
+        "away below 25 deg | obtuse % | self-int. | crossing repairs | Hausdorff / input mean edge | volume change % | "
+        "wall s | peak RSS MB | input repairs | first error |\n"
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
   for (std::size_t i = 0; i < items.size(); ++i) {
     const CorpusItem& item = items[i];
     std::vector<std::string> argv{exe, "corpus-one", item.path.string(), "--threads", std::to_string(a.threads)};
@@ -515,7 +524,7 @@ void run_corpus(const CorpusArgs& a) {
     {
       const std::string first_error = table_text(line, "message", 120);
       const std::string repairs = table_text(line, "input_repairs", 80);
-      md << "| " << label << " | " << outcome << " | " << (child.cells.empty() ? "- | - | - | - | - | - | - | - | -" : child.cells)
+      md << "| " << label << " | " << outcome << " | " << (child.cells.empty() ? "- | - | - | - | - | - | - | - | - | - | -" : child.cells)
          << " | " << fixed(child.wall_seconds, 1) << " | " << fixed(double(child.max_rss_kb) / 1024.0, 0) << " | "
          << (repairs == "nothing to repair" ? "" : repairs) << " | " << first_error << " |\n";
     }
