@@ -728,7 +728,8 @@ SplitResult split_obtuse(const SurfaceMesh& surface, const StitchOptions& option
   }
   if (out.n_splits == 0) return out;
   // The repair once more around the new nodes: their rings' vertices.
-  std::vector<std::uint8_t> near(result.mesh.n_vertices(), 0);
+  std::vector<std::uint8_t>& near = out.near;
+  near.assign(result.mesh.n_vertices(), 0);
   for (const auto v : out.made) {
     near[static_cast<std::size_t>(v.idx())] = 1;
     for (auto u : result.mesh.vv_range(v)) near[static_cast<std::size_t>(u.idx())] = 1;

@@ -433,7 +433,7 @@ bool repair_intersections(const TriMesh& assembled, TriMesh& mesh, std::vector<F
 constexpr int kSplitRounds = 3;
 
 // stitch_detail::split_obtuse, checked: the faces around the changed vertices (the new ones
-// and their rings) are checked exactly against the whole mesh; when some cross, the mesh
+// and their rings, SplitResult::near) are checked exactly against the whole mesh; when some cross, the mesh
 // goes back to how it was and the splits again, without those whose new vertex is on a
 // crossing face (all of them when none is). Faces are appended and vertices added by the
 // splits, so the earlier ones keep their indices.
@@ -453,11 +453,7 @@ void split_obtuse_checked(const SurfaceMesh& surface, const StitchOptions& optio
     if (split.n_splits == 0) return;
     std::vector<FacePair> pairs;
     if (options.check_self_intersections) {
-      std::vector<std::uint8_t> near(result.mesh.n_vertices(), 0);
-      for (const auto v : split.made) {
-        near[static_cast<std::size_t>(v.idx())] = 1;
-        for (auto u : result.mesh.vv_range(v)) near[static_cast<std::size_t>(u.idx())] = 1;
-      }
+      const std::vector<std::uint8_t>& near = split.near;
       std::vector<std::uint32_t> touched;
       for (auto f : result.mesh.faces()) {
         for (auto v : result.mesh.fv_range(f)) {

@@ -96,6 +96,9 @@ struct SplitResult {
   std::size_t n_splits = 0, n_flips = 0, n_moves = 0;
   std::vector<TriMesh::VertexHandle> made;           //!< the new vertices
   std::vector<std::array<int, 2>> split_edges;       //!< the split edges' end vertices (smaller first), per new vertex
+  //! Per vertex, 1 for the new vertices and their ring neighbours after the splits: every
+  //! face changed by the splits, their flips and the repair after them has one of these.
+  std::vector<std::uint8_t> near;
 };
 
 //! StitchOptions::obtuse_split_rounds sweeps of obtuse splits on result.mesh (face_patch,
