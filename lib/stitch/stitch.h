@@ -108,7 +108,7 @@ struct StitchReport {
   std::size_t n_input_nodes = 0;       //!< SurfaceMesh::nodes
   //! Nodes no triangle uses (dropped). Nodes merged away by collapses are counted in
   //! n_collapses and n_settled_collapses instead: the output has n_input_nodes -
-  //! n_unused_nodes - n_collapses - n_settled_collapses vertices.
+  //! n_unused_nodes - n_collapses - n_settled_collapses + n_obtuse_splits vertices.
   std::size_t n_unused_nodes = 0;
   std::size_t n_input_triangles = 0;   //!< SurfaceMesh::triangles
   //! Triangles OpenMesh cannot add (repeated node, complex edge or vertex: a duplicated,
