@@ -156,10 +156,12 @@ class Optimiser {
   // smoothing, that leaves fewer obtuse triangles around the vertex and passes the
   // smoothing's tests (with the angle floor raised by kObtuseAngleMarginDeg) is taken.
   // Serial, in vertex order. Returns the number of moves.
-  std::size_t obtuse_sweep() {
+  // only: when not empty, only the vertices v with only[v] != 0 are tried.
+  std::size_t obtuse_sweep(const std::vector<std::uint8_t>& only = {}) {
     std::size_t n_moves = 0;
     std::vector<std::pair<double, Vec>> apexes;
     for (auto v : mesh_.vertices()) {
+      if (!only.empty() && only[static_cast<std::size_t>(v.idx())] == 0) continue;
       const NodeInfo& info = nodes_[static_cast<std::size_t>(v.idx())];
       if (!info.is_movable || mesh_.is_boundary(v)) continue;
       const Vec p = point(mesh_, v);
@@ -211,10 +213,15 @@ class Optimiser {
   // and, instead of flip_sweep()'s alpha gain, floors (the smaller new alpha must stay at least
   // min(the smaller old one, alpha_floor), the smaller smallest angle at least min(the old
   // one, angle_floor_deg + kObtuseAngleMarginDeg)). Serial. Returns the number of flips.
-  std::size_t obtuse_flip_sweep() {
+  // only: when not empty, only the edges whose both ends have only[v] != 0 are tried.
+  std::size_t obtuse_flip_sweep(const std::vector<std::uint8_t>& only = {}) {
     std::size_t n_flips = 0;
     FlipQuad q;
     for (auto e : mesh_.edges()) {
+      if (!only.empty() && (only[static_cast<std::size_t>(mesh_.to_vertex_handle(mesh_.halfedge_handle(e, 0)).idx())] == 0 ||
+                            only[static_cast<std::size_t>(mesh_.from_vertex_handle(mesh_.halfedge_handle(e, 0)).idx())] == 0)) {
+        continue;
+      }
       if (!flip_quad(e, q)) continue;
       const Vec &a = q.a, &b = q.b, &c = q.c, &d = q.d;
       const int old_obtuse = int(is_obtuse(a, b, c)) + int(is_obtuse(b, a, d));
@@ -231,12 +238,236 @@ class Optimiser {
     return n_flips;
   }
 
+  // Obtuse splits (StitchOptions::obtuse_split_rounds): every face that is still obtuse, in
+  // face order (the faces at the start of the sweep), gets its longest edge (a, b) split at
+  // the foot of the altitude from the obtuse corner c, clamped to [kSplitMin, 1 - kSplitMin]
+  // of the edge, or at its midpoint when that fails. The new node goes onto the segment
+  // when the edge is a crease, a chord between two feature nodes of two patches or on the
+  // input's boundary (it is then a feature node: nothing moves it), else onto the fitted
+  // surface as smoothing projects a node there (its patch, or the mean of the two patches
+  // of a non-feature border edge). Accepted when the new triangles hold fewer obtuse
+  // angles than the old ones, none degenerates or turns its normal from its old triangle's
+  // by more than acos(min_normal_dot), their smallest alpha stays at least min(old,
+  // alpha_floor) and their smallest angle at least min(old, angle_floor_deg). Edges in
+  // `refused` (vertex pairs, smaller index first) are left alone. New vertices get the node
+  // ids vertex_node.size() onwards of is_feature / vertex_node (both grow); their handles
+  // are appended to `made`, the split edges' ends to `split_edges`.
+  std::size_t split_sweep(std::vector<int>& vertex_node, std::vector<std::uint8_t>& is_feature,
+                          const std::vector<std::array<int, 2>>& refused, std::vector<TriMesh::VertexHandle>& made,
+                          std::vector<std::array<int, 2>>& split_edges) {
+    std::size_t n_splits = 0;
+    vertex_node_ = &vertex_node;
+    is_split_feature_ = &is_feature;
+    const std::size_t n_faces = mesh_.n_faces();
+    for (std::size_t fi = 0; fi < n_faces; ++fi) {
+      const TriMesh::FaceHandle f(static_cast<int>(fi));
+      // The halfedge (a, b) opposite the obtuse corner c.
+      TriMesh::HalfedgeHandle h;
+      for (auto g : mesh_.fh_range(f)) {
+        const Vec a = point(mesh_, mesh_.from_vertex_handle(g)), b = point(mesh_, mesh_.to_vertex_handle(g));
+        const Vec c = point(mesh_, mesh_.to_vertex_handle(mesh_.next_halfedge_handle(g)));
+        if ((a - c).dot(b - c) < 0.0) h = g;
+      }
+      if (!h.is_valid()) continue;
+      const auto va = mesh_.from_vertex_handle(h), vb = mesh_.to_vertex_handle(h);
+      const std::array<int, 2> key{std::min(va.idx(), vb.idx()), std::max(va.idx(), vb.idx())};
+      if (std::binary_search(refused.begin(), refused.end(), key)) continue;
+      NodeInfo info;
+      bool on_segment = false;
+      if (!plan_split(h, vertex_node, is_feature, info, on_segment)) continue;
+      const Vec a = point(mesh_, va), b = point(mesh_, vb);
+      const Vec c = point(mesh_, mesh_.to_vertex_handle(mesh_.next_halfedge_handle(h)));
+      const auto o = mesh_.opposite_halfedge_handle(h);
+      const bool one_sided = mesh_.is_boundary(o);
+      const double foot = std::clamp((c - a).dot(b - a) / (b - a).squaredNorm(), kSplitMin, 1.0 - kSplitMin);
+      // The best of: the foot, the midpoint; each without and with flips (fewest obtuse
+      // triangles; the first of equals).
+      int best = -1;
+      Vec best_m;
+      for (const double t : {foot, 0.5}) {
+        const Vec m0 = a + t * (b - a);
+        const Vec m = on_segment ? m0 : project(info, m0);
+        // Not far off the edge: a fit far off there (a border of a patch fitted badly).
+        if (!m.allFinite() || (m - m0).norm() > kSplitMaxOffset * (b - a).norm()) continue;
+        for (const bool with_flips : {false, true}) {
+          const int n = evaluate_split(h, one_sided, m, on_segment, with_flips, flips_);
+          if (n >= 0 && (best < 0 || n < best)) {
+            best = n;
+            best_m = m;
+            best_flips_ = flips_;
+          }
+        }
+      }
+      if (best < 0) continue;
+      const auto v = mesh_.add_vertex(to_openmesh(best_m));
+      const int patch_c = face_patch_[fi];
+      const int patch_d = one_sided ? -1 : face_patch_[static_cast<std::size_t>(mesh_.face_handle(o).idx())];
+      const auto vc = mesh_.to_vertex_handle(mesh_.next_halfedge_handle(h));
+      mesh_.split_edge(mesh_.edge_handle(h), v);
+      face_patch_.resize(mesh_.n_faces(), -1);
+      for (auto g : mesh_.vf_range(v)) {
+        int& patch = face_patch_[static_cast<std::size_t>(g.idx())];
+        if (patch >= 0) continue;
+        bool has_c = false;
+        for (auto u : mesh_.fv_range(g)) has_c = has_c || u == vc;
+        patch = has_c ? patch_c : patch_d;
+      }
+      vertex_node.push_back(static_cast<int>(is_feature.size()));
+      is_feature.push_back(on_segment ? 1 : 0);
+      nodes_.push_back(info);
+      made.push_back(v);
+      split_edges.push_back(key);
+      ++n_splits;
+      for (const auto& [u, w] : best_flips_) {
+        const auto e = mesh_.edge_handle(mesh_.find_halfedge(u, w));
+        if (mesh_.is_flip_ok(e)) {
+          mesh_.flip(e);
+          ++n_split_flips_;
+        }
+      }
+    }
+    return n_splits;
+  }
+
   static bool is_obtuse(const Vec& a, const Vec& b, const Vec& c) {
     return (b - a).dot(c - a) < 0.0 || (c - b).dot(a - b) < 0.0 || (a - c).dot(b - c) < 0.0;
   }
 
 
  private:
+  // Where the node of a split of h's edge goes and what it may do (split_sweep): on the
+  // segment (on_segment; a feature node) for an edge on the input's boundary or between
+  // two patches with both ends feature nodes; else info for the projection (its patch, or
+  // the two patches of a non-feature border curve). False when the edge is a locked border
+  // edge whose curve is unknown.
+  bool plan_split(TriMesh::HalfedgeHandle h, const std::vector<int>& vertex_node, const std::vector<std::uint8_t>& is_feature,
+                  NodeInfo& info, bool& on_segment) const {
+    const auto va = mesh_.from_vertex_handle(h), vb = mesh_.to_vertex_handle(h);
+    const NodeInfo& a = nodes_[static_cast<std::size_t>(va.idx())];
+    const NodeInfo& b = nodes_[static_cast<std::size_t>(vb.idx())];
+    const auto e = mesh_.edge_handle(h);
+    const int pf = face_patch_[static_cast<std::size_t>(mesh_.face_handle(h).idx())];
+    const int pg = mesh_.is_boundary(e) ? pf : face_patch_[static_cast<std::size_t>(mesh_.opposite_face_handle(h).idx())];
+    const bool both_features = is_feature[static_cast<std::size_t>(vertex_node[static_cast<std::size_t>(va.idx())])] != 0 &&
+                               is_feature[static_cast<std::size_t>(vertex_node[static_cast<std::size_t>(vb.idx())])] != 0;
+    info = NodeInfo{};
+    info.curve = a.curve >= 0 ? a.curve : b.curve;
+    if (mesh_.is_boundary(e) || (pf != pg && both_features)) {
+      on_segment = true;
+      info.is_corner = info.curve < 0;  // its edges along the segment stay locked
+      return true;
+    }
+    on_segment = false;
+    info.is_movable = true;
+    info.patch0 = pf;
+    if (pf == pg) {
+      info.curve = -1;
+      return true;
+    }
+    info.patch1 = pg;
+    return !is_locked(e) && info.curve >= 0;
+  }
+
+  // A split of h's edge (a, b) (triangles (a, b, c) and, unless one_sided, (b, a, d)) at m:
+  // the new triangles (m, u, w) are (m, c, a), (m, b, c), (m, d, b), (m, a, d), (u, w) an
+  // old edge. With `with_flips`, a new triangle obtuse at m whose edge (u, w) may flip (not
+  // locked nor on the boundary, the far corner x of the triangle (w, u, x) across it not
+  // next to m, each x once) is replaced by (m, u, x) and (m, x, w) when the flip passes
+  // flip_keeps_shape(). Passes (split_sweep) when every new triangle passes the normal, alpha
+  // and angle tests against the old ones (the split triangles and those across the flipped
+  // edges) and they hold fewer obtuse angles. Returns the number of obtuse new triangles
+  // (-1 when the split fails) and the edges to flip in `flips`.
+  // A new triangle none of whose corners is a feature node (m_is_feature for m) also keeps
+  // its smallest angle at least min(that of the old triangles without a feature node,
+  // angle_floor_deg): issue 5's bound away from features.
+  int evaluate_split(TriMesh::HalfedgeHandle h, bool one_sided, const Vec& m, bool m_is_feature, bool with_flips,
+                     std::vector<std::array<TriMesh::VertexHandle, 2>>& flips) const {
+    flips.clear();
+    auto away = [&](std::initializer_list<TriMesh::VertexHandle> vs) {
+      for (const auto v : vs) {
+        if ((*is_split_feature_)[static_cast<std::size_t>((*vertex_node_)[static_cast<std::size_t>(v.idx())])] != 0) return false;
+      }
+      return true;
+    };
+    const auto o = mesh_.opposite_halfedge_handle(h);
+    const auto va = mesh_.from_vertex_handle(h), vb = mesh_.to_vertex_handle(h);
+    const auto vc = mesh_.to_vertex_handle(mesh_.next_halfedge_handle(h));
+    const auto vd = one_sided ? TriMesh::VertexHandle() : mesh_.to_vertex_handle(mesh_.next_halfedge_handle(o));
+    const Vec a = point(mesh_, va), b = point(mesh_, vb), c = point(mesh_, vc);
+    const Vec d = one_sided ? Vec::Zero() : point(mesh_, vd);
+    const Vec n_c = area_vector(a, b, c), n_d = one_sided ? Vec::Zero() : area_vector(b, a, d);
+    double old_alpha = alpha_with_area(a, b, c, n_c.norm());
+    double old_sine = alpha_and_min_angle_sine(a, b, c, n_c.norm())[1];
+    double old_sine_away = away({va, vb, vc}) ? old_sine : 1.0;
+    int old_obtuse = int(is_obtuse(a, b, c));
+    if (!one_sided) {
+      old_alpha = std::min(old_alpha, alpha_with_area(b, a, d, n_d.norm()));
+      const double sine_d = alpha_and_min_angle_sine(b, a, d, n_d.norm())[1];
+      old_sine = std::min(old_sine, sine_d);
+      if (away({va, vb, vd})) old_sine_away = std::min(old_sine_away, sine_d);
+      old_obtuse += int(is_obtuse(b, a, d));
+    }
+    struct New {
+      TriMesh::VertexHandle u, w;
+      const Vec* parent;
+    };
+    std::array<New, 4> sides{New{vc, va, &n_c}, New{vb, vc, &n_c}, New{vd, vb, &n_d}, New{va, vd, &n_d}};
+    const std::size_t n_sides = one_sided ? 2 : 4;
+    // The new triangles with the normal they are compared with (none: a flip's, tested by
+    // flip_keeps_shape()).
+    struct Tri {
+      std::array<Vec, 3> p;
+      const Vec* parent;
+      bool is_away;
+    };
+    std::array<Tri, 8> tris;
+    std::size_t n_tris = 0;
+    std::array<TriMesh::VertexHandle, 4> far;  // invalid handles
+    for (std::size_t k = 0; k < n_sides; ++k) {
+      const New& t = sides[k];
+      const Vec u = point(mesh_, t.u), w = point(mesh_, t.w);
+      if (with_flips && (u - m).dot(w - m) < 0.0) {
+        const auto g = mesh_.find_halfedge(t.w, t.u);
+        const auto e = mesh_.edge_handle(g);
+        const auto vx = mesh_.is_boundary(g) ? TriMesh::VertexHandle() : mesh_.to_vertex_handle(mesh_.next_halfedge_handle(g));
+        const bool free_x = vx.is_valid() && vx != va && vx != vb && vx != vc && vx != vd &&
+                            std::find(far.begin(), far.end(), vx) == far.end();
+        FlipQuad q;
+        if (free_x && !mesh_.is_boundary(e) && !is_locked(e)) {
+          q.a = u, q.b = w, q.c = m, q.d = point(mesh_, vx);
+          if (flip_keeps_shape(q)) {
+            far[k] = vx;
+            const Vec x = q.d;
+            old_alpha = std::min(old_alpha, alpha_with_area(w, u, x, q.l1));
+            const double sine_x = alpha_and_min_angle_sine(w, u, x, q.l1)[1];
+            old_sine = std::min(old_sine, sine_x);
+            if (away({t.w, t.u, vx})) old_sine_away = std::min(old_sine_away, sine_x);
+            old_obtuse += int(is_obtuse(w, u, x));
+            tris[n_tris++] = {{m, u, x}, nullptr, !m_is_feature && away({t.u, vx})};
+            tris[n_tris++] = {{m, x, w}, nullptr, !m_is_feature && away({vx, t.w})};
+            flips.push_back({t.u, t.w});
+            continue;
+          }
+        }
+      }
+      tris[n_tris++] = {{m, u, w}, t.parent, !m_is_feature && away({t.u, t.w})};
+    }
+    int new_obtuse = 0;
+    for (std::size_t k = 0; k < n_tris; ++k) {
+      const auto& [p, parent, is_away] = tris[k];
+      const Vec n = area_vector(p[0], p[1], p[2]);
+      const double l = n.norm();
+      if (l <= min_double_area_) return -1;
+      if (parent != nullptr && n.dot(*parent) <= options_.min_normal_dot * l * parent->norm()) return -1;
+      const auto [alpha, sine] = alpha_and_min_angle_sine(p[0], p[1], p[2], l);
+      if (alpha < std::min(old_alpha, options_.alpha_floor)) return -1;
+      if (sine < std::min(old_sine, sin_angle_floor_) * (1.0 - kSplitSineTolerance)) return -1;
+      if (is_away && sine < std::min(old_sine_away, sin_angle_floor_) * (1.0 - kSplitSineTolerance)) return -1;
+      new_obtuse += int(is_obtuse(p[0], p[1], p[2]));
+    }
+    return new_obtuse < old_obtuse ? new_obtuse : -1;
+  }
+
   // The cosine of the angle between x and y (1 when one is zero).
   static double cosine(const Vec& x, const Vec& y) {
     const double l = x.norm() * y.norm();
@@ -406,7 +637,7 @@ class Optimiser {
   const SurfaceMesh& surface_;
   const StitchOptions& options_;
   TriMesh& mesh_;
-  const std::vector<int>& face_patch_;
+  std::vector<int>& face_patch_;  // grows with obtuse splits
   const std::vector<std::uint8_t>& is_feature_;
   std::vector<NodeInfo> nodes_;
   std::vector<std::vector<int>> corner_patches_;
@@ -437,6 +668,22 @@ class Optimiser {
   static constexpr double kObtuseAngleMarginDeg = 2.5;
   double sin_obtuse_floor_ = 0.0;
   double obtuse_sine_skip_ = 0.0;
+  // An obtuse split's node stays at least this share of the edge away from its ends.
+  static constexpr double kSplitMin = 0.2;
+  // A split keeps the angles at the edge's ends (the new triangles on the obtuse side have
+  // them): their sines, computed again, may differ from the old ones by a few ulps.
+  static constexpr double kSplitSineTolerance = 1e-9;
+  // A split's node projected onto the fitted surface(s) stays within this share of the
+  // edge's length from the edge (a chord's sag over a radius of the edge's length is 1/8).
+  static constexpr double kSplitMaxOffset = 0.125;
+  // split_sweep's node ids and feature flags (they grow with the splits).
+  const std::vector<int>* vertex_node_ = nullptr;
+  const std::vector<std::uint8_t>* is_split_feature_ = nullptr;
+  // Scratch of split_sweep: the flips of a split tried and of the best one so far.
+  std::vector<std::array<TriMesh::VertexHandle, 2>> flips_, best_flips_;
+
+ public:
+  std::size_t n_split_flips_ = 0;  // flips made by split_sweep
 };
 
 }  // namespace
@@ -468,6 +715,28 @@ void optimise(const SurfaceMesh& surface, const StitchOptions& options, const st
     report.n_smoothing_moves += optimiser.obtuse_sweep();
   }
   report_progress(options.progress, "stitch: optimise", 1.0);
+}
+
+SplitResult split_obtuse(const SurfaceMesh& surface, const StitchOptions& options, std::vector<std::uint8_t>& is_feature,
+                         StitchResult& result, const std::vector<std::array<int, 2>>& refused) {
+  SplitResult out;
+  Optimiser optimiser(surface, options, result, is_feature);
+  for (int round = 0; round < options.obtuse_split_rounds; ++round) {
+    const std::size_t n = optimiser.split_sweep(result.vertex_node, is_feature, refused, out.made, out.split_edges);
+    if (n == 0) break;
+    out.n_splits += n;
+  }
+  if (out.n_splits == 0) return out;
+  // The repair once more around the new nodes: their rings' vertices.
+  std::vector<std::uint8_t>& near = out.near;
+  near.assign(result.mesh.n_vertices(), 0);
+  for (const auto v : out.made) {
+    near[static_cast<std::size_t>(v.idx())] = 1;
+    for (auto u : result.mesh.vv_range(v)) near[static_cast<std::size_t>(u.idx())] = 1;
+  }
+  out.n_flips = optimiser.n_split_flips_ + optimiser.obtuse_flip_sweep(near);
+  out.n_moves = optimiser.obtuse_sweep(near);
+  return out;
 }
 
 }  // namespace nurbsfront::stitch_detail

@@ -24,6 +24,7 @@ void StitchOptions::validate() const {
   auto fail = [](const std::string& what) { throw InvalidInput("stitch: " + what); };
   if (optimisation_passes < 0) fail("optimisation_passes must be >= 0");
   if (obtuse_repair_rounds < 0) fail("obtuse_repair_rounds must be >= 0");
+  if (obtuse_split_rounds < 0) fail("obtuse_split_rounds must be >= 0");
   if (!(max_flip_dihedral_deg >= 0.0 && max_flip_dihedral_deg < 180.0)) fail("max_flip_dihedral_deg must be in [0, 180)");
   if (!(flip_gain >= 0.0) || !std::isfinite(flip_gain)) fail("flip_gain must be finite and >= 0");
   if (!(smoothing_relaxation > 0.0 && smoothing_relaxation <= 1.0)) fail("smoothing_relaxation must be in (0, 1]");
@@ -428,6 +429,69 @@ bool repair_intersections(const TriMesh& assembled, TriMesh& mesh, std::vector<F
   return offending().empty();
 }
 
+// Rounds of obtuse splits before those whose triangles cross others are given up as a whole.
+constexpr int kSplitRounds = 3;
+
+// stitch_detail::split_obtuse, checked: the faces around the changed vertices (the new ones
+// and their rings, SplitResult::near) are checked exactly against the whole mesh; when some cross, the mesh
+// goes back to how it was and the splits again, without those whose new vertex is on a
+// crossing face (all of them when none is). Faces are appended and vertices added by the
+// splits, so the earlier ones keep their indices.
+void split_obtuse_checked(const SurfaceMesh& surface, const StitchOptions& options, std::vector<std::uint8_t>& feature,
+                          StitchResult& result, StitchReport& report) {
+  const TriMesh before = result.mesh;
+  const std::size_t n_faces = result.face_patch.size(), n_vertices = result.vertex_node.size(), n_nodes = feature.size();
+  auto restore = [&] {
+    result.mesh = before;
+    result.face_patch.resize(n_faces);
+    result.vertex_node.resize(n_vertices);
+    feature.resize(n_nodes);
+  };
+  std::vector<std::array<int, 2>> refused;
+  for (int round = 0; round < kSplitRounds; ++round) {
+    const stitch_detail::SplitResult split = stitch_detail::split_obtuse(surface, options, feature, result, refused);
+    if (split.n_splits == 0) return;
+    std::vector<FacePair> pairs;
+    if (options.check_self_intersections) {
+      const std::vector<std::uint8_t>& near = split.near;
+      std::vector<std::uint32_t> touched;
+      for (auto f : result.mesh.faces()) {
+        for (auto v : result.mesh.fv_range(f)) {
+          if (near[static_cast<std::size_t>(v.idx())] != 0) {
+            touched.push_back(static_cast<std::uint32_t>(f.idx()));
+            break;
+          }
+        }
+      }
+      pairs = intersecting_pairs_of(to_soup(result.mesh), touched);
+    }
+    if (pairs.empty()) {
+      report.n_obtuse_splits = split.n_splits;
+      report.n_flips += split.n_flips;
+      report.n_smoothing_moves += split.n_moves;
+      return;
+    }
+    // The splits whose new vertex (or a ring neighbour of it) is on a crossing face.
+    const std::size_t refused_before = refused.size();
+    for (std::size_t k = 0; k < split.made.size(); ++k) {
+      const auto v = split.made[k];
+      bool crossing = false;
+      for (const auto& pair : pairs) {
+        for (const std::uint32_t f : pair) {
+          for (auto u : result.mesh.fv_range(TriMesh::FaceHandle(static_cast<int>(f)))) {
+            crossing = crossing || u == v || result.mesh.find_halfedge(u, v).is_valid();
+          }
+        }
+      }
+      if (crossing) refused.push_back(split.split_edges[k]);
+    }
+    report.n_obtuse_splits_undone += refused.size() - refused_before;
+    restore();
+    if (refused.size() == refused_before) return;
+    std::sort(refused.begin(), refused.end());
+  }
+}
+
 StitchResult stitch_impl(const SurfaceMesh& surface, const TriMesh* input, const StitchOptions& options) {
   options.validate();
   validate_surface(surface);
@@ -459,7 +523,7 @@ StitchResult stitch_impl(const SurfaceMesh& surface, const TriMesh* input, const
     for (double a : alpha) min_alpha = std::isnan(min_alpha) ? a : std::min(min_alpha, a);
     report.alpha_min_before = min_alpha;
   }
-  const std::vector<std::uint8_t> feature = feature_nodes(surface);
+  std::vector<std::uint8_t> feature = feature_nodes(surface);  // grows with obtuse splits
   if (report.n_rejected_triangles == 0) collapse(surface, options, feature, result, report);
   report.seconds_assemble = watch.seconds();
 
@@ -504,6 +568,10 @@ StitchResult stitch_impl(const SurfaceMesh& surface, const TriMesh* input, const
     // taken again over the whole mesh when settling changed anything.
     stitch_detail::settle_intersections(surface, options, feature, result, pairs, report);
     if (report.n_settled_nodes + report.n_settled_flips + report.n_settled_collapses > 0) pairs = self_intersecting_pairs(to_soup(mesh), options.n_threads);
+  }
+  if (options.obtuse_split_rounds > 0 && pairs.empty() && mesh.n_faces() > 0) {
+    split_obtuse_checked(surface, options, feature, result, report);
+    if (report.n_obtuse_splits > 0) soup.reset();
   }
   ReportOptions check;
   check.self_intersections = false;  // counted above

@@ -61,6 +61,16 @@ struct StitchOptions {
   //! angle floor raised by 2.5 deg (counted in StitchReport::n_flips and n_smoothing_moves;
   //! docs/stitch.md "Obtuse repair"). Default 2.
   int obtuse_repair_rounds = 2;
+  //! Sweeps of obtuse splits after the optimisation and the intersection checks (>= 0; 0
+  //! switches them off): the longest edge of a triangle still obtuse is split at the foot of
+  //! the altitude from the obtuse corner (clamped to [0.2, 0.8] of the edge, or at its
+  //! midpoint), the new node on the segment for a crease, boundary edge or chord between two
+  //! feature nodes of two patches (a feature node then), else on the fitted surface(s), when
+  //! the new triangles hold fewer obtuse angles and pass the smoothing's normal, alpha and
+  //! angle floors; then the obtuse repair's flips and moves once around the new nodes. Splits
+  //! whose triangles cross others are given up. Adds vertices (StitchReport::n_obtuse_splits);
+  //! docs/stitch.md "Obtuse splits". Only when the mesh has no crossing left. Default 2.
+  int obtuse_split_rounds = 2;
   //! Triangles whose smallest angle (deg) is below this get their shortest edge collapsed
   //! before the optimisation, when the merge is allowed and improves the worst triangle
   //! around it (feature nodes never moved, and removed only into a feature corner less
@@ -98,7 +108,7 @@ struct StitchReport {
   std::size_t n_input_nodes = 0;       //!< SurfaceMesh::nodes
   //! Nodes no triangle uses (dropped). Nodes merged away by collapses are counted in
   //! n_collapses and n_settled_collapses instead: the output has n_input_nodes -
-  //! n_unused_nodes - n_collapses - n_settled_collapses vertices.
+  //! n_unused_nodes - n_collapses - n_settled_collapses + n_obtuse_splits vertices.
   std::size_t n_unused_nodes = 0;
   std::size_t n_input_triangles = 0;   //!< SurfaceMesh::triangles
   //! Triangles OpenMesh cannot add (repeated node, complex edge or vertex: a duplicated,
@@ -112,6 +122,10 @@ struct StitchReport {
   std::size_t n_smoothing_moves = 0;   //!< node moves accepted
   std::size_t n_smoothing_rejected = 0;  //!< node moves refused by the quality/normal bounds
   std::size_t n_chord_compensation_moves = 0;  //!< nodes moved by the chord compensation
+  //! Edges split by the obtuse splits (one new vertex each; StitchOptions::obtuse_split_rounds),
+  //! and the splits given up because their triangles crossed others.
+  std::size_t n_obtuse_splits = 0;
+  std::size_t n_obtuse_splits_undone = 0;
   //! Nodes moved back to their assembled position because a triangle of theirs intersected
   //! another after the optimisation.
   std::size_t n_reverted_moves = 0;
@@ -157,7 +171,9 @@ struct StitchReport {
 };
 
 //! The stitched mesh and its report. face_patch and vertex_node give the provenance of
-//! every face (patch id) and vertex (global node id of the SurfaceMesh), by index.
+//! every face (patch id) and vertex (global node id of the SurfaceMesh), by index. A vertex
+//! made by an obtuse split has a node id from SurfaceMesh::nodes.size() on (no node of the
+//! SurfaceMesh).
 struct StitchResult {
   TriMesh mesh;
   std::vector<int> face_patch;

@@ -91,6 +91,23 @@ std::vector<double> face_alphas(const TriMesh& mesh);
 void optimise(const SurfaceMesh& surface, const StitchOptions& options, const std::vector<std::uint8_t>& is_feature,
               StitchResult& result, StitchReport& report);
 
+//! What split_obtuse() did.
+struct SplitResult {
+  std::size_t n_splits = 0, n_flips = 0, n_moves = 0;
+  std::vector<TriMesh::VertexHandle> made;           //!< the new vertices
+  std::vector<std::array<int, 2>> split_edges;       //!< the split edges' end vertices (smaller first), per new vertex
+  //! Per vertex, 1 for the new vertices and their ring neighbours after the splits: every
+  //! face changed by the splits, their flips and the repair after them has one of these.
+  std::vector<std::uint8_t> near;
+};
+
+//! StitchOptions::obtuse_split_rounds sweeps of obtuse splits on result.mesh (face_patch,
+//! vertex_node and is_feature grow), then the obtuse repair's flips and moves once on the
+//! edges and vertices around the new vertices. Edges in `refused` (sorted vertex pairs)
+//! are not split. No intersection check (the caller's).
+SplitResult split_obtuse(const SurfaceMesh& surface, const StitchOptions& options, std::vector<std::uint8_t>& is_feature,
+                         StitchResult& result, const std::vector<std::array<int, 2>>& refused);
+
 //! Intersecting pairs left after the optimisation's repair, i.e. of the assembled mesh
 //! (`pairs`: all pairs of result.mesh, sorted, updated in place). Per pair, the nodes of
 //! both triangles that are neither feature nodes nor on the input's boundary move to the

@@ -387,9 +387,11 @@ TEST(PipelineSlow, CornerClusterCrossingsCollapsed) {
   EXPECT_EQ(t.n_degenerate_faces, 0u);
   EXPECT_EQ(t.n_duplicate_faces, 0u);
   EXPECT_EQ(r.face_patch.size(), r.mesh.n_faces());
-  // Every node of the surface mesh is an output vertex, unused, or merged by a collapse.
+  // Every node of the surface mesh is an output vertex, unused, or merged by a collapse;
+  // the obtuse splits add vertices.
   const StitchReport& s = rep.stitch;
-  EXPECT_EQ(r.mesh.n_vertices() + s.n_unused_nodes + s.n_collapses + s.n_settled_collapses, s.n_input_nodes);
+  EXPECT_EQ(r.mesh.n_vertices() + s.n_unused_nodes + s.n_collapses + s.n_settled_collapses,
+            s.n_input_nodes + s.n_obtuse_splits);
 }
 
 // The same rotor with its large faces sampled inside (the default): no crossings to settle.

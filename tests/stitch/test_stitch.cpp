@@ -189,7 +189,7 @@ TEST(Stitch, OptimisationImprovesAJitteredSphereAcrossBorders) {
   for (auto v : r.mesh.vertices()) {
     const auto node = static_cast<std::size_t>(r.vertex_node[static_cast<std::size_t>(v.idx())]);
     const Eigen::Vector3d p = to_eigen(r.mesh.point(v));
-    if (surface.node_kind[node] == NodeKind::Corner) {
+    if (node < surface.nodes.size() && surface.node_kind[node] == NodeKind::Corner) {  // else an obtuse split's
       EXPECT_EQ(p, surface.nodes[node]);
     }
     EXPECT_NEAR(p.norm(), 1.0, 0.02);
@@ -200,6 +200,7 @@ TEST(Stitch, OptimisationImprovesAJitteredSphereAcrossBorders) {
   none.obtuse_repair_rounds = 0;
   none.chord_compensation = 0.0;
   none.collapse_below_angle_deg = 0.0;
+  none.obtuse_split_rounds = 0;
   const StitchResult raw = stitch(surface, to_trimesh(soup), none);
   EXPECT_EQ(raw.report.n_flips + raw.report.n_smoothing_moves, 0u);
   EXPECT_DOUBLE_EQ(raw.report.output.quality.alpha_mean, raw.report.alpha_mean_before);
@@ -235,6 +236,58 @@ TEST(Stitch, ObtuseRepairLeavesFewerObtuseTriangles) {
   EXPECT_THROW((void)stitch(cube_map_surface(test::icosphere(1)), bad), InvalidInput);
 }
 
+// Two triangles on a crease (patches 0 and 1 in different planes), both obtuse at their
+// far corners: their shared longest edge A-B is a feature edge (both ends feature corners,
+// the others on the input's boundary), so neither a flip nor a move can touch them. The
+// split puts a node on A-B at the altitudes' foot (the midpoint here, exact): four right
+// triangles, the crease straight, the node a feature node of a new id.
+TEST(Stitch, ObtuseSplitOfAFeatureEdgeKeepsTheCreaseStraight) {
+  TriangleSoup roof;
+  const Eigen::Vector3d A(0.0, 0.0, 0.0), B(1.0, 0.0, 0.0), C(0.5, 0.3, 0.0), D(0.5, -0.2, -0.2);
+  roof.points = {A, B, C, D};
+  roof.triangles = {{0, 1, 2}, {1, 0, 3}};
+  const SurfaceMesh surface = make_surface(roof, {0, 1}, 2);
+  const TriMesh input = to_trimesh(roof);
+  StitchOptions off;
+  off.obtuse_split_rounds = 0;
+  const StitchResult before = stitch(surface, input, off);
+  ASSERT_TRUE(before.report.ok()) << joined(before.report.errors);
+  EXPECT_EQ(before.report.output.quality.obtuse_fraction, 1.0);  // the planted defect works
+  const StitchResult r = stitch(surface, input);
+  EXPECT_TRUE(r.report.ok()) << joined(r.report.errors);
+  EXPECT_EQ(r.report.n_obtuse_splits, 1u);
+  EXPECT_EQ(r.mesh.n_vertices(), 5u);
+  EXPECT_EQ(r.mesh.n_faces(), 4u);
+  EXPECT_EQ(r.report.output.quality.obtuse_fraction, 0.0);
+  EXPECT_TRUE(r.report.output.topology.is_manifold);
+  ASSERT_EQ(r.report.output_components.size(), 1u);
+  EXPECT_EQ(r.report.output_components[0].euler_characteristic, r.report.input_components[0].euler_characteristic);
+  ASSERT_EQ(r.vertex_node.size(), 5u);
+  ASSERT_EQ(r.face_patch.size(), 4u);
+  EXPECT_EQ(std::count(r.face_patch.begin(), r.face_patch.end(), 0), 2);
+  for (auto v : r.mesh.vertices()) {
+    const int g = r.vertex_node[static_cast<std::size_t>(v.idx())];
+    const Eigen::Vector3d p = to_eigen(r.mesh.point(v));
+    if (g < 4) {
+      EXPECT_EQ(p, roof.points[static_cast<std::size_t>(g)]);  // nothing else moved
+      continue;
+    }
+    EXPECT_EQ(g, 4);  // a new node id
+    EXPECT_EQ(r.mesh.valence(v), 4u);
+    EXPECT_LT((p - A).cross(B - A).norm(), 1e-12);  // on the crease
+    EXPECT_NEAR(p.x(), 0.5, 1e-12);
+    // The faces around it keep their sides' patches: those with C patch 0, with D patch 1.
+    for (auto f : r.mesh.vf_range(v)) {
+      bool has_c = false;
+      for (auto u : r.mesh.fv_range(f)) has_c = has_c || r.vertex_node[static_cast<std::size_t>(u.idx())] == 2;
+      EXPECT_EQ(r.face_patch[static_cast<std::size_t>(f.idx())], has_c ? 0 : 1);
+    }
+  }
+  StitchOptions bad;
+  bad.obtuse_split_rounds = -1;
+  EXPECT_THROW((void)stitch(surface, bad), InvalidInput);
+}
+
 // The obtuse repair and the chord compensation have their own switches: they run with the
 // flip and smoothing sweeps off, and nothing moves with all three off. Bad strengths are
 // refused.
@@ -250,6 +303,7 @@ TEST(Stitch, ObtuseRepairAndChordCompensationRunWithoutTheSweeps) {
   EXPECT_GT(r.report.n_flips + r.report.n_smoothing_moves, 0U);  // the obtuse repair's
   options.obtuse_repair_rounds = 0;
   options.chord_compensation = 0.0;
+  options.obtuse_split_rounds = 0;
   const StitchResult still = stitch(surface, input, options);
   EXPECT_TRUE(still.report.ok()) << joined(still.report.errors);
   EXPECT_EQ(still.report.n_chord_compensation_moves, 0U);
@@ -359,6 +413,7 @@ TEST(Stitch, FeatureCurvesAndCornersStayPut) {
   }
   for (auto v : r.mesh.vertices()) {
     const auto node = static_cast<std::size_t>(r.vertex_node[static_cast<std::size_t>(v.idx())]);
+    if (node >= surface.nodes.size()) continue;  // an obtuse split's
     if (surface.node_kind[node] != NodeKind::Inner) {
       EXPECT_EQ(to_eigen(r.mesh.point(v)), surface.nodes[node]);
     }
@@ -371,6 +426,8 @@ TEST(Stitch, FeatureCurvesAndCornersStayPut) {
     if (fa == fb) continue;
     const int a = r.vertex_node[static_cast<std::size_t>(r.mesh.from_vertex_handle(h).idx())];
     const int b = r.vertex_node[static_cast<std::size_t>(r.mesh.to_vertex_handle(h).idx())];
+    const int n_nodes = static_cast<int>(surface.nodes.size());
+    if (a >= n_nodes || b >= n_nodes) continue;  // a piece of a split crease edge
     border_edges_after.insert({std::min(a, b), std::max(a, b)});
   }
   for (const auto& e : border_edges_after) EXPECT_TRUE(border_edges_before.count(e));
@@ -394,6 +451,7 @@ TEST(Stitch, OpenInputKeepsItsBoundary) {
   for (auto v : r.mesh.vertices()) {
     if (!r.mesh.is_boundary(v)) continue;
     const auto node = static_cast<std::size_t>(r.vertex_node[static_cast<std::size_t>(v.idx())]);
+    if (node >= surface.nodes.size()) continue;  // an obtuse split's (on the boundary segment)
     EXPECT_EQ(to_eigen(r.mesh.point(v)), surface.nodes[node]);
   }
 }
@@ -694,6 +752,7 @@ TEST(Stitch, OnlyTheOffendingMovesAreUndone) {
   std::size_t n_moved = 0;
   for (auto v : r.mesh.vertices()) {
     const auto node = static_cast<std::size_t>(r.vertex_node[static_cast<std::size_t>(v.idx())]);
+    if (node >= sheets.points.size()) continue;  // an obtuse split's
     if (node >= 2 * grid.points.size() && (to_eigen(r.mesh.point(v)) - sheets.points[node]).norm() > 1e-9) ++n_moved;
   }
   EXPECT_GT(n_moved, 10u);

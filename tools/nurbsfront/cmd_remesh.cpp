@@ -45,6 +45,7 @@ struct RemeshArgs {
   std::optional<int> crossing_repair_rounds;
   std::optional<double> narrow_merge;
   std::optional<int> obtuse_repair_rounds;
+  std::optional<int> obtuse_split_rounds;
   std::optional<double> chord;
   std::optional<double> max_slope;
   std::optional<double> split_above;
@@ -100,6 +101,7 @@ void run_remesh(RemeshArgs& args) {
   if (args.crossing_repair_rounds) options.crossing_repair_rounds = *args.crossing_repair_rounds;
   if (args.narrow_merge) options.narrow_patch_merge = *args.narrow_merge;
   if (args.obtuse_repair_rounds) options.stitch.obtuse_repair_rounds = *args.obtuse_repair_rounds;
+  if (args.obtuse_split_rounds) options.stitch.obtuse_split_rounds = *args.obtuse_split_rounds;
   if (args.chord) options.surfmesh.sizing.chord_error = *args.chord;
   if (args.max_slope) options.segment.max_slope_deg = *args.max_slope;
   if (args.split_above) options.surfmesh.fit.split_above_edges = *args.split_above;
@@ -218,6 +220,9 @@ void add_remesh_command(CLI::App& app) {
   cmd->add_option("--obtuse-repair-rounds", args->obtuse_repair_rounds,
                   "Sweeps of the stitch's obtuse repair after its optimisation (default 2; 0 = off; "
                   "docs/stitch.md \"Obtuse repair\")");
+  cmd->add_option("--obtuse-split-rounds", args->obtuse_split_rounds,
+                  "Sweeps of the stitch's obtuse splits (longest edge split at the altitude's foot; default 2; "
+                  "0 = off; docs/stitch.md \"Obtuse splits\")");
   cmd->add_option("--chord", args->chord, "Chord error for --adaptive (length units; default 0.05 x size)");
   cmd->add_option("--max-slope", args->max_slope, "Largest angle (deg) between a face normal and its patch axis (default 60)");
   cmd->add_option("--split-above", args->split_above,
