@@ -4,7 +4,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 
+#include <Eigen/Dense>
+
+#include "nurbsfront/nurbs/nurbs_surface.h"
 #include "nurbsfront/surfmesh/surfmesh_internal.h"
 
 namespace nurbsfront::surfmesh_detail {
@@ -15,6 +19,67 @@ namespace {
 // still count as one: marching cubes puts an occupancy vertex at the exact midpoint, so only
 // round-off separates it.
 constexpr double kLatticeTolerance = 1e-6;
+
+// Fewest vertices of a local quadric fit (six unknowns, terraced data).
+constexpr std::size_t kMinJetVertices = 12;
+// Radius (cells) of the local quadric fits that estimate a patch's curvature before its band
+// fit: large enough to average the terraces (2.5 cells let the median wander by a factor 2 on
+// the occupancy torus at 64), small enough for the tube of the torus at 48 (radius 6 cells).
+constexpr double kCurvatureJetRadiusCells = 4.5;
+// Rings of the neighbours' faces (facing the patch's axis) the quadrics reach into: a narrow
+// patch (the torus's inner equator at 64, two or three cells wide) has no two-dimensional
+// neighbourhood of its own.
+constexpr int kCurvatureJetRings = 3;
+// A curved patch's smoothing length is taken only when at most this fraction of
+// smoothing_cells (see curved_smoothing_cells).
+constexpr double kCurvedLengthMargin = 0.9;
+// Vertices at most sampled per patch (evenly by id).
+constexpr std::size_t kCurvatureJetSamples = 256;
+
+// The median of values (reordered).
+double median_of(std::vector<double>& values) {
+  const auto middle = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2);
+  std::nth_element(values.begin(), middle, values.end());
+  return *middle;
+}
+
+// The largest |principal curvature| at the origin of the quadric w = a0 + a1 u + a2 v + a3 u^2
+// + a4 u v + a5 v^2 fitted (least squares) to `points` (relative to the centre vertex) in the
+// frame of their best plane; -1 if the fit is degenerate.
+double jet_curvature(const std::vector<Eigen::Vector3d>& points, double radius) {
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (const auto& q : points) mean += q;
+  mean /= static_cast<double>(points.size());
+  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+  for (const auto& q : points) cov += (q - mean) * (q - mean).transpose();
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(cov);
+  const Eigen::Vector3d n = eigen.eigenvectors().col(0);
+  const Eigen::Vector3d t1 = eigen.eigenvectors().col(2);
+  const Eigen::Vector3d t2 = n.cross(t1);
+  // Coordinates scaled by the radius (conditioning); the coefficients are unscaled below.
+  Eigen::Matrix<double, 6, 6> normal = Eigen::Matrix<double, 6, 6>::Zero();
+  Eigen::Matrix<double, 6, 1> rhs = Eigen::Matrix<double, 6, 1>::Zero();
+  for (const auto& q : points) {
+    const double u = q.dot(t1) / radius;
+    const double v = q.dot(t2) / radius;
+    const Eigen::Matrix<double, 6, 1> row(1.0, u, v, u * u, u * v, v * v);
+    normal.selfadjointView<Eigen::Lower>().rankUpdate(row);
+    rhs += row * (q.dot(n) / radius);
+  }
+  const Eigen::LDLT<Eigen::Matrix<double, 6, 6>> ldlt(normal.selfadjointView<Eigen::Lower>());
+  if (ldlt.info() != Eigen::Success) return -1.0;
+  const Eigen::Matrix<double, 6, 1> a = ldlt.solve(rhs);
+  if (!a.allFinite()) return -1.0;
+  SurfaceDerivatives d;
+  d.su = Eigen::Vector3d(1.0, 0.0, a[1]);
+  d.sv = Eigen::Vector3d(0.0, 1.0, a[2]);
+  d.suu = Eigen::Vector3d(0.0, 0.0, 2.0 * a[3] / radius);
+  d.suv = Eigen::Vector3d(0.0, 0.0, a[4] / radius);
+  d.svv = Eigen::Vector3d(0.0, 0.0, 2.0 * a[5] / radius);
+  const SurfaceCurvature c = curvature_from_derivatives(d);
+  const double k = std::max(std::abs(c.k1), std::abs(c.k2));
+  return std::isfinite(k) ? k : -1.0;
+}
 
 }  // namespace
 
@@ -60,23 +125,68 @@ BandFitResult fit_cell_bands(const std::vector<Eigen::Vector3d>& world, const Pa
   return fit_height_field_to_bands(cell_band_samples(world, frame, grid), options);
 }
 
-double curved_smoothing_cells(const BicubicHeightField& field, std::span<const Eigen::Vector3d> local,
-                              const CellGrid& grid) {
-  if (grid.curved_smoothing <= 0.0 || local.empty()) return grid.smoothing_cells;
-  std::vector<double> kappa;
-  kappa.reserve(local.size());
-  for (const auto& q : local) kappa.push_back(max_abs_curvature(field, q.x(), q.y()));
-  const auto middle = kappa.begin() + static_cast<std::ptrdiff_t>(kappa.size() / 2);
-  std::nth_element(kappa.begin(), middle, kappa.end());
-  const double median = *middle;
-  const double radius = 1.0 / (median * grid.spacing.minCoeff());  // cells
-  if (!(radius >= kMinCurvedRadiusCells)) return grid.smoothing_cells;
+double curved_smoothing_cells(const TriMesh& mesh, const Segmentation& segmentation, int p, const CellGrid& grid) {
+  const Patch& patch = segmentation.patches[static_cast<std::size_t>(p)];
+  if (grid.curved_smoothing <= 0.0 || patch.faces.empty()) return grid.smoothing_cells;
+  const double cell = grid.spacing.minCoeff();
+  const double radius = kCurvatureJetRadiusCells * cell;
+  // The patch's vertices (the samples) and those of its neighbours' faces within `rings`
+  // that face its axis (overlap_vertices: a narrow patch's neighbourhoods reach across its
+  // width, a sharp edge's other side is left out), ascending.
+  std::vector<int> own;
+  own.reserve(3 * patch.faces.size());
+  for (const int f : patch.faces)
+    for (const auto v : mesh.fv_range(TriMesh::FaceHandle(f))) own.push_back(v.idx());
+  std::sort(own.begin(), own.end());
+  own.erase(std::unique(own.begin(), own.end()), own.end());
+  std::vector<int> reach = own;
+  const std::vector<int> more = overlap_vertices(mesh, segmentation, p, kCurvatureJetRings);
+  reach.insert(reach.end(), more.begin(), more.end());
+  std::inplace_merge(reach.begin(), reach.begin() + static_cast<std::ptrdiff_t>(own.size()), reach.end());
+  const std::size_t stride = (own.size() + kCurvatureJetSamples - 1) / kCurvatureJetSamples;
+  std::vector<std::size_t> stamp(reach.size(), reach.size());
+  std::vector<std::size_t> queue;
+  std::vector<Eigen::Vector3d> near;
+  std::vector<double> largest_abs;
+  auto index_of = [&](int v) {
+    const auto it = std::lower_bound(reach.begin(), reach.end(), v);
+    return it == reach.end() || *it != v ? reach.size() : static_cast<std::size_t>(it - reach.begin());
+  };
+  for (std::size_t s = 0; s < own.size(); s += stride) {
+    const Eigen::Vector3d centre = to_eigen(mesh.point(TriMesh::VertexHandle(own[s])));
+    // The vertices within the radius, reached through the patch's and the overlap's vertices.
+    const std::size_t first = index_of(own[s]);
+    queue.assign(1, first);
+    stamp[first] = s;
+    near.clear();
+    for (std::size_t head = 0; head < queue.size(); ++head) {
+      const TriMesh::VertexHandle vh(reach[queue[head]]);
+      near.push_back(to_eigen(mesh.point(vh)) - centre);
+      for (const auto w : mesh.vv_range(vh)) {
+        const std::size_t k = index_of(w.idx());
+        if (k == reach.size() || stamp[k] == s) continue;
+        stamp[k] = s;
+        if ((to_eigen(mesh.point(w)) - centre).norm() <= radius) queue.push_back(k);
+      }
+    }
+    if (near.size() < kMinJetVertices) continue;
+    const double k = jet_curvature(near, radius);
+    if (k >= 0.0) largest_abs.push_back(k * cell);
+  }
+  if (largest_abs.empty()) return grid.smoothing_cells;
+  const double median = median_of(largest_abs);
+  const double radius_cells = 1.0 / median;
+  if (!(radius_cells >= kMinCurvedRadiusCells)) return grid.smoothing_cells;
   // A surface curved alike over the patch, not a flat patch with a rounded edge in it: the
   // upper quartile of the curvature at most kCurvedQuartileRatio times the median.
-  const auto upper = middle + static_cast<std::ptrdiff_t>((kappa.end() - middle) / 2);
-  std::nth_element(middle, upper, kappa.end());
+  const auto upper = largest_abs.begin() + static_cast<std::ptrdiff_t>(3 * largest_abs.size() / 4);
+  std::nth_element(largest_abs.begin(), upper, largest_abs.end());
   if (*upper > kCurvedQuartileRatio * median) return grid.smoothing_cells;
-  return std::min(grid.curved_smoothing * std::sqrt(2.0 * radius), grid.smoothing_cells);
+  // The terraces' noise in each quadric biases its largest |k| up (the sphere at 48, radius
+  // 23 cells, came out as 19-21 cells: 2.19-2.25 cells): only a length clearly below
+  // smoothing_cells is taken.
+  const double length = grid.curved_smoothing * std::sqrt(2.0 * radius_cells);
+  return length <= kCurvedLengthMargin * grid.smoothing_cells ? length : grid.smoothing_cells;
 }
 
 }  // namespace nurbsfront::surfmesh_detail

@@ -385,16 +385,12 @@ void fit_patch(const TriMesh& mesh, const Segmentation& seg, int p, const Border
       // refit does them), and the wide refit starts from that fit.
       const bool wide = grid_in.wide_overlap_rings > kFitOverlapRings;
       const double gate = grid_in.wide_overlap_max_miss_cells * grid_in.spacing.minCoeff();
-      BandFitResult fitted = fit_cell_bands(points, frame, grid_in, *fit.domain, nullptr, wide ? gate : -1.0);
-      // A curved patch is fitted again with a shorter smoothing length: 2.25 cells flattened
-      // the tube of the occupancy torus at 48 and 64 cells (radius 6 and 8 cells; docs/surfmesh.md,
-      // "Smoothing length of curved patches").
+      // A curved patch gets a shorter smoothing length, estimated from its vertices before the
+      // fit: 2.25 cells flattened the tube of the occupancy torus at 48 and 64 cells (radius 6
+      // and 8 cells; docs/surfmesh.md, "Smoothing length of curved patches").
       CellGrid grid = grid_in;
-      grid.smoothing_cells = curved_smoothing_cells(fitted.field, std::span(local.data(), n_own), grid_in);
-      if (grid.smoothing_cells < grid_in.smoothing_cells) {
-        const BicubicHeightField first = std::move(fitted.field);
-        fitted = fit_cell_bands(points, frame, grid, *fit.domain, &first, wide ? gate : -1.0);
-      }
+      grid.smoothing_cells = curved_smoothing_cells(mesh, seg, p, grid_in);
+      BandFitResult fitted = fit_cell_bands(points, frame, grid, *fit.domain, nullptr, wide ? gate : -1.0);
       // A patch whose band fit still misses a band by more than plain_fit_miss_cells holds
       // a sharp (bevelled) edge that the smooth fit rounds off: it gets the plain fit of its
       // vertices instead (occupancy DRAM cell at 128: Hausdorff to the input 1.18 -> 0.91

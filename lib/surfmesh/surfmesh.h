@@ -174,17 +174,18 @@ struct CellGrid {
   //! the sphere and the torus from 48 cells up unchanged: 0.3 took the torus at 64 from 0.21
   //! to 0.42 voxel max; docs/surfmesh.md).
   double plain_fit_miss_cells = 0.5;
-  //! A curved patch's smoothing length: at most this times sqrt(2 R) cells, R the median over
-  //! the patch's vertices of the smallest radius of curvature (cells) of its first band fit
-  //! (sqrt(2 R) is how far the surface runs from its tangent plane before it leaves it by one
-  //! cell: about a terrace's half-width); not below a radius of 5 cells, nor when the upper
-  //! quartile of the curvature exceeds 1.5 times the median (a rounded sharp edge's
-  //! curvature, not a surface's). A patch whose length comes out shorter than
-  //! smoothing_cells is fitted again with it: the tube of the occupancy torus (radius 6 and 8
-  //! cells at 48 and 64) was flattened by 2.25 cells (docs/surfmesh.md, "Smoothing length of
-  //! curved patches"). Flat patches and spheres of radius 21 cells and more keep
-  //! smoothing_cells. Finite and >= 0; 0 disables. Default 0.35.
-  double curved_smoothing = 0.35;
+  //! A curved patch's smoothing length: this times sqrt(2 R) cells, R the median over (at most
+  //! 256 of) the patch's vertices of the smallest radius of curvature (cells) of a
+  //! least-squares quadric of the marching-cubes vertices within 4.5 cells, estimated before
+  //! the band fit (sqrt(2 R) is how far the surface runs from its tangent plane before it
+  //! leaves it by one cell: about a terrace's half-width); only when that is at most 0.9
+  //! smoothing_cells, not below a radius of 5 cells, nor when the upper quartile of the
+  //! curvature exceeds 1.5 times the median (a rounded sharp edge's curvature, not a
+  //! surface's). The tube of the occupancy torus (radius 6 and 8 cells at 48 and 64) was
+  //! flattened by 2.25 cells (docs/surfmesh.md, "Smoothing length of curved patches"). Flat
+  //! patches and the sphere at 48 cells (radius 23) keep smoothing_cells. Finite and >= 0;
+  //! 0 disables. Default 0.375.
+  double curved_smoothing = 0.375;
   void validate() const;
 };
 

@@ -142,12 +142,12 @@ inline constexpr double kMinCurvedRadiusCells = 5.0;
 //! flat trench patch holding a rounded edge 2.1.
 inline constexpr double kCurvedQuartileRatio = 1.5;
 
-//! The band-fit smoothing length (cells) of a patch whose first band fit is `field` (frame
-//! coordinates): grid.smoothing_cells, or less on a curved patch (CellGrid::curved_smoothing),
-//! from the median over `local` (the patch's own vertices, frame coordinates) of the largest
-//! |principal curvature| of the field.
-[[nodiscard]] double curved_smoothing_cells(const BicubicHeightField& field, std::span<const Eigen::Vector3d> local,
-                                            const CellGrid& grid);
+//! The band-fit smoothing length (cells) of patch p, chosen before its fit: grid.smoothing_cells,
+//! or less on a curved patch (CellGrid::curved_smoothing), from the median over (at most 256 of)
+//! its vertices of the largest |principal curvature| of a least-squares quadric of the
+//! vertices within 4.5 cells (in the frame of their best plane; the patch's own vertices and
+//! those of its neighbours' faces within 3 rings that face its axis).
+[[nodiscard]] double curved_smoothing_cells(const TriMesh& mesh, const Segmentation& segmentation, int p, const CellGrid& grid);
 
 //! One patch's result before global numbering.
 struct PatchResult {

@@ -1107,6 +1107,33 @@ TEST(SurfmeshSlow, SharedMeshes) {
   if (!any) GTEST_SKIP() << "../shared/data is absent";
 }
 
+// The smoothing length of curved occupancy patches, estimated from their marching-cubes
+// vertices before the band fit (CellGrid::curved_smoothing): the torus's tube (radius 6 cells
+// at 48) gives every patch about curved_smoothing x sqrt(2 x 6) cells; the sphere (radius 23
+// cells) keeps smoothing_cells, as does every patch with the option at 0.
+TEST(Surfmesh, CurvedSmoothingLengthFromTheVertices) {
+  for (const std::string name : {"torus", "sphere"}) {
+    const Scene scene = scene_by_name(name);
+    const ScalarGrid grid = sample_scene(scene, 48, SampleMode::Occupancy);
+    const TriMesh mesh = to_trimesh(marching_cubes(grid, scene_marching_cubes_options(SampleMode::Occupancy)));
+    const Segmentation seg = segment(mesh);
+    CellGrid cells{true, grid.origin, grid.spacing};
+    CellGrid off = cells;
+    off.curved_smoothing = 0.0;
+    for (int p = 0; p < static_cast<int>(seg.patches.size()); ++p) {
+      SCOPED_TRACE(name + " patch " + std::to_string(p));
+      EXPECT_EQ(surfmesh_detail::curved_smoothing_cells(mesh, seg, p, off), off.smoothing_cells);
+      const double length = surfmesh_detail::curved_smoothing_cells(mesh, seg, p, cells);
+      if (name == "sphere") {
+        EXPECT_EQ(length, cells.smoothing_cells);
+      } else if (seg.patches[static_cast<std::size_t>(p)].faces.size() >= 100) {
+        const double tube = std::get<TorusScene>(scene).minor_radius / grid.spacing.x();
+        EXPECT_NEAR(length, cells.curved_smoothing * std::sqrt(2.0 * tube), 0.15 * cells.curved_smoothing * std::sqrt(2.0 * tube));
+      }
+    }
+  }
+}
+
 TEST(SurfmeshSlow, OccupancyDramCell128) {
   const TriMesh mesh = scene_mesh("dram", 128, SampleMode::Occupancy);
   const Segmentation seg = segment(mesh);
