@@ -206,6 +206,9 @@ void SurfMeshOptions::validate() const {
   if (!(std::isfinite(max_node_offset_edges) && max_node_offset_edges >= 0.0))
     bad_option("max_node_offset_edges must be finite and >= 0, got " + std::to_string(max_node_offset_edges));
   if (threads < 0) bad_option("threads must be >= 0, got " + std::to_string(threads));
+  if (cell_grid.enabled && fit.detail_spacing_edges > 0.0)
+    bad_option("fit.detail_spacing_edges refits the plain fit; with a cell grid the band fit is used instead: "
+               "set one of them to off, got detail_spacing_edges " + std::to_string(fit.detail_spacing_edges));
 }
 
 Eigen::Vector3d PatchSurface::project(const Eigen::Vector3d& world) const {
@@ -251,9 +254,24 @@ SurfaceMesh surfmesh_detail::mesh_surface(const TriMesh& input, const Segmentati
   const std::size_t n_patches = segmentation.patches.size();
   const unsigned threads = parallel::thread_count(options.threads);
   std::vector<PatchResult> results(n_patches);
+  // The marching-cubes gate (feature sizing) and the label-image test (detail fit) in one pass.
+  const bool detail_fit = options.fit.detail_spacing_edges > 0.0;
+  const LatticeShares lattice =
+      detail_fit || (options.sizing.feature_size > 0.0 && !options.sizing.feature_size_everywhere) ? lattice_edge_shares(input)
+                                                                                                  : LatticeShares{};
+  // The detail fit would follow a label image's staircases (docs/surfmesh.md "Detail fit:
+  // where it runs"): such an input keeps the plain fit.
+  SurfMeshOptions plain_options;
+  const SurfMeshOptions* fit_options = &options;
+  if (detail_fit && label_image_staircase(lattice)) {
+    plain_options = options;
+    plain_options.fit.detail_spacing_edges = 0.0;
+    fit_options = &plain_options;
+    out.detail_fit_skipped = true;
+  }
   auto fit_all = [&](const BorderNodes& nodes) {
     run_parallel(n_patches, threads, options.progress, 0.0, 0.5, [&](std::size_t p) {
-      fit_patch(input, segmentation, static_cast<int>(p), nodes, options, mean_edge, results[p]);
+      fit_patch(input, segmentation, static_cast<int>(p), nodes, *fit_options, mean_edge, results[p]);
     });
   };
   double sizing_grid = 0.0;  // > 0: the front's sizes are sampled on a grid (adaptive, feature)
@@ -263,7 +281,7 @@ SurfaceMesh surfmesh_detail::mesh_surface(const TriMesh& input, const Segmentati
   out.curve_is_feature = feature_curves(input, segmentation, options.crease_angle_deg, &crease_angles);
   // Feature sizing where it helps (SizingOptions::feature_size): not on marching-cubes
   // surfaces, not for a few thin parts.
-  if (options.sizing.feature_size > 0.0 && (options.sizing.feature_size_everywhere || !vertices_on_lattice_edges(input))) {
+  if (options.sizing.feature_size > 0.0 && (options.sizing.feature_size_everywhere || lattice.on_lattice_edges < 0.5)) {
     FeatureSizing feature = feature_sizing(input, segmentation, out.curve_is_feature, size_at, options.sizing.feature_size,
                                            options.sizing.min_size_fraction * h, options.sizing.gradation,
                                            options.sizing.feature_size_everywhere ? 0.0 : kFeatureSizingMinAreaShare);
@@ -395,7 +413,7 @@ SurfaceMesh surfmesh_detail::mesh_surface(const TriMesh& input, const Segmentati
     mesh_patch(segmentation, static_cast<int>(p), borders, options, h, uniform ? SizeAt() : front_size,
                patch_grid.empty() ? sizing_grid : patch_grid[p], results[p]);
     // A detail-fitted patch keeps its nodes closer to its input (PatchFitOptions::detail_spacing_edges).
-    const double offset = results[p].detail_fit ? options.fit.detail_node_offset_edges : options.max_node_offset_edges;
+    const double offset = results[p].report.detail_fit ? options.fit.detail_node_offset_edges : options.max_node_offset_edges;
     if (offset > 0.0)
       results[p].report.n_clamped_nodes = clamp_inner_nodes(input, segmentation, static_cast<int>(p), offset * mean_edge, results[p]);
   });

@@ -272,6 +272,7 @@ struct PatchMeshReport {
   std::size_t n_triangles = 0;
   double fit_max_residual = 0.0; //!< at the patch's input vertices
   int fit_levels = 0;
+  bool detail_fit = false;         //!< refitted on the detail lattice (PatchFitOptions::detail_spacing_edges)
   std::size_t n_clamped_nodes = 0; //!< inner nodes moved back (max_node_offset_edges)
   double seconds = 0.0;
 };
@@ -316,6 +317,10 @@ struct SurfaceMesh {
   //! the input is not taken for a marching-cubes surface (or feature_size_everywhere), and
   //! the width-limited patches hold enough of the area for a size below the uniform one.
   bool feature_sizing_applied = false;
+  //! The detail fit was asked for (PatchFitOptions::detail_spacing_edges) but not run: the
+  //! input is taken for a label image's marching-cubes staircase (docs/surfmesh.md "Detail
+  //! fit: where it runs").
+  bool detail_fit_skipped = false;
 };
 
 //! Splits the patches whose fitted surface does not represent their input: every patch is
