@@ -114,16 +114,19 @@ struct PatchFitOptions {
   //! (bunny: up to one mean edge off). Plain fit only (not with cell_grid). 0 = off.
   //! Default 2 (marching-cubes surfaces have no such faces).
   double large_face_edges = 2.0;
-  //! Detail fit (off when 0; not with a cell grid): a patch whose plain fit misses
+  //! Detail fit (off when 0; refused with a cell grid): a patch whose plain fit misses
   //! one of its own points by more than detail_above_edges mean input edges is refitted with
-  //! this finest lattice spacing (mean input edges, instead of min_spacing_edges), and that
+  //! this finest lattice spacing (mean input edges, instead of min_spacing_edges); the refit
+  //! is kept when its mean miss at the patch's own vertices is not larger, and that
   //! patch's new inner nodes are then kept within
   //! detail_node_offset_edges of its input faces along its axis (instead of
   //! SurfMeshOptions::max_node_offset_edges). For inputs with real detail of one or two mean
   //! edges (range scans, smoothed-image level sets: bunny, brain), with adaptive sizing at
   //! equal vertex count; the 2.5-edge lattice is there to average marching-cubes staircases,
   //! which the detail fit would follow (label images: liver Hausdorff 0.96 -> 1.86 with it;
-  //! docs/surfmesh.md "Detail fit"). 0 (off) or below min_spacing_edges. Default 0.
+  //! docs/surfmesh.md "Detail fit"): an input taken for a label image's staircase (half or
+  //! more of its vertices at their lattice edge's midpoint) is not refitted
+  //! (SurfaceMesh::detail_fit_skipped). 0 (off) or below min_spacing_edges. Default 0.
   double detail_spacing_edges = 0.0;
   //! See detail_spacing_edges (mean input edges, >= 0). Default 0.25.
   double detail_above_edges = 0.25;
