@@ -173,6 +173,8 @@ InputResult run_input(const CompareInput& in, const Settings& s) {
 
   std::size_t target = 0;
   double target_size = 0.0;
+  // The --detail rows say so in their method (the default rows keep their names).
+  const std::string ours = s.detail ? "nurbsfront remesh --adaptive --detail-fit 1" : "nurbsfront remesh";
   try {
     watch.restart();
     cpu = process_cpu_seconds();
@@ -184,7 +186,7 @@ InputResult run_input(const CompareInput& in, const Settings& s) {
       remeshed = remesh_to_vertex_count(input, remeshed.mesh.n_vertices(), options);
     }
     const double seconds = watch.seconds();
-    MethodRow row = measure(s.detail ? "nurbsfront remesh --adaptive --detail-fit 1" : "nurbsfront remesh", remeshed.mesh, seconds, process_cpu_seconds() - cpu, input_soup,
+    MethodRow row = measure(ours, remeshed.mesh, seconds, process_cpu_seconds() - cpu, input_soup,
                             input_topology, s.threads);
     row.remesh_errors = remeshed.report.errors.size();
     if (!remeshed.report.errors.empty()) row.note = "report errors: " + remeshed.report.errors.front();
@@ -194,7 +196,7 @@ InputResult run_input(const CompareInput& in, const Settings& s) {
     write_output(s, in.name, "nurbsfront", remeshed.mesh);
   } catch (const std::exception& e) {
     MethodRow row;
-    row.method = "nurbsfront remesh";
+    row.method = ours;
     row.note = std::string("failed: ") + e.what();
     result.rows.push_back(row);
   }
@@ -229,7 +231,7 @@ InputResult run_input(const CompareInput& in, const Settings& s) {
       if (result.rows[k].rerun_for == count) result.rows[d].nurbsfront_row = k;
     }
     if (result.rows[d].nurbsfront_row != 1) continue;
-    const std::string method = "nurbsfront remesh (rerun at " + std::to_string(count) + ")";
+    const std::string method = ours + " (rerun at " + std::to_string(count) + ")";
     try {
       RemeshOptions options = remesh_options(s.threads, s.detail);
       options.surfmesh.sizing.size = first_size * std::sqrt(double(target) / double(count));

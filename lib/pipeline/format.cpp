@@ -16,7 +16,7 @@ std::string patch_json(std::size_t index, const PatchMeshReport& p) {
   o.count("patch", index).text("status", to_string(p.status)).text("message", p.message);
   o.count("input_faces", p.n_input_faces).count("border_nodes", p.n_border_nodes);
   o.count("inner_nodes", p.n_inner_nodes).count("triangles", p.n_triangles).count("clamped_nodes", p.n_clamped_nodes);
-  o.num("fit_max_residual", p.fit_max_residual).integer("fit_levels", p.fit_levels).num("seconds", p.seconds);
+  o.num("fit_max_residual", p.fit_max_residual).integer("fit_levels", p.fit_levels).flag("detail_fit", p.detail_fit).num("seconds", p.seconds);
   return o.str();
 }
 
@@ -52,13 +52,15 @@ std::string to_json(const RemeshReport& r) {
   seconds.num("distance", r.seconds_distance).num("total", r.seconds_total);
   std::vector<std::string> failed;
   double fit_residual_max = 0.0;
+  std::size_t n_detail_fit = 0;
   for (std::size_t p = 0; p < r.patches.size(); ++p) {
     fit_residual_max = std::max(fit_residual_max, r.patches[p].fit_max_residual);
+    n_detail_fit += r.patches[p].detail_fit ? 1 : 0;
     if (r.patches[p].status != PatchStatus::Ok) failed.push_back(patch_json(p, r.patches[p]));
   }
   json::Object patches;
   patches.count("count", r.patches.size()).count("ok", r.patches.size() - r.n_failed_patches);
-  patches.num("fit_max_residual", fit_residual_max).add("failed", json::array(failed));
+  patches.num("fit_max_residual", fit_residual_max).count("detail_fit", n_detail_fit).add("failed", json::array(failed));
   const StitchReport& s = r.stitch;
   json::Object stitch;
   stitch.count("input_nodes", s.n_input_nodes).count("unused_nodes", s.n_unused_nodes);
@@ -80,7 +82,7 @@ std::string to_json(const RemeshReport& r) {
   for (const auto& e : r.errors) errors.push_back(json::string(e));
   json::Object all;
   all.flag("ok", r.ok()).num("target_size", r.target_size).num("input_mean_edge", r.input_mean_edge);
-  all.flag("feature_sizing_applied", r.feature_sizing_applied);
+  all.flag("feature_sizing_applied", r.feature_sizing_applied).flag("detail_fit_skipped", r.detail_fit_skipped);
   all.add("counts", counts.str()).add("seconds", seconds.str()).add("patches", patches.str());
   all.add("stitch", stitch.str()).add("output", to_json(r.output)).add("errors", json::array(errors));
   return all.str();

@@ -79,6 +79,9 @@ struct RemeshReport {
   //! Feature sizing set the sizes (SurfaceMesh::feature_sizing_applied): false on inputs
   //! taken for marching-cubes surfaces and where no crease-bounded patch is narrow enough.
   bool feature_sizing_applied = false;
+  //! The detail fit was asked for but the input was taken for a label image's staircase
+  //! (SurfaceMesh::detail_fit_skipped).
+  bool detail_fit_skipped = false;
   double target_size = 0.0;       //!< resolved uniform target edge length (length units)
   double input_mean_edge = 0.0;   //!< mean edge length of the input
   double seconds_segment = 0.0;

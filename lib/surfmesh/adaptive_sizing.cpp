@@ -148,13 +148,16 @@ SizeAt adaptive_sizing(const TriMesh& mesh, const Segmentation& segmentation, co
   return graded_sizing(mesh, std::move(sizes), gradation);
 }
 
-double lattice_edge_vertex_share(const TriMesh& mesh) {
+double lattice_edge_vertex_share(const TriMesh& mesh) { return lattice_edge_shares(mesh).on_lattice_edges; }
+
+LatticeShares lattice_edge_shares(const TriMesh& mesh) {
   const std::size_t n = mesh.n_vertices();
   const std::size_t m = mesh.n_edges();
-  if (n == 0 || m == 0) return 0.0;
+  if (n == 0 || m == 0) return {};
   // A cell is not much smaller than an edge: shorter extents are rounding or slivers.
   const double shortest = 0.2 * mean_edge_length(mesh);
   std::vector<std::uint8_t> on_lattice(n, 0);  // per vertex: axes on which it is a lattice value
+  std::vector<std::uint8_t> on_half(n, 0);     // per vertex: axes on which it is half-way between two
   // The spacing is found from at most ~64k edges (evenly spread over the indices).
   const std::size_t stride = std::max<std::size_t>(1, m / 65536);
   std::vector<std::pair<double, int>> extent;  // per sampled edge: extent along the axis, edge
@@ -214,14 +217,27 @@ double lattice_edge_vertex_share(const TriMesh& mesh) {
       }
     for (std::size_t w = 0; w < n; ++w) {
       const double t = (mesh.point(TriMesh::VertexHandle(static_cast<int>(w)))[axis] - origin) / spacing;
-      if (std::abs(t - std::round(t)) < 1e-3) ++on_lattice[w];
+      const double off = std::abs(t - std::round(t));
+      if (off < 1e-3) ++on_lattice[w];
+      else if (std::abs(off - 0.5) < 1e-3) ++on_half[w];
     }
   }
-  const auto count = static_cast<std::size_t>(std::count_if(on_lattice.begin(), on_lattice.end(), [](std::uint8_t c) { return c >= 2; }));
-  return static_cast<double>(count) / static_cast<double>(n);
+  std::size_t count = 0, midpoints = 0;
+  for (std::size_t w = 0; w < n; ++w) {
+    count += on_lattice[w] >= 2 ? 1 : 0;
+    // A label image's edges between two midpoints span half a spacing along an axis; where
+    // those are the most common extent, the lattice found is the half one and a midpoint
+    // has all three coordinates on it.
+    midpoints += on_lattice[w] == 3 || (on_lattice[w] == 2 && on_half[w] == 1) ? 1 : 0;
+  }
+  return {static_cast<double>(count) / static_cast<double>(n), static_cast<double>(midpoints) / static_cast<double>(n)};
 }
 
-bool vertices_on_lattice_edges(const TriMesh& mesh) { return lattice_edge_vertex_share(mesh) >= 0.5; }
+bool marching_cubes_lattice(const LatticeShares& shares) { return shares.on_lattice_edges >= 0.5; }
+
+bool vertices_on_lattice_edges(const TriMesh& mesh) { return marching_cubes_lattice(lattice_edge_shares(mesh)); }
+
+bool label_image_staircase(const LatticeShares& shares) { return shares.at_edge_midpoints >= 0.5; }
 
 FeatureSizing feature_sizing(const TriMesh& mesh, const Segmentation& segmentation,
                              const std::vector<std::uint8_t>& curve_is_feature, const SizeAt& base, double factor,

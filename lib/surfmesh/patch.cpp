@@ -428,8 +428,20 @@ void fit_patch(const TriMesh& mesh, const Segmentation& seg, int p, const Border
       if (o.detail_spacing_edges > 0.0 && !options.cell_grid.enabled && fitted.max_residual() > o.detail_above_edges * mean_edge) {
         SurfMeshOptions detail = options;
         detail.fit.min_spacing_edges = o.detail_spacing_edges;
-        fitted = fit_height_field(local, plain_fit_options(detail, mean_edge, lo, hi));
-        result.detail_fit = true;
+        FitResult refit = fit_height_field(local, plain_fit_options(detail, mean_edge, lo, hi));
+        // The refit is kept unless it misses the patch's own points by more on average (not
+        // the largest miss: on the brain 3 of 39 refits miss one point by 2-20% more, with a
+        // mean miss a third of the plain fit's; nor the overlap ring's points, other patches'
+        // faces, which can dominate both fits' largest residual).
+        const auto own_mean_miss = [&](const BicubicHeightField& field) {
+          double sum = 0.0;
+          for (std::size_t i = 0; i < n_own; ++i) sum += std::abs(local[i].z() - field.value(local[i].x(), local[i].y()));
+          return sum;
+        };
+        if (own_mean_miss(refit.field) <= own_mean_miss(fitted.field)) {
+          fitted = std::move(refit);
+          result.report.detail_fit = true;
+        }
       }
       result.surface.field = std::move(fitted.field);
       result.report.fit_max_residual = fitted.max_residual();

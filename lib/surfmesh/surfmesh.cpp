@@ -210,6 +210,9 @@ void SurfMeshOptions::validate() const {
   if (!(std::isfinite(max_node_offset_edges) && max_node_offset_edges >= 0.0))
     bad_option("max_node_offset_edges must be finite and >= 0, got " + std::to_string(max_node_offset_edges));
   if (threads < 0) bad_option("threads must be >= 0, got " + std::to_string(threads));
+  if (cell_grid.enabled && fit.detail_spacing_edges > 0.0)
+    bad_option("fit.detail_spacing_edges refits the plain fit; with a cell grid the band fit is used instead: "
+               "set one of them to off, got detail_spacing_edges " + std::to_string(fit.detail_spacing_edges));
 }
 
 Eigen::Vector3d PatchSurface::project(const Eigen::Vector3d& world) const {
@@ -254,13 +257,23 @@ SurfaceMesh surfmesh_detail::mesh_surface(const TriMesh& input, const Segmentati
   }
   const std::size_t n_patches = segmentation.patches.size();
   const unsigned threads = parallel::thread_count(options.threads);
-  // The marching-cubes gate (lattice edges): no feature sizing there, and no flat-face
-  // samples (PatchFitOptions::flat_face_edges).
+  std::vector<PatchResult> results(n_patches);
+  // The marching-cubes gate (lattice edges: no feature sizing and no flat-face samples there,
+  // PatchFitOptions::flat_face_edges) and the label-image test (detail fit) in one pass.
   const bool feature_sizing_gate = options.sizing.feature_size > 0.0 && !options.sizing.feature_size_everywhere;
-  const bool marching_cubes = (feature_sizing_gate || options.fit.flat_face_edges > 0.0) && vertices_on_lattice_edges(input);
+  const bool detail_fit = options.fit.detail_spacing_edges > 0.0;
+  const LatticeShares lattice = detail_fit || feature_sizing_gate || options.fit.flat_face_edges > 0.0
+                                    ? lattice_edge_shares(input)
+                                    : LatticeShares{};
+  const bool marching_cubes = marching_cubes_lattice(lattice);
   SurfMeshOptions fit_options = options;
   if (marching_cubes) fit_options.fit.flat_face_edges = 0.0;
-  std::vector<PatchResult> results(n_patches);
+  // The detail fit would follow a label image's staircases (docs/surfmesh.md "Detail fit:
+  // where it runs"): such an input keeps the plain fit.
+  if (detail_fit && label_image_staircase(lattice)) {
+    fit_options.fit.detail_spacing_edges = 0.0;
+    out.detail_fit_skipped = true;
+  }
   auto fit_all = [&](const BorderNodes& nodes) {
     run_parallel(n_patches, threads, options.progress, 0.0, 0.5, [&](std::size_t p) {
       fit_patch(input, segmentation, static_cast<int>(p), nodes, fit_options, mean_edge, results[p]);
@@ -405,7 +418,7 @@ SurfaceMesh surfmesh_detail::mesh_surface(const TriMesh& input, const Segmentati
     mesh_patch(segmentation, static_cast<int>(p), borders, options, h, uniform ? SizeAt() : front_size,
                patch_grid.empty() ? sizing_grid : patch_grid[p], results[p]);
     // A detail-fitted patch keeps its nodes closer to its input (PatchFitOptions::detail_spacing_edges).
-    const double offset = results[p].detail_fit ? options.fit.detail_node_offset_edges : options.max_node_offset_edges;
+    const double offset = results[p].report.detail_fit ? options.fit.detail_node_offset_edges : options.max_node_offset_edges;
     if (offset > 0.0)
       results[p].report.n_clamped_nodes = clamp_inner_nodes(input, segmentation, static_cast<int>(p), offset * mean_edge, results[p]);
   });

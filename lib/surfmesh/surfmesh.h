@@ -123,16 +123,19 @@ struct PatchFitOptions {
   //! every face above 1.5 sampled), nor on marching-cubes surfaces (the lattice-edge gate of
   //! feature sizing). Plain fit only; 0 = off. Default 1.5.
   double flat_face_edges = 1.5;
-  //! Detail fit (off when 0; not with a cell grid): a patch whose plain fit misses
+  //! Detail fit (off when 0; refused with a cell grid): a patch whose plain fit misses
   //! one of its own points by more than detail_above_edges mean input edges is refitted with
-  //! this finest lattice spacing (mean input edges, instead of min_spacing_edges), and that
+  //! this finest lattice spacing (mean input edges, instead of min_spacing_edges); the refit
+  //! is kept when its mean miss at the patch's own vertices is not larger, and that
   //! patch's new inner nodes are then kept within
   //! detail_node_offset_edges of its input faces along its axis (instead of
   //! SurfMeshOptions::max_node_offset_edges). For inputs with real detail of one or two mean
   //! edges (range scans, smoothed-image level sets: bunny, brain), with adaptive sizing at
   //! equal vertex count; the 2.5-edge lattice is there to average marching-cubes staircases,
   //! which the detail fit would follow (label images: liver Hausdorff 0.96 -> 1.86 with it;
-  //! docs/surfmesh.md "Detail fit"). 0 (off) or below min_spacing_edges. Default 0.
+  //! docs/surfmesh.md "Detail fit"): an input taken for a label image's staircase (half or
+  //! more of its vertices at their lattice edge's midpoint) is not refitted
+  //! (SurfaceMesh::detail_fit_skipped). 0 (off) or below min_spacing_edges. Default 0.
   double detail_spacing_edges = 0.0;
   //! See detail_spacing_edges (mean input edges, >= 0). Default 0.25.
   double detail_above_edges = 0.25;
@@ -287,6 +290,7 @@ struct PatchMeshReport {
   std::size_t n_triangles = 0;
   double fit_max_residual = 0.0; //!< at the patch's input vertices
   int fit_levels = 0;
+  bool detail_fit = false;         //!< refitted on the detail lattice (PatchFitOptions::detail_spacing_edges)
   std::size_t n_clamped_nodes = 0; //!< inner nodes moved back (max_node_offset_edges)
   double seconds = 0.0;
 };
@@ -331,6 +335,10 @@ struct SurfaceMesh {
   //! the input is not taken for a marching-cubes surface (or feature_size_everywhere), and
   //! the width-limited patches hold enough of the area for a size below the uniform one.
   bool feature_sizing_applied = false;
+  //! The detail fit was asked for (PatchFitOptions::detail_spacing_edges) but not run: the
+  //! input is taken for a label image's marching-cubes staircase (docs/surfmesh.md "Detail
+  //! fit: where it runs").
+  bool detail_fit_skipped = false;
 };
 
 //! Splits the patches whose fitted surface does not represent their input: every patch is

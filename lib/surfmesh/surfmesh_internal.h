@@ -156,8 +156,6 @@ struct PatchResult {
   bool has_surface = false;
   //! The surface is a band fit (CellGrid), not a plain fit of the vertices.
   bool band_fit = false;
-  //! The plain fit was refitted on the detail lattice (PatchFitOptions::detail_spacing_edges).
-  bool detail_fit = false;
   //! New nodes on the surface (world coordinates).
   std::vector<Eigen::Vector3d> inner_nodes;
   //! Triangles: ids >= 0 are global border nodes, id < 0 is inner node -(id + 1).
@@ -225,12 +223,34 @@ inline constexpr double kFeatureSizingMinAreaShare = 0.01;
 //! spacing). O(n + E).
 [[nodiscard]] double lattice_edge_vertex_share(const TriMesh& mesh);
 
+//! Shares of the input's vertices (lattice_edge_shares).
+struct LatticeShares {
+  double on_lattice_edges = 0.0;  //!< lattice_edge_vertex_share
+  //! Vertices at the midpoint of their lattice edge (two coordinates on lattice planes, the
+  //! third half a spacing from both, to 1e-3 spacing; or all three on the lattice, which is
+  //! what a midpoint is when the edges' most common extent, the spacing found, is half the
+  //! image's spacing): marching cubes of a label (0/1) image at the middle iso-value puts
+  //! every vertex there, a smooth image almost none.
+  double at_edge_midpoints = 0.0;
+};
+
+//! lattice_edge_vertex_share and the share of vertices at their lattice edge's midpoint in
+//! one pass. Measured (2026-11-26): see docs/surfmesh.md "Detail fit: where it runs".
+[[nodiscard]] LatticeShares lattice_edge_shares(const TriMesh& mesh);
+
+//! True when the input looks like the marching-cubes surface of a label image (staircases):
+//! lattice_edge_shares(mesh).at_edge_midpoints >= 0.5.
+[[nodiscard]] bool label_image_staircase(const LatticeShares& shares);
+
 //! True when the input looks like a marching-cubes surface: lattice_edge_vertex_share >= 0.5.
 //! Measured (2026-11-26; docs/surfmesh.md "The marching-cubes gate"): 1 on the scenes (level
 //! set and occupancy, res 24-256), the headsq, ironProt and liver surfaces and
 //! brainImageSmooth; at most 0.04 on the CAD and scanned meshes (cheese 0.001: its vertices
 //! share coordinates, but on no regular lattice), except three_peaks (1, a terrain on a grid).
 [[nodiscard]] bool vertices_on_lattice_edges(const TriMesh& mesh);
+
+//! vertices_on_lattice_edges from shares already computed: shares.on_lattice_edges >= 0.5.
+[[nodiscard]] bool marching_cubes_lattice(const LatticeShares& shares);
 
 //! Feature sizing's result: size_at empty when no vertex's size is below base.
 struct FeatureSizing {

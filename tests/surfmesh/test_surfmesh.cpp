@@ -783,13 +783,15 @@ TEST(Surfmesh, InnerNodesStayNearTheirPatchsFaces) {
 }
 
 TEST(Surfmesh, DetailFitFollowsDetailTheDefaultLatticeSmooths) {
-  // Ridges 4 edges apart, half an edge high: the default lattice (2.5 mean edges) smooths
-  // them; the detail fit (PatchFitOptions::detail_spacing_edges) refits on a lattice of one
-  // mean edge and keeps the new nodes within detail_node_offset_edges of the input.
+  // Ridges about 4 edges apart, half an edge high: the default lattice (2.5 mean edges)
+  // smooths them; the detail fit (PatchFitOptions::detail_spacing_edges) refits on a lattice
+  // of one mean edge and keeps the new nodes within detail_node_offset_edges of the input.
+  // (The period is not a whole number of edges: heights on a few levels would make the grid
+  // a label image's staircase, which the detail fit skips, see DetailFitSkipsLabelImageStaircases.)
   constexpr int kN = 16;
   const double edge = 1.0 / kN;
   TriMesh mesh = to_trimesh(test::grid_patch(kN, kN));
-  for (const auto v : mesh.vertices()) mesh.point(v)[2] = 0.5 * edge * std::sin(2.0 * std::numbers::pi * mesh.point(v)[0] / (4.0 * edge));
+  for (const auto v : mesh.vertices()) mesh.point(v)[2] = 0.5 * edge * std::sin(2.0 * std::numbers::pi * mesh.point(v)[0] / (4.37 * edge));
   const Segmentation seg = labelled_segmentation(mesh, std::vector<int>(mesh.n_faces(), 0), 1);
   SurfMeshOptions options;
   options.sizing.size = edge;
@@ -799,6 +801,9 @@ TEST(Surfmesh, DetailFitFollowsDetailTheDefaultLatticeSmooths) {
   options.fit.detail_spacing_edges = 1.0;
   const SurfaceMesh detail = mesh_surface(mesh, seg, options);
   expect_consistent(seg, detail);
+  EXPECT_FALSE(detail.detail_fit_skipped);
+  EXPECT_TRUE(detail.patches[0].detail_fit);
+  EXPECT_FALSE(plain.patches[0].detail_fit);
   EXPECT_LT(detail.patches[0].fit_max_residual, 0.5 * plain.patches[0].fit_max_residual);
   EXPECT_LE(max_inner_offset(mesh, detail), options.fit.detail_node_offset_edges * mean_edge * (1.0 + 1e-9));
   EXPECT_GT(max_inner_offset(mesh, plain), 2.0 * options.fit.detail_node_offset_edges * mean_edge);
@@ -806,6 +811,39 @@ TEST(Surfmesh, DetailFitFollowsDetailTheDefaultLatticeSmooths) {
   // A patch the default lattice fits within detail_above_edges is not refitted: the same nodes.
   options.fit.detail_above_edges = 2.0 * plain.patches[0].fit_max_residual / mean_edge;
   EXPECT_EQ(mesh_surface(mesh, seg, options).nodes, plain.nodes);
+}
+
+// The detail fit does not follow staircases: marching cubes of a 0/1 image at 0.5 puts every
+// vertex at the midpoint of its lattice edge, of a smooth image (level set, the brain's
+// smoothed image) almost none there. On the occupancy sphere the default lattice misses the
+// one-cell terraces by more than detail_above_edges, and the detail fit is skipped: the
+// same nodes as without it.
+TEST(Surfmesh, DetailFitSkipsLabelImageStaircases) {
+  const TriMesh steps = scene_mesh("sphere", 24, SampleMode::Occupancy);
+  const surfmesh_detail::LatticeShares step_shares = surfmesh_detail::lattice_edge_shares(steps);
+  EXPECT_EQ(step_shares.on_lattice_edges, 1.0);
+  EXPECT_GE(step_shares.at_edge_midpoints, 0.9);
+  EXPECT_TRUE(surfmesh_detail::label_image_staircase(step_shares));
+  for (const TriMesh& smooth : {scene_mesh("sphere", 24, SampleMode::LevelSet), read_mesh(test::test_data("io/brainImageSmooth.vtk"))}) {
+    const surfmesh_detail::LatticeShares shares = surfmesh_detail::lattice_edge_shares(smooth);
+    EXPECT_GE(shares.on_lattice_edges, 0.5);
+    EXPECT_LT(shares.at_edge_midpoints, 0.1);
+    EXPECT_FALSE(surfmesh_detail::label_image_staircase(shares));
+  }
+  EXPECT_EQ(surfmesh_detail::lattice_edge_shares(TriMesh()).at_edge_midpoints, 0.0);
+
+  const Segmentation seg = segment(steps);
+  SurfMeshOptions options;
+  const SurfaceMesh plain = mesh_surface(steps, seg, options);
+  double worst = 0.0;
+  for (const auto& p : plain.patches) worst = std::max(worst, p.fit_max_residual);
+  EXPECT_GT(worst, options.fit.detail_above_edges * plain.input_mean_edge);  // the gate would open
+  options.fit.detail_spacing_edges = 1.0;
+  const SurfaceMesh detail = mesh_surface(steps, seg, options);
+  EXPECT_TRUE(detail.detail_fit_skipped);
+  EXPECT_FALSE(plain.detail_fit_skipped);
+  for (const auto& p : detail.patches) EXPECT_FALSE(p.detail_fit);
+  EXPECT_EQ(detail.nodes, plain.nodes);
 }
 
 // Most of the curve's input edges have a dihedral above the angle (a crease that is not
@@ -968,6 +1006,7 @@ TEST(Surfmesh, BadOptionsAndMismatchedSegmentation) {
       [](SurfMeshOptions& o) { o.fit.detail_spacing_edges = -1.0; },
       [](SurfMeshOptions& o) { o.fit.detail_above_edges = std::nan(""); },
       [](SurfMeshOptions& o) { o.fit.detail_node_offset_edges = 0.0; },
+      [](SurfMeshOptions& o) { o.cell_grid = {true, Eigen::Vector3d::Zero(), Eigen::Vector3d::Ones()}; o.fit.detail_spacing_edges = 1.0; },
       [](SurfMeshOptions& o) { o.smoothing_passes = -1; },
       [](SurfMeshOptions& o) { o.corner_split_angle_deg = 0.0; },
       [](SurfMeshOptions& o) { o.corner_split_angle_deg = std::nan(""); },

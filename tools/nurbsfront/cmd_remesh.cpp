@@ -2,8 +2,10 @@
 // nurbsfront remesh IN OUT: the remeshing pipeline on a mesh file or a built-in scene's
 // marching-cubes surface; prints a summary, writes the mesh, optionally the JSON report
 // and a VTK file with per-face patch id and alpha. Exits non-zero when the report has errors.
+#include <cmath>
 #include <cstddef>
 #include <fstream>
+#include <iomanip>
 #include <iostream>
 #include <limits>
 #include <memory>
@@ -25,6 +27,10 @@
 namespace nurbsfront::cli {
 
 namespace {
+
+// --vertices: remesh_to_vertex_count's tolerance and runs (its defaults).
+constexpr double kVertexCountTolerance = 0.005;
+constexpr int kVertexCountRuns = 4;
 
 struct RemeshArgs {
   std::vector<std::string> files;  // IN OUT, or OUT with --scene
@@ -131,7 +137,8 @@ void run_remesh(RemeshArgs& args) {
   const TriMesh& input = prepared.mesh;
   options.validate();
   const double seconds_input = watch.seconds();
-  const RemeshResult result = args.vertices ? remesh_to_vertex_count(input, *args.vertices, options) : remesh(input, options);
+  const RemeshResult result = args.vertices ? remesh_to_vertex_count(input, *args.vertices, options, kVertexCountTolerance, kVertexCountRuns)
+                                            : remesh(input, options);
 
   watch.restart();
   write_mesh(result.mesh, args.output);
@@ -153,6 +160,16 @@ void run_remesh(RemeshArgs& args) {
   if (args.vertices) {
     std::cout << "output vertices " << result.mesh.n_vertices() << " (asked " << *args.vertices << "), target edge "
               << result.report.target_size << '\n';
+    // remesh_to_vertex_count returns its closest run: say so when that is not the count asked.
+    const double off = std::abs(static_cast<double>(result.mesh.n_vertices()) - static_cast<double>(*args.vertices)) /
+                       static_cast<double>(*args.vertices);
+    if (off > kVertexCountTolerance) {
+      std::cerr << "warning: remesh: " << result.mesh.n_vertices() << " output vertices are " << std::fixed
+                << std::setprecision(1) << 100.0 * off << "% from the " << *args.vertices
+                << " asked (not reached within " << 100.0 * kVertexCountTolerance << "% in " << kVertexCountRuns
+                << " runs, the size changing by at most 3x per run; a count far from the input's may be unreachable)\n"
+                << std::defaultfloat;
+    }
   }
   std::cout << "input " << seconds_input << " s, output " << seconds_output << " s\n"
             << "wrote " << args.output << (args.vtk.empty() ? "" : ", " + args.vtk)
