@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "nurbsfront/core/error.h"
+#include "nurbsfront/core/parallel.h"
 #include "nurbsfront/io/mesh_io.h"
 
 namespace nurbsfront {
@@ -983,7 +984,9 @@ TriMesh read_mesh(const std::filesystem::path& path, const CleanOptions& options
   // to_trimesh() runs check_manifold() (the points are finite: read_soup checked them);
   // the check is repeated only to name the file in the error.
   try {
-    return to_trimesh(cleaned.soup);
+    TriMesh mesh;
+    to_trimesh(cleaned.soup, mesh, parallel::thread_count(options.threads));
+    return mesh;
   } catch (const TopologyError&) {
     const ManifoldCheck check = check_manifold(cleaned.soup);
     throw TopologyError("'" + path.string() + "' is not an oriented 2-manifold after cleaning: " + check.message() +
