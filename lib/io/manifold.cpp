@@ -316,21 +316,24 @@ std::string PrepareReport::summary() const {
 //! value into its final place (OpenMesh meshes declare no move operations: a copy of a 1 M
 //! face mesh costs about 75 ms).
 TriMesh manifold_mesh(const TriangleSoup& cleaned, PrepareReport& report, unsigned n_threads) {
-  TriMesh mesh;  // every return returns it (named return value: no copy)
+  TriMesh mesh;  // the one return value (named return value: no copy)
+  bool built = false;
   try {
     to_trimesh(cleaned, mesh, n_threads);
-    return mesh;
+    built = true;
   } catch (const TopologyError&) {
   }
-  const ManifoldRepair repaired = make_manifold(cleaned);
-  report.manifold = repaired.report;
-  try {
-    to_trimesh(repaired.soup, mesh, n_threads);
-    return mesh;
-  } catch (const TopologyError& e) {
-    throw InvalidInput("the input is not an oriented 2-manifold even after repair (" + report.summary() + "): " +
-                       e.what() + "; a non-orientable part (such as a Moebius band) cannot be remeshed");
+  if (!built) {
+    const ManifoldRepair repaired = make_manifold(cleaned);
+    report.manifold = repaired.report;
+    try {
+      to_trimesh(repaired.soup, mesh, n_threads);
+    } catch (const TopologyError& e) {
+      throw InvalidInput("the input is not an oriented 2-manifold even after repair (" + report.summary() + "): " +
+                         e.what() + "; a non-orientable part (such as a Moebius band) cannot be remeshed");
+    }
   }
+  return mesh;
 }
 
 PreparedMesh prepare_mesh(const TriangleSoup& soup, const CleanOptions& options) {

@@ -983,15 +983,15 @@ TriMesh read_mesh(const std::filesystem::path& path, const CleanOptions& options
   CleanResult cleaned = clean(read_soup(path), options);
   // to_trimesh() runs check_manifold() (the points are finite: read_soup checked them);
   // the check is repeated only to name the file in the error.
+  TriMesh mesh;  // the one return value (named return value: OpenMesh meshes have no move)
   try {
-    TriMesh mesh;
     to_trimesh(cleaned.soup, mesh, parallel::thread_count(options.threads));
-    return mesh;
   } catch (const TopologyError&) {
     const ManifoldCheck check = check_manifold(cleaned.soup);
     throw TopologyError("'" + path.string() + "' is not an oriented 2-manifold after cleaning: " + check.message() +
                         " (prepare_mesh() repairs that: `nurbsfront convert --repair`)");
   }
+  return mesh;
 }
 
 }  // namespace nurbsfront
