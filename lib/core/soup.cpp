@@ -3,10 +3,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <exception>
 #include <limits>
 #include <sstream>
 
 #include "nurbsfront/core/error.h"
+#include "nurbsfront/core/parallel.h"
 #include "nurbsfront/core/soup_internal.h"
 #include "nurbsfront/core/tolerances.h"
 
@@ -191,12 +193,51 @@ TriMesh to_trimesh(const TriangleSoup& soup) {
   return mesh;
 }
 
-void to_trimesh(const TriangleSoup& soup, TriMesh& mesh) {
+void to_trimesh(const TriangleSoup& soup, TriMesh& mesh) { to_trimesh(soup, mesh, 1); }
+
+void to_trimesh(const TriangleSoup& soup, TriMesh& mesh, unsigned n_threads) {
   mesh.clear();
   require_finite(soup);
-  const ManifoldCheck check = check_manifold(soup);
+  const ManifoldCheck check = core_detail::check_and_build(soup, mesh, n_threads);
   if (!check.ok()) throw TopologyError("nurbsfront: mesh is not an oriented 2-manifold: " + check.message());
-  core_detail::to_trimesh_checked(soup, mesh);
+}
+
+ManifoldCheck core_detail::check_and_build(const TriangleSoup& soup, TriMesh& mesh, unsigned n_threads) {
+  const std::size_t n_points = soup.points.size();
+  const bool buildable = std::all_of(soup.triangles.begin(), soup.triangles.end(), [n_points](const auto& t) {
+    return t[0] < n_points && t[1] < n_points && t[2] < n_points && t[0] != t[1] && t[1] != t[2] && t[2] != t[0];
+  });
+  if (n_threads < 2 || !buildable || soup.triangles.empty()) {
+    const ManifoldCheck check = check_manifold(soup);
+    if (check.ok()) {
+      to_trimesh_checked(soup, mesh);
+    } else {
+      mesh.clear();
+    }
+    return check;
+  }
+  ManifoldCheck check;
+  std::exception_ptr build_error;  // reported only when the check accepts the soup
+  parallel::for_chunks(2, 2, 1, [&](std::size_t begin, std::size_t, unsigned) {
+    if (begin == 0) {
+      check = check_manifold(soup);
+      return;
+    }
+    try {
+      to_trimesh_checked(soup, mesh);
+    } catch (const InvalidInput&) {
+      build_error = std::current_exception();
+    }
+  });
+  if (!check.ok()) {
+    mesh.clear();
+    return check;
+  }
+  if (build_error) {
+    mesh.clear();
+    std::rethrow_exception(build_error);
+  }
+  return check;
 }
 
 void core_detail::to_trimesh_checked(const TriangleSoup& soup, TriMesh& mesh) {

@@ -71,6 +71,11 @@ struct ManifoldCheck {
 //! \throw as to_trimesh(soup); `mesh` is left empty then.
 void to_trimesh(const TriangleSoup& soup, TriMesh& mesh);
 
+//! As to_trimesh(soup, mesh); with n_threads >= 2 check_manifold() runs beside the build
+//! (the build of a soup the check refuses is thrown away). The same mesh and the same
+//! errors for any thread count.
+void to_trimesh(const TriangleSoup& soup, TriMesh& mesh, unsigned n_threads);
+
 //! The mesh's vertices and faces as a soup (deleted elements skipped, garbage ignored).
 [[nodiscard]] TriangleSoup to_soup(const TriMesh& mesh);
 

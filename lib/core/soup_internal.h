@@ -10,4 +10,11 @@ namespace nurbsfront::core_detail {
 //! \throw InvalidInput for non-finite coordinates; `mesh` is left empty then.
 void to_trimesh_checked(const TriangleSoup& soup, TriMesh& mesh);
 
+//! check_manifold(soup); when it is ok, `mesh` is to_trimesh_checked(soup, mesh)'s mesh,
+//! otherwise it is left empty. With n_threads >= 2 and every triangle naming three distinct
+//! in-range points, the check runs on a second thread while the mesh is built (the build
+//! only stores handles there, so a refused soup costs a discarded mesh, never a bad access).
+//! \throw InvalidInput for non-finite coordinates of a soup the check accepts.
+ManifoldCheck check_and_build(const TriangleSoup& soup, TriMesh& mesh, unsigned n_threads);
+
 }  // namespace nurbsfront::core_detail

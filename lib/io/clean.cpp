@@ -142,6 +142,7 @@ void CleanOptions::validate() const {
     throw InvalidInput("CleanOptions::weld_tolerance_relative must be in [0, 1), got " +
                        std::to_string(weld_tolerance_relative));
   }
+  if (threads < 0) throw InvalidInput("CleanOptions::threads must be >= 0, got " + std::to_string(threads));
 }
 
 CleanResult clean(const TriangleSoup& soup, const CleanOptions& options) {

@@ -15,6 +15,7 @@
 #include <Eigen/Geometry>
 
 #include "nurbsfront/core/error.h"
+#include "nurbsfront/core/parallel.h"
 #include "nurbsfront/io/mesh_io.h"
 
 namespace nurbsfront {
@@ -314,19 +315,25 @@ std::string PrepareReport::summary() const {
 //! it: the common case, an oriented 2-manifold, costs one check, as before. Returned by
 //! value into its final place (OpenMesh meshes declare no move operations: a copy of a 1 M
 //! face mesh costs about 75 ms).
-TriMesh manifold_mesh(const TriangleSoup& cleaned, PrepareReport& report) {
+TriMesh manifold_mesh(const TriangleSoup& cleaned, PrepareReport& report, unsigned n_threads) {
+  TriMesh mesh;  // the one return value (named return value: no copy)
+  bool built = false;
   try {
-    return to_trimesh(cleaned);
+    to_trimesh(cleaned, mesh, n_threads);
+    built = true;
   } catch (const TopologyError&) {
   }
-  const ManifoldRepair repaired = make_manifold(cleaned);
-  report.manifold = repaired.report;
-  try {
-    return to_trimesh(repaired.soup);
-  } catch (const TopologyError& e) {
-    throw InvalidInput("the input is not an oriented 2-manifold even after repair (" + report.summary() + "): " +
-                       e.what() + "; a non-orientable part (such as a Moebius band) cannot be remeshed");
+  if (!built) {
+    const ManifoldRepair repaired = make_manifold(cleaned);
+    report.manifold = repaired.report;
+    try {
+      to_trimesh(repaired.soup, mesh, n_threads);
+    } catch (const TopologyError& e) {
+      throw InvalidInput("the input is not an oriented 2-manifold even after repair (" + report.summary() + "): " +
+                         e.what() + "; a non-orientable part (such as a Moebius band) cannot be remeshed");
+    }
   }
+  return mesh;
 }
 
 PreparedMesh prepare_mesh(const TriangleSoup& soup, const CleanOptions& options) {
@@ -337,7 +344,7 @@ PreparedMesh prepare_mesh(const TriangleSoup& soup, const CleanOptions& options)
     throw InvalidInput("the input has no triangles" +
                        std::string(soup.triangles.empty() ? "" : " left after dropping collapsed ones (" + report.summary() + ")"));
   }
-  PreparedMesh result{manifold_mesh(cleaned.soup, report), report};  // braced: evaluated left to right
+  PreparedMesh result{manifold_mesh(cleaned.soup, report, parallel::thread_count(options.threads)), report};  // braced: evaluated left to right
   // clean() counted the triangles with three distinct collinear corners; make_manifold
   // moves no point, so there are none to remove when it counted none.
   if (result.report.clean.n_collinear_faces > 0) remove_zero_area_faces(result.mesh, result.report);

@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "nurbsfront/core/error.h"
+#include "nurbsfront/core/parallel.h"
 #include "nurbsfront/io/mesh_io.h"
 
 namespace nurbsfront {
@@ -982,13 +983,15 @@ TriMesh read_mesh(const std::filesystem::path& path, const CleanOptions& options
   CleanResult cleaned = clean(read_soup(path), options);
   // to_trimesh() runs check_manifold() (the points are finite: read_soup checked them);
   // the check is repeated only to name the file in the error.
+  TriMesh mesh;  // the one return value (named return value: OpenMesh meshes have no move)
   try {
-    return to_trimesh(cleaned.soup);
+    to_trimesh(cleaned.soup, mesh, parallel::thread_count(options.threads));
   } catch (const TopologyError&) {
     const ManifoldCheck check = check_manifold(cleaned.soup);
     throw TopologyError("'" + path.string() + "' is not an oriented 2-manifold after cleaning: " + check.message() +
                         " (prepare_mesh() repairs that: `nurbsfront convert --repair`)");
   }
+  return mesh;
 }
 
 }  // namespace nurbsfront

@@ -202,7 +202,7 @@ using FacePair = std::array<std::uint32_t, 2>;
 // Every node used by a triangle becomes a vertex (in node order); triangles are added in
 // order, those OpenMesh cannot take are counted (n_rejected_triangles).
 void assemble(const std::vector<Eigen::Vector3d>& nodes, const std::vector<std::array<int, 3>>& triangles,
-              const std::vector<int>& triangle_patch, StitchResult& result, StitchReport& report) {
+              const std::vector<int>& triangle_patch, unsigned n_threads, StitchResult& result, StitchReport& report) {
   result.mesh = TriMesh();
   result.vertex_node.clear();
   result.face_patch.clear();
@@ -216,6 +216,7 @@ void assemble(const std::vector<Eigen::Vector3d>& nodes, const std::vector<std::
   // exactly the mesh that add_face() in triangle order gives (same vertex, edge, halfedge
   // and face numbering; add_face() never refuses a triangle of such a soup), at about half
   // the cost. Otherwise face by face below, skipping the triangles add_face() refuses.
+  // With 2+ threads the manifold check runs beside the direct build (check_and_build).
   {
     TriangleSoup soup;
     std::vector<std::uint32_t> index(nodes.size(), 0);
@@ -229,8 +230,7 @@ void assemble(const std::vector<Eigen::Vector3d>& nodes, const std::vector<std::
       soup.triangles.push_back({index[static_cast<std::size_t>(t[0])], index[static_cast<std::size_t>(t[1])],
                                 index[static_cast<std::size_t>(t[2])]});
     }
-    if (check_manifold(soup).ok()) {
-      core_detail::to_trimesh_checked(soup, result.mesh);
+    if (core_detail::check_and_build(soup, result.mesh, n_threads).ok()) {
       for (std::size_t i = 0; i < nodes.size(); ++i) {
         if (used[i]) {
           result.vertex_node.push_back(static_cast<int>(i));
@@ -241,6 +241,7 @@ void assemble(const std::vector<Eigen::Vector3d>& nodes, const std::vector<std::
       result.face_patch = triangle_patch;
       return;
     }
+    result.mesh = TriMesh();
   }
   TriMesh& mesh = result.mesh;
   std::vector<TriMesh::VertexHandle> handle(nodes.size());
@@ -298,11 +299,11 @@ void collapse(const SurfaceMesh& surface, const StitchOptions& options, const st
     // given up, the merges are undone by assembling the triangles as they were.
     auto restore = [&] {
       StitchReport scratch;
-      assemble(surface.nodes, surface.triangles, surface.triangle_patch, result, scratch);
+      assemble(surface.nodes, surface.triangles, surface.triangle_patch, options.n_threads, result, scratch);
     };
     StitchResult& trial = result;
     StitchReport trial_report;
-    assemble(nodes, triangles, triangle_patch, trial, trial_report);
+    assemble(nodes, triangles, triangle_patch, options.n_threads, trial, trial_report);
     if (trial_report.n_rejected_triangles > 0) {
       report.n_collapses_undone += merges.n_merges;
       restore();
@@ -509,7 +510,7 @@ StitchResult stitch_impl(const SurfaceMesh& surface, const TriMesh* input, const
   }
 
   // 1. Assembly by id.
-  assemble(surface.nodes, surface.triangles, surface.triangle_patch, result, report);
+  assemble(surface.nodes, surface.triangles, surface.triangle_patch, options.n_threads, result, report);
   TriMesh& mesh = result.mesh;
   if (report.n_rejected_triangles > 0) {
     report.errors.push_back(std::to_string(report.n_rejected_triangles) +

@@ -4,6 +4,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <condition_variable>
 #include <cstdint>
 #include <mutex>
 #include <stdexcept>
@@ -59,6 +60,38 @@ TEST(Parallel, EveryIndexOnceAndTheSameResultsForAnyThreadCount) {
   int n_calls = 0;
   EXPECT_TRUE(parallel::for_chunks(0, 4, 1, [&](std::size_t, std::size_t, unsigned) { ++n_calls; }));
   EXPECT_EQ(n_calls, 0);
+}
+
+// Two chunks on two threads: each call waits (up to a timeout, so a pool that runs one
+// worker fails instead of hanging) until both calls have arrived. Both can arrive only when
+// two threads run the task at the same time; their thread ids and worker numbers differ.
+TEST(Parallel, TwoWorkersRunAtTheSameTime) {
+  for (const bool with_monitor : {false, true}) {
+    std::mutex mutex;
+    std::condition_variable arrived_changed;
+    int arrived = 0;
+    int met = 0;  // calls that saw both arrivals before the timeout
+    std::vector<std::thread::id> ids;
+    std::vector<unsigned> workers;
+    auto task = [&](std::size_t, std::size_t, unsigned worker) {
+      std::unique_lock lock(mutex);
+      ++arrived;
+      ids.push_back(std::this_thread::get_id());
+      workers.push_back(worker);
+      arrived_changed.notify_all();
+      if (arrived_changed.wait_for(lock, std::chrono::seconds(20), [&] { return arrived >= 2; })) ++met;
+    };
+    const parallel::Monitor monitor = with_monitor ? parallel::Monitor([](std::size_t) { return true; }) : nullptr;
+    EXPECT_TRUE(parallel::for_chunks(2, 2, 1, task, monitor));
+    EXPECT_EQ(met, 2) << "with monitor " << with_monitor;
+    ASSERT_EQ(ids.size(), 2U);
+    EXPECT_NE(ids[0], ids[1]);
+    EXPECT_NE(workers[0], workers[1]);
+    if (with_monitor) {  // every chunk on a started thread
+      EXPECT_NE(ids[0], std::this_thread::get_id());
+      EXPECT_NE(ids[1], std::this_thread::get_id());
+    }
+  }
 }
 
 TEST(Parallel, WorkerExceptionReachesTheCaller) {

@@ -170,6 +170,9 @@ TEST(Clean, RejectsBadInputAndOptions) {
   EXPECT_THROW((void)clean(test::cube(), bad), InvalidInput);
   bad.weld_tolerance_relative = std::numeric_limits<double>::quiet_NaN();
   EXPECT_THROW(bad.validate(), InvalidInput);
+  CleanOptions bad_threads;
+  bad_threads.threads = -1;
+  EXPECT_THROW(bad_threads.validate(), InvalidInput);
   TriangleSoup s = test::cube();
   s.triangles.push_back({0, 1, 99});
   EXPECT_THROW((void)clean(s), InvalidInput);

@@ -206,6 +206,13 @@ TEST(PrepareMesh, WeldsRepairsAndNamesWhatItDid) {
   EXPECT_EQ(p.mesh.n_vertices(), 16u);
   EXPECT_EQ(p.report.summary(), "1 duplicate vertices welded, 1 vertices duplicated at non-manifold points");
   EXPECT_EQ(prepare_mesh(cube()).report.summary(), "nothing to repair");
+  // With the manifold checks beside the builds (2 threads): the same repair and mesh.
+  CleanOptions two;
+  two.threads = 2;
+  const PreparedMesh q = prepare_mesh(s, two);
+  EXPECT_EQ(q.report.summary(), p.report.summary());
+  EXPECT_EQ(to_soup(q.mesh).triangles, to_soup(p.mesh).triangles);
+  EXPECT_EQ(to_soup(q.mesh).points, to_soup(p.mesh).points);
 }
 
 TEST(PrepareMesh, ReadMeshPointsToTheRepair) {
@@ -216,6 +223,9 @@ TEST(PrepareMesh, ReadMeshPointsToTheRepair) {
   } catch (const TopologyError& e) {
     EXPECT_NE(std::string(e.what()).find("convert --repair"), std::string::npos) << e.what();
   }
+  CleanOptions two;
+  two.threads = 2;
+  EXPECT_THROW((void)read_mesh(path, two), TopologyError);
   const PreparedMesh p = prepare_mesh(read_soup(path));
   EXPECT_EQ(p.report.manifold.n_paired_edges, 1u);
   EXPECT_EQ(p.mesh.n_faces(), 24u);

@@ -86,7 +86,9 @@ PreparedMesh load_input(const RemeshArgs& args, RemeshOptions& remesh_options) {
     if (args.occupancy) throw InvalidInput("remesh: --occupancy applies to --scene only");
     soup = read_soup(args.input);
   }
-  return prepare_mesh(soup);
+  CleanOptions clean_options;
+  clean_options.threads = args.threads ? static_cast<int>(*args.threads) : 0;
+  return prepare_mesh(soup, clean_options);
 }
 
 void run_remesh(RemeshArgs& args) {

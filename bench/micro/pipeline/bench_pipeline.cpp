@@ -75,11 +75,13 @@ void run(benchmark::State& state, const std::string& name) {
   const std::filesystem::path in_path = std::filesystem::temp_directory_path() / ("nurbsfront_bench_" + name + "_in.ply");
   const std::filesystem::path out_path = std::filesystem::temp_directory_path() / ("nurbsfront_bench_" + name + "_out.ply");
   if (files) write_mesh(mesh, in_path);
+  CleanOptions read_options;  // the input's mesh built with the run's threads
+  read_options.threads = static_cast<int>(state.range(0));
   RemeshReport report;
   const double cpu_start = process_cpu_seconds();
   for (auto _ : state) {
     if (files) {
-      const TriMesh read = read_mesh(in_path);
+      const TriMesh read = read_mesh(in_path, read_options);
       RemeshResult result = remesh(read, options);
       write_mesh(result.mesh, out_path);
       report = std::move(result.report);
