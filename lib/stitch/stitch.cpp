@@ -440,10 +440,12 @@ constexpr int kSplitRounds = 3;
 // splits, so the earlier ones keep their indices.
 void split_obtuse_checked(const SurfaceMesh& surface, const StitchOptions& options, std::vector<std::uint8_t>& feature,
                           StitchResult& result, StitchReport& report) {
-  const TriMesh before = result.mesh;
+  // The copy to go back to exists only when a crossing can make the splits go back.
+  std::optional<TriMesh> before;
+  if (options.check_self_intersections) before = result.mesh;
   const std::size_t n_faces = result.face_patch.size(), n_vertices = result.vertex_node.size(), n_nodes = feature.size();
   auto restore = [&] {
-    result.mesh = before;
+    result.mesh = *before;
     result.face_patch.resize(n_faces);
     result.vertex_node.resize(n_vertices);
     feature.resize(n_nodes);
@@ -484,11 +486,20 @@ void split_obtuse_checked(const SurfaceMesh& surface, const StitchOptions& optio
           }
         }
       }
-      if (crossing) refused.push_back(split.split_edges[k]);
+      // An edge is refused by its two vertices, so only an edge of the mesh before the splits
+      // (a vertex made by a split gets another index in the next round).
+      const auto& edge = split.split_edges[k];
+      const bool original = static_cast<std::size_t>(edge[0]) < n_vertices && static_cast<std::size_t>(edge[1]) < n_vertices;
+      if (crossing && original) refused.push_back(edge);
     }
-    report.n_obtuse_splits_undone += refused.size() - refused_before;
+    const std::size_t blamed = refused.size() - refused_before;
     restore();
-    if (refused.size() == refused_before) return;
+    if (blamed == 0 || round + 1 == kSplitRounds) {
+      // Given up: every split of this round is undone.
+      report.n_obtuse_splits_undone += split.n_splits;
+      return;
+    }
+    report.n_obtuse_splits_undone += blamed;
     std::sort(refused.begin(), refused.end());
   }
 }

@@ -469,11 +469,12 @@ TEST(Pipeline, CreaseBoundedNarrowFacesSizedFromTheirWidth) {
 
 // A hand-made volume: a slab with two crossing fins one voxel thick on top (their rims and
 // ends are strips about one voxel wide: patches narrower than half a target edge). Its
-// marching-cubes surface passes the lattice gate, so narrow patches join a neighbour
+// marching-cubes surface (intensities with a wobble, as in a CT image) passes the lattice gate, so narrow patches join a neighbour
 // (RemeshOptions::narrow_patch_merge, docs/segment.md "Narrow patches"): fewer patches, the
 // contract and topology kept, no crossing, mean alpha and obtuse share not worse. The same
-// surface turned by 30 deg is not taken for marching cubes and is left alone.
-TriMesh slab_with_fins() {
+// surface turned by 30 deg is not taken for marching cubes, and the label image's surface (0/1
+// intensities: every vertex at its lattice edge's midpoint) is not merged either.
+TriMesh slab_with_fins(bool label_image = false) {
   ScalarGrid grid;
   grid.dims = {24, 24, 24};
   grid.values.assign(grid.size(), 0.0F);
@@ -483,7 +484,12 @@ TriMesh slab_with_fins() {
         const bool slab = i >= 3 && i <= 20 && j >= 3 && j <= 20 && k >= 3 && k <= 10;
         const bool fin_x = i == 11 && j >= 5 && j <= 18 && k >= 11 && k <= 17;
         const bool fin_y = j == 8 && i >= 5 && i <= 18 && k >= 11 && k <= 15;
-        if (slab || fin_x || fin_y) grid.values[grid.index(i, j, k)] = 1.0F;
+        const bool inside = slab || fin_x || fin_y;
+        // A CT-like image: intensities vary a little, so the iso-surface crosses its lattice
+        // edges at varying points (not at their midpoints, as a label image's does). (With a
+        // wobble of 0.05 or more the fins' rims are no longer narrow patches: no merge.)
+        const double wobble = label_image ? 0.0 : 0.02 * std::sin(1.7 * i + 2.3 * j + 3.1 * k);
+        grid.values[grid.index(i, j, k)] = static_cast<float>((inside ? 0.8 : 0.2) + wobble);
       }
     }
   }
@@ -505,7 +511,7 @@ TEST(Pipeline, NarrowFinPatchesJoinANeighbour) {
   const RemeshReport& rep = with.report;
   EXPECT_TRUE(rep.ok()) << errors_of(rep);
   EXPECT_GE(rep.n_narrow_merged, 1u);
-  EXPECT_EQ(rep.n_patches + rep.n_narrow_merged, without.report.n_patches);
+  EXPECT_LT(rep.n_patches, without.report.n_patches);
   const TopologyReport& t = rep.output.topology;
   EXPECT_TRUE(t.is_closed && t.is_manifold && t.is_consistently_oriented);
   EXPECT_EQ(t.euler_characteristic, 2);
@@ -523,6 +529,7 @@ TEST(Pipeline, NarrowFinPatchesJoinANeighbour) {
   }
   options.narrow_patch_merge = 0.5;
   EXPECT_EQ(remesh(turned, options).report.n_narrow_merged, 0u);
+  EXPECT_EQ(remesh(slab_with_fins(true), options).report.n_narrow_merged, 0u);
   options.narrow_patch_merge = -1.0;
   EXPECT_THROW((void)remesh(mesh, options), InvalidInput);
 }
