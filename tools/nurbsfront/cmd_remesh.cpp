@@ -52,6 +52,8 @@ struct RemeshArgs {
   std::optional<double> narrow_merge;
   std::optional<int> obtuse_repair_rounds;
   std::optional<int> obtuse_split_rounds;
+  std::optional<double> corner_angle;
+  std::optional<double> flat_face_edges;
   std::optional<double> chord;
   std::optional<double> max_slope;
   std::optional<double> split_above;
@@ -110,6 +112,8 @@ void run_remesh(RemeshArgs& args) {
   if (args.narrow_merge) options.narrow_patch_merge = *args.narrow_merge;
   if (args.obtuse_repair_rounds) options.stitch.obtuse_repair_rounds = *args.obtuse_repair_rounds;
   if (args.obtuse_split_rounds) options.stitch.obtuse_split_rounds = *args.obtuse_split_rounds;
+  if (args.corner_angle) options.surfmesh.corner_split_angle_deg = *args.corner_angle;
+  if (args.flat_face_edges) options.surfmesh.fit.flat_face_edges = *args.flat_face_edges;
   if (args.chord) options.surfmesh.sizing.chord_error = *args.chord;
   if (args.max_slope) options.segment.max_slope_deg = *args.max_slope;
   if (args.split_above) options.surfmesh.fit.split_above_edges = *args.split_above;
@@ -242,6 +246,14 @@ void add_remesh_command(CLI::App& app) {
   cmd->add_option("--obtuse-split-rounds", args->obtuse_split_rounds,
                   "Sweeps of the stitch's obtuse splits (longest edge split at the altitude's foot; default 2; "
                   "0 = off; docs/stitch.md \"Obtuse splits\")");
+  cmd->add_option("--corner-angle", args->corner_angle,
+                  "Patch corners wider than this (deg, in the surface metric) get a node on their bisector "
+                  "instead of one closing triangle (in (0, 180]; default 89.5; 180 = off; docs/front2d.md "
+                  "\"Corner rule\")");
+  cmd->add_option("--flat-face-edges", args->flat_face_edges,
+                  "Input faces longer than this many mean edges lying in one plane with two neighbours are "
+                  "sampled inside for the fit (default 1.5; 0 = off; not on marching-cubes inputs; "
+                  "docs/surfmesh.md \"Flat faces beside a fillet\")");
   cmd->add_option("--chord", args->chord, "Chord error for --adaptive (length units; default 0.05 x size)");
   cmd->add_option("--max-slope", args->max_slope, "Largest angle (deg) between a face normal and its patch axis (default 60)");
   cmd->add_option("--split-above", args->split_above,
