@@ -67,7 +67,8 @@ double jet_curvature(const std::vector<Eigen::Vector3d>& points, double radius) 
     rhs += row * (q.dot(n) / radius);
   }
   const Eigen::LDLT<Eigen::Matrix<double, 6, 6>> ldlt(normal.selfadjointView<Eigen::Lower>());
-  if (ldlt.info() != Eigen::Success) return -1.0;
+  // LDLT reports success on a singular matrix too (points on a line or a conic): no estimate.
+  if (ldlt.info() != Eigen::Success || !(ldlt.rcond() > 1e-12)) return -1.0;
   const Eigen::Matrix<double, 6, 1> a = ldlt.solve(rhs);
   if (!a.allFinite()) return -1.0;
   SurfaceDerivatives d;
