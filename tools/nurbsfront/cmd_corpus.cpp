@@ -239,7 +239,9 @@ void run_one(const OneArgs& a) {
         soup = read_soup(a.input);
       }
       if (!a.pslg) {
-        PreparedMesh prepared = prepare_mesh(soup);
+        CleanOptions clean;  // the input's mesh built with the run's threads, as remesh does
+        clean.threads = static_cast<int>(a.threads);
+        PreparedMesh prepared = prepare_mesh(soup, clean);
         repairs = prepared.report.summary();
         input = std::move(prepared.mesh);
       }

@@ -12,6 +12,7 @@
 #include <benchmark/benchmark.h>
 
 #include <sys/resource.h>
+#include <unistd.h>
 
 #include <filesystem>
 #include <map>
@@ -72,8 +73,10 @@ void run(benchmark::State& state, const std::string& name) {
   options.set_threads(static_cast<unsigned>(state.range(0)));
   options.compute_distances = state.range(1) != 0;
   const bool files = state.range(2) != 0;
-  const std::filesystem::path in_path = std::filesystem::temp_directory_path() / ("nurbsfront_bench_" + name + "_in.ply");
-  const std::filesystem::path out_path = std::filesystem::temp_directory_path() / ("nurbsfront_bench_" + name + "_out.ply");
+  // The process id in the names: two benchmark processes at once do not share files.
+  const std::string stem = "nurbsfront_bench_" + std::to_string(::getpid()) + "_" + name;
+  const std::filesystem::path in_path = std::filesystem::temp_directory_path() / (stem + "_in.ply");
+  const std::filesystem::path out_path = std::filesystem::temp_directory_path() / (stem + "_out.ply");
   if (files) write_mesh(mesh, in_path);
   CleanOptions read_options;  // the input's mesh built with the run's threads
   read_options.threads = static_cast<int>(state.range(0));
