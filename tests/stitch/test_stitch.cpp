@@ -288,6 +288,69 @@ TEST(Stitch, ObtuseSplitOfAFeatureEdgeKeepsTheCreaseStraight) {
   EXPECT_THROW((void)stitch(surface, bad), InvalidInput);
 }
 
+// A split whose new triangles cross another component is undone. A flat rhombus of one
+// patch, A-B its long diagonal (both triangles obtuse at C and D; flips and moves off, so
+// only the split can repair them). The patch's fit is planted 0.1 above the rhombus, so the
+// split's node goes 0.1 above the middle of A-B (under the 1/8 of the edge it may be off)
+// and its four triangles form a low tent. A small upright triangle (a component of its
+// own) stands over the middle, above the rhombus (which it does not cross) but through
+// the tent: the split is undone and the output is the input.
+TEST(Stitch, AnObtuseSplitThroughANearbySheetIsUndone) {
+  TriangleSoup soup;
+  soup.points = {{0.0, 0.0, 0.0}, {1.0, 0.0, 0.0}, {0.5, 0.3, 0.0}, {0.5, -0.3, 0.0},
+                 {0.45, -0.05, 0.03}, {0.45, 0.05, 0.03}, {0.45, 0.0, 0.2}};
+  soup.triangles = {{0, 1, 2}, {1, 0, 3}, {4, 5, 6}};
+  const std::vector<int> face_patch{0, 0, 1};
+  ASSERT_EQ(count_self_intersections(soup), 0u);
+  SurfaceMesh surface = make_surface(soup, face_patch, 2);
+  const double local_z = surface.surfaces[0].frame.to_local(Eigen::Vector3d(0.5, 0.0, 0.1)).z();
+  for (double& c : surface.surfaces[0].field.mutable_coefficients()) c = local_z;
+  const TriMesh input = to_trimesh(soup);
+  StitchOptions options;
+  options.optimisation_passes = 0;
+  options.obtuse_repair_rounds = 0;
+  options.chord_compensation = 0.0;
+  // The planted defect works: unchecked, the split is made and crosses the sheet.
+  StitchOptions unchecked = options;
+  unchecked.check_self_intersections = false;
+  const StitchResult crossing = stitch(surface, input, unchecked);
+  EXPECT_EQ(crossing.report.n_obtuse_splits, 1u);
+  EXPECT_GT(count_self_intersections(to_soup(crossing.mesh)), 0u);
+  const StitchResult r = stitch(surface, input, options);
+  EXPECT_TRUE(r.report.ok()) << joined(r.report.errors);
+  EXPECT_GE(r.report.n_obtuse_splits_undone, 1u);
+  EXPECT_EQ(r.report.n_obtuse_splits, 0u);
+  ASSERT_TRUE(r.report.output.topology.n_self_intersecting_pairs.has_value());
+  EXPECT_EQ(*r.report.output.topology.n_self_intersecting_pairs, 0u);
+  EXPECT_EQ(count_self_intersections(to_soup(r.mesh)), 0u);
+  // The arrays went back with the mesh.
+  EXPECT_EQ(r.mesh.n_vertices(), soup.points.size());
+  EXPECT_EQ(r.mesh.n_faces(), soup.triangles.size());
+  ASSERT_EQ(r.vertex_node.size(), r.mesh.n_vertices());
+  ASSERT_EQ(r.face_patch.size(), r.mesh.n_faces());
+  for (auto v : r.mesh.vertices()) {
+    const int g = r.vertex_node[static_cast<std::size_t>(v.idx())];
+    ASSERT_LT(static_cast<std::size_t>(g), soup.points.size());
+    EXPECT_EQ(to_eigen(r.mesh.point(v)), soup.points[static_cast<std::size_t>(g)]);
+  }
+  EXPECT_EQ(std::count(r.face_patch.begin(), r.face_patch.end(), 0), 2);
+  EXPECT_EQ(std::count(r.face_patch.begin(), r.face_patch.end(), 1), 1);
+  ASSERT_EQ(r.report.output_components.size(), r.report.input_components.size());
+  for (std::size_t k = 0; k < r.report.output_components.size(); ++k) {
+    EXPECT_EQ(r.report.output_components[k].euler_characteristic, r.report.input_components[k].euler_characteristic);
+  }
+  // With the sheet out of the way the split is kept.
+  TriangleSoup away = soup;
+  for (std::size_t k = 4; k < 7; ++k) away.points[k].y() += 2.0;
+  SurfaceMesh away_surface = make_surface(away, face_patch, 2);
+  away_surface.surfaces[0] = surface.surfaces[0];
+  const StitchResult kept = stitch(away_surface, to_trimesh(away), options);
+  EXPECT_TRUE(kept.report.ok()) << joined(kept.report.errors);
+  EXPECT_EQ(kept.report.n_obtuse_splits, 1u);
+  EXPECT_EQ(kept.report.n_obtuse_splits_undone, 0u);
+  EXPECT_EQ(kept.vertex_node.size(), kept.mesh.n_vertices());
+  EXPECT_EQ(kept.face_patch.size(), kept.mesh.n_faces());
+}
 // The obtuse repair and the chord compensation have their own switches: they run with the
 // flip and smoothing sweeps off, and nothing moves with all three off. Bad strengths are
 // refused.
