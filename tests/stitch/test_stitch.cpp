@@ -137,6 +137,20 @@ TriangleSoup jittered_sphere(int subdivisions, double amount) {
   return s;
 }
 
+// Whether v lies on the segment between its two neighbours u along a curve (the edges v-u
+// for which on_curve(halfedge v -> u) holds; exactly two of them), collinear within 1e-9 of
+// their distance: where an obtuse split puts its node on a crease or the boundary.
+template <class OnCurve>
+bool between_its_curve_neighbours(const TriMesh& mesh, TriMesh::VertexHandle v, OnCurve on_curve) {
+  std::vector<Eigen::Vector3d> ends;
+  for (auto h : mesh.voh_range(v)) {
+    if (on_curve(h)) ends.push_back(to_eigen(mesh.point(mesh.to_vertex_handle(h))));
+  }
+  if (ends.size() != 2) return false;
+  const Eigen::Vector3d p = to_eigen(mesh.point(v)), u = ends[0] - p, w = ends[1] - p;
+  return u.cross(w).norm() <= 1e-9 * (ends[1] - ends[0]).squaredNorm() && u.dot(w) < 0.0;
+}
+
 TEST(Stitch, SphereOfSixPatchesIsClosedOrientedWithEulerTwo) {
   const TriangleSoup soup = test::icosphere(3);
   const SurfaceMesh surface = cube_map_surface(soup);
@@ -275,6 +289,10 @@ TEST(Stitch, ObtuseSplitOfAFeatureEdgeKeepsTheCreaseStraight) {
     EXPECT_EQ(g, 4);  // a new node id
     EXPECT_EQ(r.mesh.valence(v), 4u);
     EXPECT_LT((p - A).cross(B - A).norm(), 1e-12);  // on the crease
+    EXPECT_TRUE(between_its_curve_neighbours(r.mesh, v, [&](TriMesh::HalfedgeHandle h) {
+      const int left = r.mesh.face_handle(h).idx(), right = r.mesh.opposite_face_handle(h).idx();
+      return r.face_patch[static_cast<std::size_t>(left)] != r.face_patch[static_cast<std::size_t>(right)];
+    }));
     EXPECT_NEAR(p.x(), 0.5, 1e-12);
     // The faces around it keep their sides' patches: those with C patch 0, with D patch 1.
     for (auto f : r.mesh.vf_range(v)) {
@@ -288,6 +306,98 @@ TEST(Stitch, ObtuseSplitOfAFeatureEdgeKeepsTheCreaseStraight) {
   EXPECT_THROW((void)stitch(surface, bad), InvalidInput);
 }
 
+// One triangle obtuse at C, its longest edge A-B on the input's boundary: the split puts a
+// feature node on the segment (at the altitude's foot, the midpoint), between A and B along
+// the boundary; two right triangles, nothing else moved.
+TEST(Stitch, ObtuseSplitOfABoundaryEdgeKeepsTheBoundaryStraight) {
+  TriangleSoup one;
+  one.points = {{0.0, 0.0, 0.0}, {1.0, 0.0, 0.0}, {0.5, 0.3, 0.0}};
+  one.triangles = {{0, 1, 2}};
+  const StitchResult r = stitch(make_surface(one, {0}, 1), to_trimesh(one));
+  EXPECT_TRUE(r.report.ok()) << joined(r.report.errors);
+  EXPECT_EQ(r.report.n_obtuse_splits, 1u);
+  ASSERT_EQ(r.mesh.n_vertices(), 4u);
+  ASSERT_EQ(r.mesh.n_faces(), 2u);
+  ASSERT_EQ(r.vertex_node.size(), 4u);
+  ASSERT_EQ(r.face_patch.size(), 2u);
+  EXPECT_EQ(r.report.output.quality.obtuse_fraction, 0.0);
+  EXPECT_EQ(r.report.output.topology.euler_characteristic, 1);
+  EXPECT_EQ(r.report.output.topology.n_boundary_loops, 1u);
+  for (auto v : r.mesh.vertices()) {
+    const auto g = static_cast<std::size_t>(r.vertex_node[static_cast<std::size_t>(v.idx())]);
+    if (g < one.points.size()) {
+      EXPECT_EQ(to_eigen(r.mesh.point(v)), one.points[g]);
+      continue;
+    }
+    EXPECT_TRUE(r.mesh.is_boundary(v));
+    EXPECT_TRUE(between_its_curve_neighbours(r.mesh, v, [&](TriMesh::HalfedgeHandle h) { return r.mesh.is_boundary(r.mesh.edge_handle(h)); }));
+    EXPECT_NEAR(r.mesh.point(v)[0], 0.5, 1e-12);
+  }
+}
+
+// A split whose new triangles cross another component is undone. A flat rhombus of one
+// patch, A-B its long diagonal (both triangles obtuse at C and D; flips and moves off, so
+// only the split can repair them). The patch's fit is planted 0.1 above the rhombus, so the
+// split's node goes 0.1 above the middle of A-B (under the 1/8 of the edge it may be off)
+// and its four triangles form a low tent. A small upright triangle (a component of its
+// own) stands over the middle, above the rhombus (which it does not cross) but through
+// the tent: the split is undone and the output is the input.
+TEST(Stitch, AnObtuseSplitThroughANearbySheetIsUndone) {
+  TriangleSoup soup;
+  soup.points = {{0.0, 0.0, 0.0}, {1.0, 0.0, 0.0}, {0.5, 0.3, 0.0}, {0.5, -0.3, 0.0},
+                 {0.45, -0.05, 0.03}, {0.45, 0.05, 0.03}, {0.45, 0.0, 0.2}};
+  soup.triangles = {{0, 1, 2}, {1, 0, 3}, {4, 5, 6}};
+  const std::vector<int> face_patch{0, 0, 1};
+  ASSERT_EQ(count_self_intersections(soup), 0u);
+  SurfaceMesh surface = make_surface(soup, face_patch, 2);
+  const double local_z = surface.surfaces[0].frame.to_local(Eigen::Vector3d(0.5, 0.0, 0.1)).z();
+  for (double& c : surface.surfaces[0].field.mutable_coefficients()) c = local_z;
+  const TriMesh input = to_trimesh(soup);
+  StitchOptions options;
+  options.optimisation_passes = 0;
+  options.obtuse_repair_rounds = 0;
+  options.chord_compensation = 0.0;
+  // The planted defect works: unchecked, the split is made and crosses the sheet.
+  StitchOptions unchecked = options;
+  unchecked.check_self_intersections = false;
+  const StitchResult crossing = stitch(surface, input, unchecked);
+  EXPECT_EQ(crossing.report.n_obtuse_splits, 1u);
+  EXPECT_GT(count_self_intersections(to_soup(crossing.mesh)), 0u);
+  const StitchResult r = stitch(surface, input, options);
+  EXPECT_TRUE(r.report.ok()) << joined(r.report.errors);
+  EXPECT_GE(r.report.n_obtuse_splits_undone, 1u);
+  EXPECT_EQ(r.report.n_obtuse_splits, 0u);
+  ASSERT_TRUE(r.report.output.topology.n_self_intersecting_pairs.has_value());
+  EXPECT_EQ(*r.report.output.topology.n_self_intersecting_pairs, 0u);
+  EXPECT_EQ(count_self_intersections(to_soup(r.mesh)), 0u);
+  // The arrays went back with the mesh.
+  EXPECT_EQ(r.mesh.n_vertices(), soup.points.size());
+  EXPECT_EQ(r.mesh.n_faces(), soup.triangles.size());
+  ASSERT_EQ(r.vertex_node.size(), r.mesh.n_vertices());
+  ASSERT_EQ(r.face_patch.size(), r.mesh.n_faces());
+  for (auto v : r.mesh.vertices()) {
+    const int g = r.vertex_node[static_cast<std::size_t>(v.idx())];
+    ASSERT_LT(static_cast<std::size_t>(g), soup.points.size());
+    EXPECT_EQ(to_eigen(r.mesh.point(v)), soup.points[static_cast<std::size_t>(g)]);
+  }
+  EXPECT_EQ(std::count(r.face_patch.begin(), r.face_patch.end(), 0), 2);
+  EXPECT_EQ(std::count(r.face_patch.begin(), r.face_patch.end(), 1), 1);
+  ASSERT_EQ(r.report.output_components.size(), r.report.input_components.size());
+  for (std::size_t k = 0; k < r.report.output_components.size(); ++k) {
+    EXPECT_EQ(r.report.output_components[k].euler_characteristic, r.report.input_components[k].euler_characteristic);
+  }
+  // With the sheet out of the way the split is kept.
+  TriangleSoup away = soup;
+  for (std::size_t k = 4; k < 7; ++k) away.points[k].y() += 2.0;
+  SurfaceMesh away_surface = make_surface(away, face_patch, 2);
+  away_surface.surfaces[0] = surface.surfaces[0];
+  const StitchResult kept = stitch(away_surface, to_trimesh(away), options);
+  EXPECT_TRUE(kept.report.ok()) << joined(kept.report.errors);
+  EXPECT_EQ(kept.report.n_obtuse_splits, 1u);
+  EXPECT_EQ(kept.report.n_obtuse_splits_undone, 0u);
+  EXPECT_EQ(kept.vertex_node.size(), kept.mesh.n_vertices());
+  EXPECT_EQ(kept.face_patch.size(), kept.mesh.n_faces());
+}
 // The obtuse repair and the chord compensation have their own switches: they run with the
 // flip and smoothing sweeps off, and nothing moves with all three off. Bad strengths are
 // refused.
@@ -411,9 +521,21 @@ TEST(Stitch, FeatureCurvesAndCornersStayPut) {
       }
     }
   }
+  auto patch_of = [&](TriMesh::FaceHandle f) { return r.face_patch[static_cast<std::size_t>(f.idx())]; };
+  auto on_crease = [&](TriMesh::HalfedgeHandle h) {
+    return !r.mesh.is_boundary(r.mesh.edge_handle(h)) && patch_of(r.mesh.face_handle(h)) != patch_of(r.mesh.opposite_face_handle(h));
+  };
   for (auto v : r.mesh.vertices()) {
     const auto node = static_cast<std::size_t>(r.vertex_node[static_cast<std::size_t>(v.idx())]);
-    if (node >= surface.nodes.size()) continue;  // an obtuse split's
+    if (node >= surface.nodes.size()) {
+      // An obtuse split's: one on a crease lies on the crease's segment.
+      std::set<int> patches;
+      for (auto f : r.mesh.vf_range(v)) patches.insert(patch_of(f));
+      if (patches.size() > 1) {
+        EXPECT_TRUE(between_its_curve_neighbours(r.mesh, v, on_crease)) << to_eigen(r.mesh.point(v)).transpose();
+      }
+      continue;
+    }
     if (surface.node_kind[node] != NodeKind::Inner) {
       EXPECT_EQ(to_eigen(r.mesh.point(v)), surface.nodes[node]);
     }
@@ -451,7 +573,11 @@ TEST(Stitch, OpenInputKeepsItsBoundary) {
   for (auto v : r.mesh.vertices()) {
     if (!r.mesh.is_boundary(v)) continue;
     const auto node = static_cast<std::size_t>(r.vertex_node[static_cast<std::size_t>(v.idx())]);
-    if (node >= surface.nodes.size()) continue;  // an obtuse split's (on the boundary segment)
+    if (node >= surface.nodes.size()) {  // an obtuse split's: on the boundary's segment
+      EXPECT_TRUE(between_its_curve_neighbours(r.mesh, v, [&](TriMesh::HalfedgeHandle h) { return r.mesh.is_boundary(r.mesh.edge_handle(h)); }))
+          << to_eigen(r.mesh.point(v)).transpose();
+      continue;
+    }
     EXPECT_EQ(to_eigen(r.mesh.point(v)), surface.nodes[node]);
   }
 }
