@@ -148,8 +148,7 @@ RemeshResult remesh(const TriMesh& input, const RemeshOptions& options) {
   report.n_crease_edges = first_segmentation.n_crease_edges;
   // Narrow patches (one-voxel fins and strips of marching-cubes surfaces) join a neighbour.
   if (options.narrow_patch_merge > 0.0) {
-    const double h = surfmesh_options.sizing.size > 0.0 ? surfmesh_options.sizing.size
-                                                         : surfmesh_options.sizing.relative_size * mean_edge;
+    const double h = surfmesh_detail::uniform_size(surfmesh_options.sizing, mean_edge);
     const std::vector<int> narrow = narrow_patches(input, first_segmentation, options.narrow_patch_merge * h);
     // Not on label images (0/1 cells: vertices at their lattice edges' midpoints): the liver's
     // merges cost one crossing repair and twice the run's CPU (2.8 -> 5.4 s) for no bound it

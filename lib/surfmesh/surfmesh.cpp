@@ -241,7 +241,7 @@ SurfaceMesh surfmesh_detail::mesh_surface(const TriMesh& input, const Segmentati
   report_progress(options.progress, "surfmesh: borders", 0.0);
 
   if (!(mean_edge > 0.0)) throw InvalidInput("mesh_surface: the mesh has no edge of positive length");
-  const double h = options.sizing.size > 0.0 ? options.sizing.size : options.sizing.relative_size * mean_edge;
+  const double h = uniform_size(options.sizing, mean_edge);
   out.input_mean_edge = mean_edge;
   out.target_size = h;
   SizeAt size_at = [h](const Eigen::Vector3d&) { return h; };

@@ -249,6 +249,12 @@ struct LatticeShares {
 //! share coordinates, but on no regular lattice), except three_peaks (1, a terrain on a grid).
 [[nodiscard]] bool vertices_on_lattice_edges(const TriMesh& mesh);
 
+//! The uniform target edge length: sizing.size when set (> 0), else sizing.relative_size x
+//! the input's mean edge.
+[[nodiscard]] inline double uniform_size(const SizingOptions& sizing, double mean_edge) {
+  return sizing.size > 0.0 ? sizing.size : sizing.relative_size * mean_edge;
+}
+
 //! vertices_on_lattice_edges from shares already computed: shares.on_lattice_edges >= 0.5.
 [[nodiscard]] bool marching_cubes_lattice(const LatticeShares& shares);
 
