@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <utility>
 
@@ -146,6 +147,9 @@ RemeshResult remesh(const TriMesh& input, const RemeshOptions& options) {
   segment_detail::SplitterPtr splitter;
   Segmentation first_segmentation = segment_detail::segment(input, segment_options, mean_edge, &splitter);
   report.n_crease_edges = first_segmentation.n_crease_edges;
+  // The input's lattice shares when the narrow-patch merge needed them (mesh_surface uses them
+  // too instead of a second pass over the vertices).
+  std::optional<surfmesh_detail::LatticeShares> lattice;
   // Narrow patches (one-voxel fins and strips of marching-cubes surfaces) join a neighbour.
   if (options.narrow_patch_merge > 0.0) {
     const double h = surfmesh_detail::uniform_size(surfmesh_options.sizing, mean_edge);
@@ -153,9 +157,9 @@ RemeshResult remesh(const TriMesh& input, const RemeshOptions& options) {
     // Not on label images (0/1 cells: vertices at their lattice edges' midpoints): the liver's
     // merges cost one crossing repair and twice the run's CPU (2.8 -> 5.4 s) for no bound it
     // did not meet already (docs/segment.md, "Narrow patches").
-    const surfmesh_detail::LatticeShares lattice =
-        narrow.empty() ? surfmesh_detail::LatticeShares{} : surfmesh_detail::lattice_edge_shares(input);
-    if (surfmesh_detail::marching_cubes_lattice(lattice) && !surfmesh_detail::label_image_staircase(lattice)) {
+    if (!narrow.empty()) lattice = surfmesh_detail::lattice_edge_shares(input);
+    if (lattice && surfmesh_detail::marching_cubes_lattice(*lattice) &&
+        !surfmesh_detail::label_image_staircase(*lattice)) {
       const std::size_t n_before = first_segmentation.patches.size();
       first_segmentation = segment_detail::merge_into_neighbours(*splitter, first_segmentation, narrow);
       report.n_narrow_merged = n_before - first_segmentation.patches.size();
@@ -171,7 +175,8 @@ RemeshResult remesh(const TriMesh& input, const RemeshOptions& options) {
   // The splitter's graph and normals are not held through surfmesh and stitch (about 100 MB
   // on DRAM 256); the rare crossing repair below makes a new one (the same graph and normals).
   splitter.reset();
-  SurfaceMesh surface = surfmesh_detail::mesh_surface(input, segmentation, surfmesh_options, mean_edge);
+  const surfmesh_detail::LatticeShares* shares = lattice ? &*lattice : nullptr;
+  SurfaceMesh surface = surfmesh_detail::mesh_surface(input, segmentation, surfmesh_options, mean_edge, shares);
   report.seconds_surfmesh = watch.seconds();
 
   watch.restart();
@@ -214,7 +219,7 @@ RemeshResult remesh(const TriMesh& input, const RemeshOptions& options) {
                                        : segment_detail::bisect_patches(*splitter, segmentation, which);
       if (merged.patches.size() == segmentation.patches.size()) continue;
       watch.restart();
-      SurfaceMesh merged_surface = surfmesh_detail::mesh_surface(input, merged, surfmesh_options, mean_edge);
+      SurfaceMesh merged_surface = surfmesh_detail::mesh_surface(input, merged, surfmesh_options, mean_edge, shares);
       report.seconds_surfmesh += watch.seconds();
       watch.restart();
       StitchResult merged_stitched = stitch(merged_surface, input, stitch_options);

@@ -233,7 +233,8 @@ SurfaceMesh mesh_surface(const TriMesh& input, const Segmentation& segmentation,
 }
 
 SurfaceMesh surfmesh_detail::mesh_surface(const TriMesh& input, const Segmentation& segmentation,
-                                          const SurfMeshOptions& options, const double mean_edge) {
+                                          const SurfMeshOptions& options, const double mean_edge,
+                                          const LatticeShares* shares) {
   options.validate();
   validate_segmentation(input, segmentation);
   SurfaceMesh out;
@@ -262,7 +263,8 @@ SurfaceMesh surfmesh_detail::mesh_surface(const TriMesh& input, const Segmentati
   // PatchFitOptions::flat_face_edges) and the label-image test (detail fit) in one pass.
   const bool feature_sizing_gate = options.sizing.feature_size > 0.0 && !options.sizing.feature_size_everywhere;
   const bool detail_fit = options.fit.detail_spacing_edges > 0.0;
-  const LatticeShares lattice = detail_fit || feature_sizing_gate || options.fit.flat_face_edges > 0.0
+  const LatticeShares lattice = shares != nullptr ? *shares
+                                : detail_fit || feature_sizing_gate || options.fit.flat_face_edges > 0.0
                                     ? lattice_edge_shares(input)
                                     : LatticeShares{};
   const bool marching_cubes = marching_cubes_lattice(lattice);

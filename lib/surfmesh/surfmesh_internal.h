@@ -351,9 +351,11 @@ std::size_t clamp_inner_nodes(const TriMesh& mesh, const Segmentation& segmentat
 
 //! mesh_surface() and split_unfitted_patches() with mean_edge = mean_edge_length(input)
 //! given by a caller that already has it (the pipeline computes it once per remesh);
-//! splitter, when given, is the one segment() left for the same input and segment_options.
+//! splitter, when given, is the one segment() left for the same input and segment_options;
+//! shares, when given, are lattice_edge_shares(input) computed by the caller (not again).
 [[nodiscard]] SurfaceMesh mesh_surface(const TriMesh& input, const Segmentation& segmentation,
-                                       const SurfMeshOptions& options, double mean_edge);
+                                       const SurfMeshOptions& options, double mean_edge,
+                                       const LatticeShares* shares = nullptr);
 [[nodiscard]] Segmentation split_unfitted_patches(const TriMesh& input, const Segmentation& segmentation,
                                                   const SurfMeshOptions& options,
                                                   const SegmentOptions& segment_options, std::size_t* n_split,
