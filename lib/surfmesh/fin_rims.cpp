@@ -26,6 +26,10 @@ std::vector<int> fin_rim_curves(const TriMesh& mesh, const Segmentation& segment
     // Stitch moves a node of a curve that is no feature onto the mean of its projections
     // onto both fits: only where the two fits agree at every node of the curve (a narrow
     // strip's fit can leave its strip quickly; headsq@1150: nodes moved 2 mean edges off).
+    // A patch that failed has no fit to move the nodes on.
+    if (surface.patches[static_cast<std::size_t>(curve.patch_left)].status != PatchStatus::Ok ||
+        surface.patches[static_cast<std::size_t>(curve.patch_right)].status != PatchStatus::Ok)
+      continue;
     const PatchSurface& left = surface.surfaces[static_cast<std::size_t>(curve.patch_left)];
     const PatchSurface& right = surface.surfaces[static_cast<std::size_t>(curve.patch_right)];
     bool agree = true;
