@@ -242,6 +242,7 @@ RemeshResult remesh(const TriMesh& input, const RemeshOptions& options) {
   report.n_corners = segmentation.corners.size();
   report.n_nodes = surface.nodes.size();
   report.feature_sizing_applied = surface.feature_sizing_applied;
+  report.n_fin_rim_curves = surface.n_fin_rim_curves;
   report.detail_fit_skipped = surface.detail_fit_skipped;
   report.target_size = surface.target_size;
   report.input_mean_edge = surface.input_mean_edge;

@@ -76,6 +76,9 @@ struct RemeshReport {
   std::size_t n_crossing_repairs = 0;
   //! Narrow patches joined to a neighbour after segmentation (RemeshOptions::narrow_patch_merge).
   std::size_t n_narrow_merged = 0;
+  //! Crease curves along fins' narrow strips that stitch did not treat as features
+  //! (SurfaceMesh::n_fin_rim_curves, SurfMeshOptions::fin_rim_width).
+  std::size_t n_fin_rim_curves = 0;
   //! Feature sizing set the sizes (SurfaceMesh::feature_sizing_applied): false on inputs
   //! taken for marching-cubes surfaces and where no crease-bounded patch is narrow enough.
   bool feature_sizing_applied = false;

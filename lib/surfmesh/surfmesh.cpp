@@ -22,6 +22,10 @@ namespace nurbsfront {
 
 namespace {
 
+// SurfMeshOptions::fin_rim_width: the two fits of a fin rim curve agree within this many mean
+// input edges at each of its nodes.
+constexpr double kFinRimMaxGapEdges = 0.25;
+
 [[noreturn]] void bad_option(const std::string& what) { throw InvalidInput("SurfMeshOptions: " + what); }
 
 bool finite_positive(double x) { return std::isfinite(x) && x > 0.0; }
@@ -205,6 +209,10 @@ void SurfMeshOptions::validate() const {
     bad_option("crease_angle_deg must be in (0, 180], got " + std::to_string(crease_angle_deg));
   if (!(unsmoothed_crease_angle_deg >= 0.0 && unsmoothed_crease_angle_deg <= 180.0))
     bad_option("unsmoothed_crease_angle_deg must be in [0, 180], got " + std::to_string(unsmoothed_crease_angle_deg));
+  if (!(fin_rim_width >= 0.0 && std::isfinite(fin_rim_width)))
+    bad_option("fin_rim_width must be finite and >= 0, got " + std::to_string(fin_rim_width));
+  if (!(fin_rim_max_angle_deg >= 0.0 && fin_rim_max_angle_deg <= 180.0))
+    bad_option("fin_rim_max_angle_deg must be in [0, 180], got " + std::to_string(fin_rim_max_angle_deg));
   if (!(tiny_curve_merge_size >= 0.0 && tiny_curve_merge_size <= 0.5))
     bad_option("tiny_curve_merge_size must be in [0, 0.5], got " + std::to_string(tiny_curve_merge_size));
   if (!(std::isfinite(max_node_offset_edges) && max_node_offset_edges >= 0.0))
@@ -263,8 +271,9 @@ SurfaceMesh surfmesh_detail::mesh_surface(const TriMesh& input, const Segmentati
   // PatchFitOptions::flat_face_edges) and the label-image test (detail fit) in one pass.
   const bool feature_sizing_gate = options.sizing.feature_size > 0.0 && !options.sizing.feature_size_everywhere;
   const bool detail_fit = options.fit.detail_spacing_edges > 0.0;
+  const bool fin_rims = options.fin_rim_width > 0.0;
   const LatticeShares lattice = shares != nullptr ? *shares
-                                : detail_fit || feature_sizing_gate || options.fit.flat_face_edges > 0.0
+                                : detail_fit || feature_sizing_gate || fin_rims || options.fit.flat_face_edges > 0.0
                                     ? lattice_edge_shares(input)
                                     : LatticeShares{};
   const bool marching_cubes = marching_cubes_lattice(lattice);
@@ -452,6 +461,15 @@ SurfaceMesh surfmesh_detail::mesh_surface(const TriMesh& input, const Segmentati
     }
     out.surfaces[p] = std::move(r.surface);
     out.patches[p] = std::move(r.report);
+  }
+  // Fin rims are no features for stitch; the borders and patches above kept them as creases
+  // (their sources, the unsmoothed sharp ones).
+  if (fin_rims && marching_cubes && !label_image_staircase(lattice)) {
+    for (const int c : fin_rim_curves(input, segmentation, out, crease_angles, options.fin_rim_width * h,
+                                      options.fin_rim_max_angle_deg, kFinRimMaxGapEdges * mean_edge)) {
+      out.curve_is_feature[static_cast<std::size_t>(c)] = 0;
+      ++out.n_fin_rim_curves;
+    }
   }
   return out;
 }

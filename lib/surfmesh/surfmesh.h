@@ -242,6 +242,21 @@ struct SurfMeshOptions {
   //! the input's boundary never merge; nothing merges with a cell grid (occupancy inputs).
   //! 0 disables. In [0, 0.5]. Default 0.3.
   double tiny_curve_merge_size = 0.3;
+  //! Fin rims (docs/stitch.md "Fin rims"): on marching-cubes surfaces (the lattice gate) that
+  //! are not a label image's staircase, a crease curve between two patches one of which is a
+  //! strip narrower than this many target sizes next to a wide patch (segment's
+  //! narrow_patches: width 2 x area / border length) and whose crease angle (curve_crease_angles,
+  //! 3 rings) is at most fin_rim_max_angle_deg is no feature for stitch
+  //! (SurfaceMesh::curve_is_feature 0, counted in SurfaceMesh::n_fin_rim_curves): its nodes
+  //! and those of the strip may then be smoothed, repaired, split and collapsed on the fits of
+  //! both sides. The patches are discretised and meshed as before (the curves' sources and
+  //! sizes do not change). One-voxel fins of CT bone give strips between two creases that no
+  //! triangle of the target size fits (most of headsq's obtuse triangles). 0 = off; >= 0.
+  //! Default 1.
+  double fin_rim_width = 1.0;
+  //! The largest crease angle (deg) of a fin rim curve (fin_rim_width): sharper folds stay
+  //! features (their nodes would round the fold off). In [0, 180]. Default 120.
+  double fin_rim_max_angle_deg = 120.0;
   //! Largest distance, in mean input edges, of a new inner node from the patch's own input
   //! faces along the patch axis: a node the fit lifts further (the fit smooths thin fins,
   //! tips and sharp bends by several edges, and such a node can pass through the
@@ -319,6 +334,9 @@ struct SurfaceMesh {
   //! Per curve: true when the curve is a crease (see SurfMeshOptions::crease_angle_deg) or
   //! on the input's boundary; stitch never flips across or smooths such curves.
   std::vector<std::uint8_t> curve_is_feature;
+  //! Crease curves that are no feature because they border a fin's narrow strip
+  //! (SurfMeshOptions::fin_rim_width).
+  std::size_t n_fin_rim_curves = 0;
   //! Per curve, its global node ids along the curve (an open curve starts and ends at its
   //! corners; a closed one does not repeat its first node; a tiny curve whose corners
   //! merged is {survivor, survivor}). May be empty (a hand-made SurfaceMesh): stitch then

@@ -120,6 +120,15 @@ struct PatchBorder {
 [[nodiscard]] std::vector<std::uint8_t> feature_curves(const TriMesh& mesh, const Segmentation& segmentation,
                                                        double crease_angle_deg, std::vector<double>* angles = nullptr);
 
+//! SurfMeshOptions::fin_rim_width: the feature curves (surface.curve_is_feature) between two
+//! patches, one of which is in narrow_patches(mesh, segmentation, max_width), whose crease
+//! angle (`angles`, per curve) is at most max_angle_deg and at each of whose nodes the
+//! projections onto the two patches' surfaces, and their mean to the node, are at most max_gap
+//! apart; ascending ids.
+[[nodiscard]] std::vector<int> fin_rim_curves(const TriMesh& mesh, const Segmentation& segmentation,
+                                              const SurfaceMesh& surface, const std::vector<double>& angles,
+                                              double max_width, double max_angle_deg, double max_gap);
+
 //! The band samples of points (world) in a patch frame: a point at the midpoint of a cell
 //! lattice edge (one coordinate half-way between centres, the other two on centres) gets
 //! that edge as its band, any other point is a plain point sample.

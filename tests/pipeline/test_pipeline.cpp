@@ -13,6 +13,7 @@
 #include <string>
 
 #include "fixtures/shapes.h"
+#include "fixtures/volumes.h"
 #include "nurbsfront/core/error.h"
 #include "nurbsfront/io/mesh_io.h"
 #include "nurbsfront/isosurface/marching_cubes.h"
@@ -531,6 +532,60 @@ TEST(Pipeline, NarrowFinPatchesJoinANeighbour) {
   EXPECT_EQ(remesh(turned, options).report.n_narrow_merged, 0u);
   EXPECT_EQ(remesh(slab_with_fins(true), options).report.n_narrow_merged, 0u);
   options.narrow_patch_merge = -1.0;
+  EXPECT_THROW((void)remesh(mesh, options), InvalidInput);
+}
+
+// Issue 5, fin rims (docs/stitch.md "Fin rims"): a one-voxel fin of a CT-like image has a rim
+// strip narrower than one target edge between two creases; locked, its triangles stay obtuse.
+// With SurfMeshOptions::fin_rim_width those curves are no features for stitch: fewer obtuse
+// triangles (under issue 5's 1% here), the contract, topology and distance kept. The same
+// surface turned by 30 deg (not taken for marching cubes) and the label image's surface are
+// left alone.
+TriMesh fin_surface(double wobble) {
+  MarchingCubesOptions mc;
+  mc.iso = 0.5;
+  mc.inside_above = true;
+  mc.pad = true;
+  return prepare_mesh(marching_cubes(test::slab_with_thin_fin(wobble), mc)).mesh;
+}
+
+TEST(Pipeline, FinRimCurvesAreNoFeatures) {
+  const TriMesh mesh = fin_surface(0.02);
+  RemeshOptions options = fast_options();
+  const RemeshResult with = remesh(mesh, options);
+  options.surfmesh.fin_rim_width = 0.0;
+  const RemeshResult without = remesh(mesh, options);
+  const RemeshReport& rep = with.report;
+  EXPECT_TRUE(rep.ok()) << errors_of(rep);
+  EXPECT_GE(rep.n_fin_rim_curves, 2u);  // both sides of the rim strip
+  EXPECT_EQ(without.report.n_fin_rim_curves, 0u);
+  const TopologyReport& t = rep.output.topology;
+  EXPECT_TRUE(t.is_closed && t.is_manifold && t.is_consistently_oriented);
+  EXPECT_EQ(t.euler_characteristic, 2);
+  EXPECT_EQ(count_self_intersections(to_soup(with.mesh)), 0u);
+  EXPECT_LT(rep.output.quality.obtuse_fraction, without.report.output.quality.obtuse_fraction);
+  EXPECT_LT(rep.output.quality.obtuse_fraction, 0.01);
+  EXPECT_GE(rep.output.quality.alpha_mean, without.report.output.quality.alpha_mean);
+  EXPECT_GE(rep.stitch.min_angle_away_from_features_deg, kAwayFromFeaturesAngleBoundDeg);
+  ASSERT_TRUE(rep.output.distance && without.report.output.distance);
+  EXPECT_LE(rep.output.distance->hausdorff, 1.01 * without.report.output.distance->hausdorff);
+  EXPECT_NE(to_json(rep).find("\"fin_rim_curves\": " + std::to_string(rep.n_fin_rim_curves)), std::string::npos);
+
+  options = fast_options();
+  options.compute_distances = false;
+  TriMesh turned = mesh;
+  const Eigen::Matrix3d rotation = Eigen::AngleAxisd(std::numbers::pi / 6.0, Eigen::Vector3d(1.0, 2.0, 3.0).normalized()).toRotationMatrix();
+  for (const auto v : turned.vertices()) {
+    const auto p = turned.point(v);
+    const Eigen::Vector3d q = rotation * Eigen::Vector3d(p[0], p[1], p[2]);
+    turned.set_point(v, {q.x(), q.y(), q.z()});
+  }
+  EXPECT_EQ(remesh(turned, options).report.n_fin_rim_curves, 0u);
+  EXPECT_EQ(remesh(fin_surface(0.0), options).report.n_fin_rim_curves, 0u);  // a label image
+  options.surfmesh.fin_rim_width = -1.0;
+  EXPECT_THROW((void)remesh(mesh, options), InvalidInput);
+  options.surfmesh.fin_rim_width = 1.0;
+  options.surfmesh.fin_rim_max_angle_deg = 181.0;
   EXPECT_THROW((void)remesh(mesh, options), InvalidInput);
 }
 

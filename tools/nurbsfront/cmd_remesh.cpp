@@ -50,6 +50,8 @@ struct RemeshArgs {
   bool feature_size_everywhere = false;
   std::optional<int> crossing_repair_rounds;
   std::optional<double> narrow_merge;
+  std::optional<double> fin_rim_width;
+  std::optional<double> fin_rim_angle;
   std::optional<int> obtuse_repair_rounds;
   std::optional<int> obtuse_split_rounds;
   std::optional<double> corner_angle;
@@ -110,6 +112,8 @@ void run_remesh(RemeshArgs& args) {
   options.surfmesh.sizing.feature_size_everywhere = args.feature_size_everywhere;
   if (args.crossing_repair_rounds) options.crossing_repair_rounds = *args.crossing_repair_rounds;
   if (args.narrow_merge) options.narrow_patch_merge = *args.narrow_merge;
+  if (args.fin_rim_width) options.surfmesh.fin_rim_width = *args.fin_rim_width;
+  if (args.fin_rim_angle) options.surfmesh.fin_rim_max_angle_deg = *args.fin_rim_angle;
   if (args.obtuse_repair_rounds) options.stitch.obtuse_repair_rounds = *args.obtuse_repair_rounds;
   if (args.obtuse_split_rounds) options.stitch.obtuse_split_rounds = *args.obtuse_split_rounds;
   if (args.corner_angle) options.surfmesh.corner_split_angle_deg = *args.corner_angle;
@@ -236,6 +240,11 @@ void add_remesh_command(CLI::App& app) {
   cmd->add_option("--crossing-repair-rounds", args->crossing_repair_rounds,
                   "Rounds of re-segmenting the patches of crossings the stitch left (default 4; 0 = off; "
                   "docs/segment.md \"Re-segmenting crossing patches\")");
+  cmd->add_option("--fin-rim-width", args->fin_rim_width,
+                  "On marching-cubes inputs, crease curves beside a strip narrower than this many target edges "
+                  "are no features for stitch (fin rims; docs/stitch.md); 0 = off (default 1)");
+  cmd->add_option("--fin-rim-angle", args->fin_rim_angle,
+                  "Largest crease angle (deg) of such a fin rim curve (default 120)");
   cmd->add_option("--narrow-merge", args->narrow_merge,
                   "On marching-cubes inputs, patches narrower than this many target edges join a neighbour "
                   "(default 0.5; 0 = off; docs/segment.md \"Narrow patches\")")
