@@ -137,6 +137,8 @@ std::string what_of(const std::exception_ptr& error) {
 
 }  // namespace
 
+bool fits_own_vertices_only(const Patch& patch) { return patch.faces.size() < kFitOverlapMinFaces; }
+
 std::vector<int> overlap_vertices(const TriMesh& mesh, const Segmentation& seg, int p, int rings) {
   const Patch& patch = seg.patches[static_cast<std::size_t>(p)];
   std::vector<int> frontier;
@@ -144,7 +146,7 @@ std::vector<int> overlap_vertices(const TriMesh& mesh, const Segmentation& seg, 
     for (const int v : seg.curves[static_cast<std::size_t>(c)].vertices) frontier.push_back(v);
   std::unordered_set<int> taken_faces;
   std::vector<int> added;
-  const int n_rings = patch.faces.size() < kFitOverlapMinFaces ? 0 : rings;
+  const int n_rings = fits_own_vertices_only(patch) ? 0 : rings;
   for (int ring = 0; ring < n_rings && !frontier.empty(); ++ring) {
     std::vector<int> next;
     for (const int v : frontier) {

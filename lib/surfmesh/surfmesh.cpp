@@ -217,6 +217,8 @@ void SurfMeshOptions::validate() const {
     bad_option("tiny_curve_merge_size must be in [0, 0.5], got " + std::to_string(tiny_curve_merge_size));
   if (!(std::isfinite(max_node_offset_edges) && max_node_offset_edges >= 0.0))
     bad_option("max_node_offset_edges must be finite and >= 0, got " + std::to_string(max_node_offset_edges));
+  if (!(std::isfinite(small_patch_node_offset_edges) && small_patch_node_offset_edges >= 0.0))
+    bad_option("small_patch_node_offset_edges must be finite and >= 0, got " + std::to_string(small_patch_node_offset_edges));
   if (threads < 0) bad_option("threads must be >= 0, got " + std::to_string(threads));
   if (cell_grid.enabled && fit.detail_spacing_edges > 0.0)
     bad_option("fit.detail_spacing_edges refits the plain fit; with a cell grid the band fit is used instead: "
@@ -429,7 +431,12 @@ SurfaceMesh surfmesh_detail::mesh_surface(const TriMesh& input, const Segmentati
     mesh_patch(segmentation, static_cast<int>(p), borders, options, h, uniform ? SizeAt() : front_size,
                patch_grid.empty() ? sizing_grid : patch_grid[p], results[p]);
     // A detail-fitted patch keeps its nodes closer to its input (PatchFitOptions::detail_spacing_edges).
-    const double offset = results[p].report.detail_fit ? options.fit.detail_node_offset_edges : options.max_node_offset_edges;
+    double offset = results[p].report.detail_fit ? options.fit.detail_node_offset_edges : options.max_node_offset_edges;
+    // A small patch's fit is held by its few vertices only (no overlap ring): its nodes keep
+    // closer to its faces (SurfMeshOptions::small_patch_node_offset_edges).
+    const double small = options.small_patch_node_offset_edges;
+    if (small > 0.0 && !results[p].band_fit && fits_own_vertices_only(segmentation.patches[p]))
+      offset = offset > 0.0 ? std::min(offset, small) : small;
     if (offset > 0.0)
       results[p].report.n_clamped_nodes = clamp_inner_nodes(input, segmentation, static_cast<int>(p), offset * mean_edge, results[p]);
   });

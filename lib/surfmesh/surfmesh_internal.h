@@ -171,6 +171,10 @@ struct PatchResult {
   std::vector<std::array<int, 3>> triangles;
 };
 
+//! True for a patch of fewer than 40 input faces: its fit sees its own vertices only
+//! (overlap_vertices adds no ring).
+[[nodiscard]] bool fits_own_vertices_only(const Patch& patch);
+
 //! The neighbours' vertices added to patch p's fit: those of the faces of other patches
 //! within `rings` vertex rings of p's border that face its axis, not in p, ascending; none
 //! for a patch of fewer than 40 input faces (it fits its own vertices only).

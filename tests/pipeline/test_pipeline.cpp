@@ -395,6 +395,26 @@ TEST(PipelineSlow, CornerClusterCrossingsCollapsed) {
             s.n_input_nodes + s.n_obtuse_splits);
 }
 
+// CGAL's cheese: its holes' walls are split into hundreds of patches of fewer than 40 long
+// faces, whose fits (their own vertices only) are free between the vertices; the nodes of
+// such patches sat up to 0.7 mean edges into the holes and the solid gained 4.3% volume
+// (main 2363222). Held within small_patch_node_offset_edges (0.02) of their faces: 1.9%
+// measured, still above issue 5's 0.5% (docs/surfmesh.md "Small patches keep their nodes on
+// their faces"). The bound here is the measured gain with a margin, and the topology kept.
+TEST(PipelineSlow, CheeseSmallPatchesKeepTheirVolume) {
+  const TriMesh mesh = prepare_mesh(read_soup(test::test_data("meshes/cheese.off"))).mesh;
+  RemeshOptions options = fast_options();
+  options.compute_distances = false;  // the volume is the point (ASan time)
+  const RemeshResult r = remesh(mesh, options);
+  const RemeshReport& rep = r.report;
+  EXPECT_TRUE(rep.ok()) << errors_of(rep);
+  const TopologyReport& t = rep.output.topology;
+  EXPECT_TRUE(t.is_closed);
+  EXPECT_EQ(t.euler_characteristic, -264);
+  const double volume_in = enclosed_volume(to_soup(mesh));
+  EXPECT_LT(std::abs(enclosed_volume(to_soup(r.mesh)) - volume_in), 0.025 * volume_in);
+}
+
 // The same rotor with its large faces sampled inside (the default): no crossings to settle.
 TEST(Pipeline, ThinDiscLargeFacesSampledNoCrossings) {
   const TriMesh mesh = prepare_mesh(read_soup(test::test_data("meshes/rotor.off"))).mesh;

@@ -782,6 +782,39 @@ TEST(Surfmesh, InnerNodesStayNearTheirPatchsFaces) {
   EXPECT_THROW((void)mesh_surface(mesh, seg, options), InvalidInput);
 }
 
+TEST(Surfmesh, SmallPatchNodesStayOnTheirFaces) {
+  // A patch of fewer than 40 faces fits its own vertices only, and the fit is free between
+  // them: on CGAL's cheese the nodes of such patches (long faces on the holes' walls) sat up
+  // to 0.7 mean edges off their faces. Here a 4 x 4 grid (32 faces) with its middle vertex
+  // raised by one edge: the bicubic fit cannot follow the piecewise-linear tent, so nodes
+  // lifted onto it are off the faces; small_patch_node_offset_edges keeps them within 0.02
+  // mean edges. A 5 x 5 grid (50 faces, with the overlap ring) keeps the 1-edge bound only.
+  for (const int n : {4, 5}) {
+    TriMesh mesh = to_trimesh(test::grid_patch(n, n));
+    const double edge = 1.0 / n;
+    mesh.point(TriMesh::VertexHandle((n / 2) * (n + 1) + n / 2))[2] = edge;
+    const Segmentation seg = labelled_segmentation(mesh, std::vector<int>(mesh.n_faces(), 0), 1);
+    SurfMeshOptions options;
+    options.sizing.size = 0.3 * edge;
+    options.small_patch_node_offset_edges = 0.0;
+    const SurfaceMesh free = mesh_surface(mesh, seg, options);
+    const double mean_edge = free.input_mean_edge;
+    EXPECT_GT(max_inner_offset(mesh, free), 0.05 * mean_edge) << n;  // the fit alone is off the faces
+    options.small_patch_node_offset_edges = 0.02;
+    const SurfaceMesh held = mesh_surface(mesh, seg, options);
+    expect_consistent(seg, held);
+    if (n == 4) {
+      EXPECT_LE(max_inner_offset(mesh, held), 0.02 * mean_edge * (1.0 + 1e-9));
+      EXPECT_GT(held.patches[0].n_clamped_nodes, 0u);
+    } else {
+      EXPECT_EQ(held.nodes, free.nodes);
+    }
+  }
+  SurfMeshOptions bad;
+  bad.small_patch_node_offset_edges = -0.1;
+  EXPECT_THROW(bad.validate(), InvalidInput);
+}
+
 TEST(Surfmesh, DetailFitFollowsDetailTheDefaultLatticeSmooths) {
   // Ridges about 4 edges apart, half an edge high: the default lattice (2.5 mean edges)
   // smooths them; the detail fit (PatchFitOptions::detail_spacing_edges) refits on a lattice

@@ -56,6 +56,7 @@ struct RemeshArgs {
   std::optional<int> obtuse_split_rounds;
   std::optional<double> corner_angle;
   std::optional<double> flat_face_edges;
+  std::optional<double> small_patch_offset;
   std::optional<double> chord;
   std::optional<double> max_slope;
   std::optional<double> split_above;
@@ -118,6 +119,7 @@ void run_remesh(RemeshArgs& args) {
   if (args.obtuse_split_rounds) options.stitch.obtuse_split_rounds = *args.obtuse_split_rounds;
   if (args.corner_angle) options.surfmesh.corner_split_angle_deg = *args.corner_angle;
   if (args.flat_face_edges) options.surfmesh.fit.flat_face_edges = *args.flat_face_edges;
+  if (args.small_patch_offset) options.surfmesh.small_patch_node_offset_edges = *args.small_patch_offset;
   if (args.chord) options.surfmesh.sizing.chord_error = *args.chord;
   if (args.max_slope) options.segment.max_slope_deg = *args.max_slope;
   if (args.split_above) options.surfmesh.fit.split_above_edges = *args.split_above;
@@ -263,6 +265,10 @@ void add_remesh_command(CLI::App& app) {
                   "Input faces longer than this many mean edges lying in one plane with two neighbours are "
                   "sampled inside for the fit (default 1.5; 0 = off; not on marching-cubes inputs; "
                   "docs/surfmesh.md \"Flat faces beside a fillet\")");
+  cmd->add_option("--small-patch-offset", args->small_patch_offset,
+                  "Inner nodes of patches of fewer than 40 input faces stay within this many mean edges of "
+                  "their faces (default 0.02; 0 = only the 1-edge bound of every patch; docs/surfmesh.md "
+                  "\"Small patches keep their nodes on their faces\")");
   cmd->add_option("--chord", args->chord, "Chord error for --adaptive (length units; default 0.05 x size)");
   cmd->add_option("--max-slope", args->max_slope, "Largest angle (deg) between a face normal and its patch axis (default 60)");
   cmd->add_option("--split-above", args->split_above,
