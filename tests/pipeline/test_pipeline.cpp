@@ -390,7 +390,7 @@ TEST(PipelineSlow, CornerClusterCrossingsCollapsed) {
   // Every node of the surface mesh is an output vertex, unused, or merged by a collapse;
   // the obtuse splits add vertices.
   const StitchReport& s = rep.stitch;
-  EXPECT_EQ(r.mesh.n_vertices() + s.n_unused_nodes + s.n_collapses + s.n_settled_collapses,
+  EXPECT_EQ(r.mesh.n_vertices() + s.n_unused_nodes + s.n_collapses + s.n_settled_collapses + s.n_angle_collapses,
             s.n_input_nodes + s.n_obtuse_splits);
 }
 
