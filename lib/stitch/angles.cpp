@@ -135,6 +135,11 @@ class AngleRepair {
  private:
   int node(TriMesh::VertexHandle v) const { return result_.vertex_node[static_cast<std::size_t>(v.idx())]; }
   bool is_feature(TriMesh::VertexHandle v) const { return is_feature_[static_cast<std::size_t>(node(v))] != 0; }
+  // A node made by an obtuse split (no node of the SurfaceMesh) ranks as a border node.
+  int rank_of(TriMesh::VertexHandle v) const {
+    const auto g = static_cast<std::size_t>(node(v));
+    return g < surface_.node_kind.size() ? rank(surface_.node_kind[g]) : 1;
+  }
   bool is_frozen(TriMesh::VertexHandle v) const { return is_frozen_[static_cast<std::size_t>(node(v))] != 0; }
 
   // A triangle with no feature node whose smallest angle is below the bound (s: its sine).
@@ -245,8 +250,7 @@ class AngleRepair {
   double collapse_gain(TriMesh::HalfedgeHandle h) const {
     const auto vb = mesh_.from_vertex_handle(h), va = mesh_.to_vertex_handle(h);
     if (is_feature(vb) || is_frozen(vb) || is_frozen(va) || mesh_.is_boundary(vb) || mesh_.is_boundary(va)) return -1.0;
-    const auto nb = static_cast<std::size_t>(node(vb)), na = static_cast<std::size_t>(node(va));
-    if (rank(surface_.node_kind[nb]) > rank(surface_.node_kind[na])) return -1.0;
+    if (rank_of(vb) > rank_of(va)) return -1.0;
     if (!mesh_.is_collapse_ok(h) || leaves_duplicate_face(mesh_, h)) return -1.0;
     const TriMesh::FaceHandle f0 = mesh_.face_handle(h), f1 = mesh_.opposite_face_handle(h);
     const Vec pb = point(mesh_, vb), pa = point(mesh_, va);

@@ -582,6 +582,10 @@ StitchResult stitch_impl(const SurfaceMesh& surface, const TriMesh* input, const
     stitch_detail::settle_intersections(surface, options, feature, result, pairs, report);
     if (report.n_settled_nodes + report.n_settled_flips + report.n_settled_collapses > 0) pairs = self_intersecting_pairs(to_soup(mesh), options.n_threads);
   }
+  if (options.obtuse_split_rounds > 0 && pairs.empty() && mesh.n_faces() > 0) {
+    split_obtuse_checked(surface, options, feature, result, report);
+    if (report.n_obtuse_splits > 0) soup.reset();
+  }
   if (options.angle_repair_rounds > 0 && pairs.empty() && mesh.n_faces() > 0) {
     const stitch_detail::AngleRepairResult angles = stitch_detail::repair_small_angles(surface, options, feature, result);
     report.n_angle_flips = angles.n_flips;
@@ -589,10 +593,6 @@ StitchResult stitch_impl(const SurfaceMesh& surface, const TriMesh* input, const
     report.n_angle_moves = angles.n_moves;
     report.n_angle_repairs_undone = angles.n_undone;
     if (angles.n_flips + angles.n_collapses + angles.n_moves > 0) soup.reset();
-  }
-  if (options.obtuse_split_rounds > 0 && pairs.empty() && mesh.n_faces() > 0) {
-    split_obtuse_checked(surface, options, feature, result, report);
-    if (report.n_obtuse_splits > 0) soup.reset();
   }
   ReportOptions check;
   check.self_intersections = false;  // counted above

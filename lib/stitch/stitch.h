@@ -231,6 +231,10 @@ struct StitchResult {
 //!    triangles move onto their patches' input faces along the patch axes, then their edges
 //!    are flipped, each change kept only if fewer pairs cross; what still crosses is an
 //!    error.
+//! 2b. Small-angle repair (angle_repair_rounds), when nothing crosses: each triangle with no
+//!    feature node and a smallest angle below kAwayFromFeaturesAngleBoundDeg gets the best
+//!    flip, collapse (the survivor stays) or move onto the fitted surfaces around it that
+//!    raises the smallest angle there; changes whose triangles cross others are given up.
 //! 3. Verification (quality module): 2-manifold, consistently oriented, no degenerate or
 //!    self-intersecting triangles; with an input mesh also: closed iff the input is, and
 //!    per component (matched to the input's by nearest bounding box) the same Euler
