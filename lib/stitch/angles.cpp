@@ -176,9 +176,9 @@ class AngleRepair {
       }
     }
     TriMesh::VertexHandle best_vertex;
-    Vec best_q;
+    Vec best_q = Vec::Zero();
     for (auto v : mesh_.fv_range(f)) {
-      Vec q;
+      Vec q = Vec::Zero();
       const double s = move_gain(v, q);
       if (s > best) {
         best = s;
