@@ -23,6 +23,7 @@ namespace nurbsfront {
 void StitchOptions::validate() const {
   auto fail = [](const std::string& what) { throw InvalidInput("stitch: " + what); };
   if (optimisation_passes < 0) fail("optimisation_passes must be >= 0");
+  if (angle_repair_rounds < 0) fail("angle_repair_rounds must be >= 0");
   if (obtuse_repair_rounds < 0) fail("obtuse_repair_rounds must be >= 0");
   if (obtuse_split_rounds < 0) fail("obtuse_split_rounds must be >= 0");
   if (!(max_flip_dihedral_deg >= 0.0 && max_flip_dihedral_deg < 180.0)) fail("max_flip_dihedral_deg must be in [0, 180)");
@@ -584,6 +585,14 @@ StitchResult stitch_impl(const SurfaceMesh& surface, const TriMesh* input, const
   if (options.obtuse_split_rounds > 0 && pairs.empty() && mesh.n_faces() > 0) {
     split_obtuse_checked(surface, options, feature, result, report);
     if (report.n_obtuse_splits > 0) soup.reset();
+  }
+  if (options.angle_repair_rounds > 0 && pairs.empty() && mesh.n_faces() > 0) {
+    const stitch_detail::AngleRepairResult angles = stitch_detail::repair_small_angles(surface, options, feature, result);
+    report.n_angle_flips = angles.n_flips;
+    report.n_angle_collapses = angles.n_collapses;
+    report.n_angle_moves = angles.n_moves;
+    report.n_angle_repairs_undone = angles.n_undone;
+    if (angles.n_flips + angles.n_collapses + angles.n_moves > 0) soup.reset();
   }
   ReportOptions check;
   check.self_intersections = false;  // counted above

@@ -71,6 +71,14 @@ struct StitchOptions {
   //! whose triangles cross others are given up. Adds vertices (StitchReport::n_obtuse_splits);
   //! docs/stitch.md "Obtuse splits". Only when the mesh has no crossing left. Default 2.
   int obtuse_split_rounds = 2;
+  //! Sweeps of the small-angle repair after the optimisation and the intersection checks
+  //! (>= 0; 0 switches it off): each triangle with no feature node and a smallest angle
+  //! below kAwayFromFeaturesAngleBoundDeg, worst first, gets the best flip or collapse of one
+  //! of its edges (the survivor stays) that raises the smallest angle of the triangles it
+  //! touches, leaves no more of them below the bound and no more obtuse ones; changes whose
+  //! triangles cross others are given up. Only when the mesh has no crossing left.
+  //! docs/stitch.md "Small angles left after the optimisation". Default 2.
+  int angle_repair_rounds = 2;
   //! Triangles whose smallest angle (deg) is below this get their shortest edge collapsed
   //! before the optimisation, when the merge is allowed and improves the worst triangle
   //! around it (feature nodes never moved, and removed only into a feature corner less
@@ -108,7 +116,8 @@ struct StitchReport {
   std::size_t n_input_nodes = 0;       //!< SurfaceMesh::nodes
   //! Nodes no triangle uses (dropped). Nodes merged away by collapses are counted in
   //! n_collapses and n_settled_collapses instead: the output has n_input_nodes -
-  //! n_unused_nodes - n_collapses - n_settled_collapses + n_obtuse_splits vertices.
+  //! n_unused_nodes - n_collapses - n_settled_collapses - n_angle_collapses + n_obtuse_splits
+  //! vertices.
   std::size_t n_unused_nodes = 0;
   std::size_t n_input_triangles = 0;   //!< SurfaceMesh::triangles
   //! Triangles OpenMesh cannot add (repeated node, complex edge or vertex: a duplicated,
@@ -145,6 +154,12 @@ struct StitchReport {
   //! Edges of such triangles collapsed (the removed node merged into the other end, which
   //! stays) because the collapse left fewer intersecting pairs.
   std::size_t n_settled_collapses = 0;
+  //! Flips and collapses of the small-angle repair (StitchOptions::angle_repair_rounds), and
+  //! its changes given up because their triangles crossed others.
+  std::size_t n_angle_flips = 0;
+  std::size_t n_angle_collapses = 0;
+  std::size_t n_angle_moves = 0;
+  std::size_t n_angle_repairs_undone = 0;
   double alpha_mean_before = 0.0;      //!< mean alpha after assembly, before optimisation
   double alpha_min_before = 0.0;       //!< min alpha after assembly, before optimisation
   //! Triangles of the result away from features: none of their vertices is a feature node,
@@ -216,6 +231,10 @@ struct StitchResult {
 //!    triangles move onto their patches' input faces along the patch axes, then their edges
 //!    are flipped, each change kept only if fewer pairs cross; what still crosses is an
 //!    error.
+//! 2b. Small-angle repair (angle_repair_rounds), when nothing crosses: each triangle with no
+//!    feature node and a smallest angle below kAwayFromFeaturesAngleBoundDeg gets the best
+//!    flip, collapse (the survivor stays) or move onto the fitted surfaces around it that
+//!    raises the smallest angle there; changes whose triangles cross others are given up.
 //! 3. Verification (quality module): 2-manifold, consistently oriented, no degenerate or
 //!    self-intersecting triangles; with an input mesh also: closed iff the input is, and
 //!    per component (matched to the input's by nearest bounding box) the same Euler

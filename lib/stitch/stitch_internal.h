@@ -75,6 +75,38 @@ inline bool may_have_angle_below(const Eigen::Vector3d& a, const Eigen::Vector3d
   return !((b - a).cross(c - a).norm() / product > sin_bound + kSineMargin);
 }
 
+//! The sine of the smallest interior angle of triangle (a, b, c): twice the area over the
+//! product of the two longest edges (the smallest angle is at most 60 deg, so the sine orders
+//! it); 0 for a degenerate triangle.
+inline double smallest_angle_sine(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
+  std::array<double, 3> l2{(b - a).squaredNorm(), (c - b).squaredNorm(), (a - c).squaredNorm()};
+  std::sort(l2.begin(), l2.end());
+  const double product = std::sqrt(l2[1] * l2[2]);
+  return product > 0.0 ? (b - a).cross(c - a).norm() / product : 0.0;
+}
+
+//! What repair_small_angles() did.
+struct AngleRepairResult {
+  std::size_t n_flips = 0, n_collapses = 0, n_moves = 0;
+  std::size_t n_undone = 0;  //!< changes given up because their triangles crossed others
+};
+
+//! StitchOptions::angle_repair_rounds sweeps over the triangles with no feature node
+//! (is_feature, per node) and a smallest angle below kAwayFromFeaturesAngleBoundDeg, worst
+//! first: each gets the best of a flip of one of its edges (dihedral and side tests as the
+//! optimisation's flips) or a collapse of one of its edges into the other end, which stays
+//! (the removed node no feature node, on no boundary, ranking no higher than the survivor:
+//! inner < border < corner; link condition; no duplicate face; no normal turned by more than
+//! acos(min_normal_dot); the removed node within half an input mean edge of the new
+//! triangles), when the triangles it touches then have a larger smallest angle, no more of
+//! them below the bound (a collapse: fewer) and no more obtuse ones. When
+//! check_self_intersections, the faces around the changes are checked exactly; if some
+//! cross, the mesh goes back and the repair is made again with the nodes of the crossing
+//! faces left alone (4 rounds). Collapses are garbage-collected (face_patch and vertex_node
+//! follow).
+AngleRepairResult repair_small_angles(const SurfaceMesh& surface, const StitchOptions& options,
+                                      const std::vector<std::uint8_t>& is_feature, StitchResult& result);
+
 //! StitchOptions::chord_compensation: moves the nodes that are no feature node (is_feature,
 //! per node; vertex_node maps vertices to nodes) nor on the boundary along their normals so
 //! that the triangles are on average on the surface through their corners, less the chords

@@ -215,6 +215,7 @@ TEST(Stitch, OptimisationImprovesAJitteredSphereAcrossBorders) {
   none.chord_compensation = 0.0;
   none.collapse_below_angle_deg = 0.0;
   none.obtuse_split_rounds = 0;
+  none.angle_repair_rounds = 0;
   const StitchResult raw = stitch(surface, to_trimesh(soup), none);
   EXPECT_EQ(raw.report.n_flips + raw.report.n_smoothing_moves, 0u);
   EXPECT_DOUBLE_EQ(raw.report.output.quality.alpha_mean, raw.report.alpha_mean_before);
@@ -506,6 +507,96 @@ TEST(Stitch, CollapsesAPlantedShortEdge) {
   }
 }
 
+// The stitch with only the small-angle repair (rounds) after the assembly: the collapse
+// before the optimisation, the sweeps, the chord compensation and the splits are off.
+StitchResult stitch_with_angle_repair(const SurfaceMesh& surface, const TriangleSoup& soup, int rounds) {
+  StitchOptions options;
+  options.collapse_below_angle_deg = 0.0;
+  options.optimisation_passes = 0;
+  options.obtuse_repair_rounds = 0;
+  options.chord_compensation = 0.0;
+  options.obtuse_split_rounds = 0;
+  options.angle_repair_rounds = rounds;
+  return stitch(surface, to_trimesh(soup), options);
+}
+
+// Issue 5: a triangle away from features below 25 deg that nothing before the small-angle
+// repair removes (a node planted 0.03 edges from its neighbour) is gone after it, the mesh
+// stays closed with Euler characteristic 2, and the survivor stays where it was (every vertex
+// still on the unit sphere).
+TEST(Stitch, AngleRepairCollapsesAShortEdgeAwayFromFeatures) {
+  TriangleSoup soup = test::icosphere(3);
+  SurfaceMesh surface = cube_map_surface(soup);
+  int v = -1, w = -1;
+  for (const auto& t : surface.triangles) {
+    for (int k = 0; k < 3 && v < 0; ++k) {
+      const int a = t[k], b = t[(k + 1) % 3];
+      if (surface.node_kind[a] == NodeKind::Inner && surface.node_kind[b] == NodeKind::Inner &&
+          surface.node_owner[a] == surface.node_owner[b]) {
+        v = a;
+        w = b;
+      }
+    }
+  }
+  ASSERT_GE(v, 0);
+  surface.nodes[v] = (surface.nodes[w] + 0.03 * (surface.nodes[v] - surface.nodes[w])).normalized();
+  soup.points[v] = surface.nodes[v];
+  const StitchResult off = stitch_with_angle_repair(surface, soup, 0);
+  ASSERT_GE(off.report.n_small_angle_away_from_features, 2u);
+  EXPECT_EQ(off.report.n_angle_collapses + off.report.n_angle_flips + off.report.n_angle_moves, 0u);
+  const StitchResult r = stitch_with_angle_repair(surface, soup, 2);
+  EXPECT_TRUE(r.report.ok()) << joined(r.report.errors);
+  EXPECT_EQ(r.report.n_small_angle_away_from_features, 0u);
+  EXPECT_GE(r.report.min_angle_away_from_features_deg, kAwayFromFeaturesAngleBoundDeg);
+  EXPECT_GE(r.report.n_angle_collapses, 1u);
+  EXPECT_EQ(r.report.n_angle_moves, 0u);  // so every vertex is where it was assembled
+  EXPECT_EQ(r.report.n_angle_repairs_undone, 0u);
+  const TopologyReport& t = r.report.output.topology;
+  EXPECT_TRUE(t.is_closed);
+  EXPECT_TRUE(t.is_manifold);
+  EXPECT_TRUE(t.is_consistently_oriented);
+  EXPECT_EQ(t.euler_characteristic, 2);
+  EXPECT_EQ(t.n_self_intersecting_pairs.value_or(1), 0u);
+  EXPECT_EQ(r.face_patch.size(), r.mesh.n_faces());
+  EXPECT_EQ(r.vertex_node.size(), r.mesh.n_vertices());
+  EXPECT_EQ(r.mesh.n_vertices() + r.report.n_unused_nodes + r.report.n_angle_collapses, surface.nodes.size());
+  for (auto u : r.mesh.vertices()) {
+    const auto node = static_cast<std::size_t>(r.vertex_node[static_cast<std::size_t>(u.idx())]);
+    EXPECT_EQ(to_eigen(r.mesh.point(u)), surface.nodes[node]);
+  }
+}
+
+// A cap (an inner node pushed next to the middle of its far edge): its small angles go by a
+// flip, a collapse or a move, the mesh stays valid.
+TEST(Stitch, AngleRepairRemovesACapAwayFromFeatures) {
+  TriangleSoup soup = test::icosphere(3);
+  SurfaceMesh surface = cube_map_surface(soup);
+  // An inner node v of a triangle (v, b, c) of one patch whose nodes are all inner.
+  int v = -1, b = -1, c = -1;
+  for (const auto& t : surface.triangles) {
+    if (v >= 0) break;
+    if (std::all_of(t.begin(), t.end(), [&](int g) { return surface.node_kind[g] == NodeKind::Inner; })) {
+      v = t[0];
+      b = t[1];
+      c = t[2];
+    }
+  }
+  ASSERT_GE(v, 0);
+  const Eigen::Vector3d middle = 0.5 * (surface.nodes[b] + surface.nodes[c]);
+  surface.nodes[v] = (middle + 0.12 * (surface.nodes[v] - middle)).normalized();
+  soup.points[v] = surface.nodes[v];
+  const StitchResult off = stitch_with_angle_repair(surface, soup, 0);
+  ASSERT_GE(off.report.n_small_angle_away_from_features, 1u);
+  const StitchResult r = stitch_with_angle_repair(surface, soup, 2);
+  EXPECT_TRUE(r.report.ok()) << joined(r.report.errors);
+  EXPECT_LT(r.report.n_small_angle_away_from_features, off.report.n_small_angle_away_from_features);
+  EXPECT_GT(r.report.min_angle_away_from_features_deg, off.report.min_angle_away_from_features_deg);
+  EXPECT_GE(r.report.n_angle_flips + r.report.n_angle_collapses + r.report.n_angle_moves, 1u);
+  EXPECT_TRUE(r.report.output.topology.is_closed);
+  EXPECT_EQ(r.report.output.topology.euler_characteristic, 2);
+  EXPECT_EQ(r.report.output.topology.n_self_intersecting_pairs.value_or(1), 0u);
+}
+
 TEST(Stitch, FeatureCurvesAndCornersStayPut) {
   const TriangleSoup soup = jittered_sphere(2, 0.3);
   SurfaceMesh surface = cube_map_surface(soup);
@@ -740,6 +831,7 @@ TEST(Stitch, SmoothingMakesNoNewTriangleBelowTheAngleFloor) {
   const TriMesh input = to_trimesh(sheet);
   StitchOptions unguarded;
   unguarded.angle_floor_deg = 0.0;
+  unguarded.angle_repair_rounds = 0;  // the smoothing's floor alone (the repair would mend them)
   const StitchResult bad = stitch(surface, input, unguarded);
   EXPECT_GT(bad.report.n_small_angle_away_from_features, 0u);  // the planted defect works
   StitchOptions assembled_only;
@@ -1009,6 +1101,9 @@ TEST(Stitch, InvalidInputThrows) {
   EXPECT_THROW((void)stitch(surface, options), InvalidInput);
   options = {};
   options.collapse_below_angle_deg = 60.0;
+  EXPECT_THROW((void)stitch(surface, options), InvalidInput);
+  options = {};
+  options.angle_repair_rounds = -1;
   EXPECT_THROW((void)stitch(surface, options), InvalidInput);
 }
 

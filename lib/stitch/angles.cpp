@@ -1,0 +1,435 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Small angles away from features (issue 5): after the optimisation and the crossing
+// repair, each triangle with no feature node and a smallest angle below
+// kAwayFromFeaturesAngleBoundDeg gets the best of a flip of one of its edges or a collapse
+// of one of its edges (the survivor stays where it is), when the change raises the smallest
+// angle of the triangles it touches and leaves fewer of them below the bound (docs/stitch.md,
+// "Small angles left after the optimisation"). What the collapse before the optimisation
+// and the sweeps leave: triangles of patches of one or two input faces between corners a
+// fraction of h apart, whose nodes are all border nodes and corners (no collapse along a
+// curve helps), and triangles the flips and moves made next to a worse one.
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <numbers>
+#include <optional>
+
+#include <Eigen/Geometry>
+
+#include <OpenMesh/Core/Utils/Property.hh>
+
+#include "nurbsfront/core/soup.h"
+#include "nurbsfront/core/tolerances.h"
+#include "nurbsfront/quality/aabb_tree.h"
+#include "nurbsfront/quality/report.h"
+#include "nurbsfront/stitch/stitch_internal.h"
+
+namespace nurbsfront::stitch_detail {
+
+namespace {
+
+using Vec = Eigen::Vector3d;
+
+// Rounds of the crossing check before the repair is given up as a whole.
+constexpr int kCheckRounds = 4;
+// A collapse's removed node stays within this many input mean edges of the new triangles
+// (the survivor does not move: the surface changes only by the removed node's cone), a
+// moved node within as much of its old triangles.
+constexpr double kMaxCollapseOffsetEdges = 0.5;
+
+Vec point(const TriMesh& mesh, TriMesh::VertexHandle v) { return to_eigen(mesh.point(v)); }
+
+int rank(NodeKind kind) {
+  switch (kind) {
+    case NodeKind::Inner: return 0;
+    case NodeKind::Border: return 1;
+    case NodeKind::Corner: return 2;
+  }
+  return 2;
+}
+
+bool is_obtuse(const Vec& a, const Vec& b, const Vec& c) {
+  return (b - a).dot(c - a) < 0.0 || (a - b).dot(c - b) < 0.0 || (a - c).dot(b - c) < 0.0;
+}
+
+// What a set of triangles has: the sine of its smallest angle, how many are below the bound
+// and how many are obtuse. A change is better when the smallest angle rises, no more
+// triangles are below the bound and no more are obtuse, and (collapse) fewer are below.
+struct Shape {
+  double min_sine = 1.0;
+  int n_small = 0;
+  int n_obtuse = 0;
+  void add(const Vec& a, const Vec& b, const Vec& c, double sin_bound) {
+    const double s = smallest_angle_sine(a, b, c);
+    min_sine = std::min(min_sine, s);
+    n_small += s < sin_bound ? 1 : 0;
+    n_obtuse += is_obtuse(a, b, c) ? 1 : 0;
+  }
+};
+
+class AngleRepair {
+ public:
+  AngleRepair(const SurfaceMesh& surface, const StitchOptions& options, const std::vector<std::uint8_t>& is_feature,
+              const std::vector<std::uint8_t>& is_frozen, StitchResult& result)
+      : surface_(surface), options_(options), is_feature_(is_feature), is_frozen_(is_frozen), result_(result),
+        mesh_(result.mesh) {
+    const double diagonal = bounding_box(mesh_).diagonal();
+    min_double_area_ = 2.0 * tolerance::kDegenerateAreaRelative * diagonal * diagonal;
+    sin_bound_ = std::sin(kAwayFromFeaturesAngleBoundDeg * std::numbers::pi / 180.0);
+    cos_dihedral_ = std::cos(options.max_flip_dihedral_deg * std::numbers::pi / 180.0);
+    // A hand-made SurfaceMesh may have no input_mean_edge: its own mean edge then.
+    max_offset_ = kMaxCollapseOffsetEdges * (surface.input_mean_edge > 0.0 ? surface.input_mean_edge : mean_edge_length(mesh_));
+  }
+
+  // Whether some triangle has no feature node and an angle below the bound.
+  bool any_small() const {
+    double s = 0.0;
+    for (auto f : mesh_.faces()) {
+      if (is_small_away(f, s)) return true;
+    }
+    return false;
+  }
+
+  // One sweep over the triangles below the bound, worst first. Returns the changes made.
+  std::size_t sweep() {
+    std::vector<std::pair<double, int>> bad;
+    for (auto f : mesh_.faces()) {
+      double s = 0.0;
+      if (is_small_away(f, s)) bad.emplace_back(s, f.idx());
+    }
+    std::sort(bad.begin(), bad.end());
+    std::size_t n_changes = 0;
+    for (const auto& [unused, index] : bad) {
+      const TriMesh::FaceHandle f(index);
+      double s = 0.0;
+      if (mesh_.status(f).deleted() || !is_small_away(f, s)) continue;
+      n_changes += repair(f) ? 1 : 0;
+    }
+    return n_changes;
+  }
+
+  // Removes the deleted elements, carrying face_patch and vertex_node along.
+  void collect_garbage() {
+    if (n_collapses_ == 0) return;
+    OpenMesh::FPropHandleT<int> patch_of;
+    OpenMesh::VPropHandleT<int> node_of;
+    mesh_.add_property(patch_of);
+    mesh_.add_property(node_of);
+    for (auto f : mesh_.faces()) mesh_.property(patch_of, f) = result_.face_patch[static_cast<std::size_t>(f.idx())];
+    for (auto v : mesh_.vertices()) mesh_.property(node_of, v) = result_.vertex_node[static_cast<std::size_t>(v.idx())];
+    mesh_.garbage_collection();
+    result_.face_patch.resize(mesh_.n_faces());
+    result_.vertex_node.resize(mesh_.n_vertices());
+    for (auto f : mesh_.faces()) result_.face_patch[static_cast<std::size_t>(f.idx())] = mesh_.property(patch_of, f);
+    for (auto v : mesh_.vertices()) result_.vertex_node[static_cast<std::size_t>(v.idx())] = mesh_.property(node_of, v);
+    mesh_.remove_property(patch_of);
+    mesh_.remove_property(node_of);
+  }
+
+  std::size_t n_flips_ = 0, n_collapses_ = 0, n_moves_ = 0;
+  //! Nodes whose triangles a change made (for the crossing check).
+  std::vector<int> changed_nodes_;
+
+ private:
+  int node(TriMesh::VertexHandle v) const { return result_.vertex_node[static_cast<std::size_t>(v.idx())]; }
+  bool is_feature(TriMesh::VertexHandle v) const { return is_feature_[static_cast<std::size_t>(node(v))] != 0; }
+  // A node made by an obtuse split (no node of the SurfaceMesh) ranks as a border node.
+  int rank_of(TriMesh::VertexHandle v) const {
+    const auto g = static_cast<std::size_t>(node(v));
+    return g < surface_.node_kind.size() ? rank(surface_.node_kind[g]) : 1;
+  }
+  bool is_frozen(TriMesh::VertexHandle v) const { return is_frozen_[static_cast<std::size_t>(node(v))] != 0; }
+
+  // A triangle with no feature node whose smallest angle is below the bound (s: its sine).
+  bool is_small_away(TriMesh::FaceHandle f, double& s) const {
+    std::array<Vec, 3> p;
+    int k = 0;
+    for (auto v : mesh_.fv_range(f)) {
+      if (is_feature(v)) return false;
+      p[static_cast<std::size_t>(k++)] = point(mesh_, v);
+    }
+    s = smallest_angle_sine(p[0], p[1], p[2]);
+    return s < sin_bound_;
+  }
+
+  // The best change around f (a flip or a collapse of one of its edges), made; false when
+  // none is better.
+  bool repair(TriMesh::FaceHandle f) {
+    double best = -1.0;
+    TriMesh::HalfedgeHandle best_flip, best_collapse;
+    for (auto h : mesh_.fh_range(f)) {
+      const double s = flip_gain(mesh_.edge_handle(h));
+      if (s > best) {
+        best = s;
+        best_flip = h;
+        best_collapse.reset();
+      }
+      for (const auto g : {h, mesh_.opposite_halfedge_handle(h)}) {
+        const double c = collapse_gain(g);
+        if (c > best) {
+          best = c;
+          best_collapse = g;
+          best_flip.reset();
+        }
+      }
+    }
+    TriMesh::VertexHandle best_vertex;
+    Vec best_q = Vec::Zero();
+    for (auto v : mesh_.fv_range(f)) {
+      Vec q = Vec::Zero();
+      const double s = move_gain(v, q);
+      if (s > best) {
+        best = s;
+        best_vertex = v;
+        best_q = q;
+        best_flip.reset();
+        best_collapse.reset();
+      }
+    }
+    if (best_vertex.is_valid()) {
+      mesh_.set_point(best_vertex, to_openmesh(best_q));
+      ++n_moves_;
+      changed_nodes_.push_back(node(best_vertex));
+      return true;
+    }
+    if (best_flip.is_valid()) {
+      const auto e = mesh_.edge_handle(best_flip);
+      mesh_.flip(e);
+      ++n_flips_;
+      for (const auto h : {mesh_.halfedge_handle(e, 0), mesh_.halfedge_handle(e, 1)}) changed_nodes_.push_back(node(mesh_.to_vertex_handle(h)));
+      return true;
+    }
+    if (best_collapse.is_valid()) {
+      const auto va = mesh_.to_vertex_handle(best_collapse);
+      mesh_.collapse(best_collapse);
+      ++n_collapses_;
+      changed_nodes_.push_back(node(va));
+      return true;
+    }
+    return false;
+  }
+
+  // The sine of the smallest angle of the two new triangles when flipping e is better than
+  // leaving it (see Shape), the flip allowed and within the dihedral bound before and after,
+  // the new triangles on the old side; else -1.
+  double flip_gain(TriMesh::EdgeHandle e) const {
+    if (mesh_.is_boundary(e)) return -1.0;
+    const auto h0 = mesh_.halfedge_handle(e, 0), h1 = mesh_.halfedge_handle(e, 1);
+    const auto va = mesh_.from_vertex_handle(h0), vb = mesh_.to_vertex_handle(h0);
+    const auto vc = mesh_.to_vertex_handle(mesh_.next_halfedge_handle(h0));
+    const auto vd = mesh_.to_vertex_handle(mesh_.next_halfedge_handle(h1));
+    // Both ends are nodes of the small triangle (no feature nodes): never a crease segment.
+    if (is_feature(va) || is_feature(vb)) return -1.0;
+    if (is_frozen(va) || is_frozen(vb) || is_frozen(vc) || is_frozen(vd)) return -1.0;
+    const Vec a = point(mesh_, va), b = point(mesh_, vb), c = point(mesh_, vc), d = point(mesh_, vd);
+    const Vec n0 = (b - a).cross(c - a), n1 = (a - b).cross(d - b);
+    const Vec n2 = (d - a).cross(c - a), n3 = (b - d).cross(c - d);
+    const double l0 = n0.norm(), l1 = n1.norm(), l2 = n2.norm(), l3 = n3.norm();
+    if (l2 <= min_double_area_ || l3 <= min_double_area_ || !(l0 > 0.0) || !(l1 > 0.0)) return -1.0;
+    if (n0.dot(n1) < cos_dihedral_ * l0 * l1 || n2.dot(n3) < cos_dihedral_ * l2 * l3) return -1.0;
+    const Vec old_normal = n0 / l0 + n1 / l1;
+    if (!(n2.dot(old_normal) > 0.0) || !(n3.dot(old_normal) > 0.0)) return -1.0;
+    Shape before, after;
+    before.add(a, b, c, sin_bound_);
+    before.add(b, a, d, sin_bound_);
+    after.add(a, d, c, sin_bound_);
+    after.add(d, b, c, sin_bound_);
+    if (!is_better(before, after) || !mesh_.is_flip_ok(e)) return -1.0;
+    return after.min_sine;
+  }
+
+  // Collapsing from(h) into to(h), which stays: the sine of the smallest angle of the
+  // triangles around it afterwards when that is better than before (see Shape) and the
+  // collapse allowed, else -1. Allowed: the removed node is no feature node, not on the
+  // boundary and ranks no higher than the survivor (inner < border < corner); the link
+  // condition holds, no two faces end on the same nodes, no triangle degenerates or turns its
+  // normal by more than acos(min_normal_dot), and the removed node stays within
+  // kMaxCollapseOffsetEdges input mean edges of the new triangles.
+  double collapse_gain(TriMesh::HalfedgeHandle h) const {
+    const auto vb = mesh_.from_vertex_handle(h), va = mesh_.to_vertex_handle(h);
+    if (is_feature(vb) || is_frozen(vb) || is_frozen(va) || mesh_.is_boundary(vb) || mesh_.is_boundary(va)) return -1.0;
+    if (rank_of(vb) > rank_of(va)) return -1.0;
+    if (!mesh_.is_collapse_ok(h) || leaves_duplicate_face(mesh_, h)) return -1.0;
+    const TriMesh::FaceHandle f0 = mesh_.face_handle(h), f1 = mesh_.opposite_face_handle(h);
+    const Vec pb = point(mesh_, vb), pa = point(mesh_, va);
+    Shape before, after;
+    double offset = std::numeric_limits<double>::infinity();
+    for (auto g : mesh_.vf_range(vb)) {
+      std::array<Vec, 3> x;
+      int k = 0;
+      for (auto u : mesh_.fv_range(g)) x[static_cast<std::size_t>(k++)] = point(mesh_, u);
+      before.add(x[0], x[1], x[2], sin_bound_);
+      if (g == f0 || g == f1) continue;
+      const Vec n_old = (x[1] - x[0]).cross(x[2] - x[0]);
+      for (auto& y : x) {
+        if (y == pb) y = pa;
+      }
+      const Vec n_new = (x[1] - x[0]).cross(x[2] - x[0]);
+      const double l_old = n_old.norm(), l_new = n_new.norm();
+      if (l_new <= min_double_area_ || (l_old > 0.0 && n_new.dot(n_old) <= options_.min_normal_dot * l_old * l_new)) return -1.0;
+      after.add(x[0], x[1], x[2], sin_bound_);
+      offset = std::min(offset, (quality_detail::closest_point_on_triangle(pb, x[0], x[1], x[2]) - pb).norm());
+    }
+    if (!(offset <= max_offset_) || !is_better(before, after) || after.n_small >= before.n_small) return -1.0;
+    return after.min_sine;
+  }
+
+  // Moving v (no feature node, not on the boundary) to the best of a few places on the
+  // fitted surfaces of its triangles' patches (the mean of its projections onto them, as the
+  // optimisation's smoothing does): halfway and all the way to the centroid of its
+  // neighbours, and halfway and a quarter of the way to the apex of the equilateral triangle
+  // over the far edge of each of its triangles below the bound. Returns the sine of the
+  // smallest angle of its triangles at the best place (q) when that is better than before (see
+  // Shape), no triangle degenerates or turns its normal by more than acos(min_normal_dot) and
+  // q lies within kMaxCollapseOffsetEdges input mean edges of its old triangles; else -1.
+  double move_gain(TriMesh::VertexHandle v, Vec& best_q) const {
+    if (is_feature(v) || is_frozen(v) || mesh_.is_boundary(v)) return -1.0;
+    const Vec p = point(mesh_, v);
+    std::array<int, 8> patches{};
+    std::size_t n_patches = 0;
+    ring_.clear();
+    Shape before;
+    Vec centroid = Vec::Zero();
+    std::vector<Vec> targets;
+    for (auto h : mesh_.voh_range(v)) {
+      const Vec b = point(mesh_, mesh_.to_vertex_handle(h));
+      const Vec c = point(mesh_, mesh_.to_vertex_handle(mesh_.next_halfedge_handle(h)));
+      const Vec n = (b - p).cross(c - p);
+      ring_.push_back({b, c, n});
+      before.add(p, b, c, sin_bound_);
+      centroid += b;
+      const int patch = result_.face_patch[static_cast<std::size_t>(mesh_.face_handle(h).idx())];
+      if (std::find(patches.begin(), patches.begin() + static_cast<long>(n_patches), patch) ==
+          patches.begin() + static_cast<long>(n_patches)) {
+        if (n_patches == patches.size()) return -1.0;
+        patches[n_patches++] = patch;
+      }
+      if (smallest_angle_sine(p, b, c) < sin_bound_) {
+        const Vec e = c - b, side = n.cross(e);
+        const double side_norm = side.norm();
+        if (side_norm > 0.0) {
+          const Vec apex = 0.5 * (b + c) + (0.5 * std::numbers::sqrt3 * e.norm() / side_norm) * side;
+          targets.push_back(p + 0.5 * (apex - p));
+          targets.push_back(p + 0.25 * (apex - p));
+        }
+      }
+    }
+    if (ring_.empty()) return -1.0;
+    centroid /= static_cast<double>(ring_.size());
+    targets.push_back(centroid);
+    targets.push_back(0.5 * (p + centroid));
+    double best = -1.0;
+    for (const Vec& target : targets) {
+      Vec q = Vec::Zero();
+      for (std::size_t i = 0; i < n_patches; ++i) q += surface_.surfaces[static_cast<std::size_t>(patches[i])].project(target);
+      q /= static_cast<double>(n_patches);
+      if (!q.allFinite()) continue;
+      Shape after;
+      bool ok = true;
+      double offset = std::numeric_limits<double>::infinity();
+      for (const RingTriangle& t : ring_) {
+        const Vec n = (t.b - q).cross(t.c - q);
+        const double l = n.norm(), l_old = t.n.norm();
+        if (l <= min_double_area_ || (l_old > 0.0 && n.dot(t.n) <= options_.min_normal_dot * l * l_old)) {
+          ok = false;
+          break;
+        }
+        after.add(q, t.b, t.c, sin_bound_);
+        offset = std::min(offset, (quality_detail::closest_point_on_triangle(q, p, t.b, t.c) - q).norm());
+      }
+      if (!ok || !(offset <= max_offset_) || !is_better(before, after) || !(after.min_sine > best)) continue;
+      best = after.min_sine;
+      best_q = q;
+    }
+    return best;
+  }
+
+  static bool is_better(const Shape& before, const Shape& after) {
+    return after.min_sine > before.min_sine && after.n_small <= before.n_small &&
+           after.n_obtuse <= before.n_obtuse + (before.n_small - after.n_small);
+  }
+
+  const SurfaceMesh& surface_;
+  const StitchOptions& options_;
+  const std::vector<std::uint8_t>& is_feature_;
+  const std::vector<std::uint8_t>& is_frozen_;
+  StitchResult& result_;
+  TriMesh& mesh_;
+  double min_double_area_ = 0.0;
+  double sin_bound_ = 0.0;
+  double cos_dihedral_ = 1.0;
+  double max_offset_ = 0.0;
+  // The far corners of a moved vertex's triangles and their old area vectors.
+  struct RingTriangle {
+    Vec b, c, n;
+  };
+  mutable std::vector<RingTriangle> ring_;
+};
+
+}  // namespace
+
+AngleRepairResult repair_small_angles(const SurfaceMesh& surface, const StitchOptions& options,
+                                      const std::vector<std::uint8_t>& is_feature, StitchResult& result) {
+  AngleRepairResult out;
+  if (options.angle_repair_rounds <= 0 || result.mesh.n_faces() == 0) return out;
+  std::vector<std::uint8_t> frozen(is_feature.size(), 0);
+  // The mesh to go back to when a change crosses another triangle (only when the checks run).
+  std::optional<StitchResult> before;
+  for (int check = 0; check < kCheckRounds; ++check) {
+    AngleRepair repair(surface, options, is_feature, frozen, result);
+    if (check == 0 && !repair.any_small()) return out;
+    if (!before && options.check_self_intersections) {
+      before.emplace();
+      before->mesh = result.mesh;
+      before->face_patch = result.face_patch;
+      before->vertex_node = result.vertex_node;
+    }
+    for (int round = 0; round < options.angle_repair_rounds; ++round) {
+      if (repair.sweep() == 0) break;
+    }
+    repair.collect_garbage();
+    if (repair.n_flips_ + repair.n_collapses_ + repair.n_moves_ == 0) return out;
+    std::vector<std::array<std::uint32_t, 2>> pairs;
+    if (options.check_self_intersections) {
+      std::vector<std::uint8_t> is_changed(is_feature.size(), 0);
+      for (const int g : repair.changed_nodes_) is_changed[static_cast<std::size_t>(g)] = 1;
+      std::vector<std::uint32_t> touched;
+      for (auto f : result.mesh.faces()) {
+        for (auto v : result.mesh.fv_range(f)) {
+          if (is_changed[static_cast<std::size_t>(result.vertex_node[static_cast<std::size_t>(v.idx())])] != 0) {
+            touched.push_back(static_cast<std::uint32_t>(f.idx()));
+            break;
+          }
+        }
+      }
+      pairs = intersecting_pairs_of(to_soup(result.mesh), touched);
+    }
+    if (pairs.empty()) {
+      out.n_flips = repair.n_flips_;
+      out.n_collapses = repair.n_collapses_;
+      out.n_moves = repair.n_moves_;
+      return out;
+    }
+    // The nodes of the crossing faces are frozen and the repair made again from the start.
+    std::size_t n_frozen = 0;
+    for (const auto& pair : pairs) {
+      for (const std::uint32_t f : pair) {
+        for (auto v : result.mesh.fv_range(TriMesh::FaceHandle(static_cast<int>(f)))) {
+          auto& x = frozen[static_cast<std::size_t>(result.vertex_node[static_cast<std::size_t>(v.idx())])];
+          n_frozen += x == 0 ? 1 : 0;
+          x = 1;
+        }
+      }
+    }
+    out.n_undone += repair.n_flips_ + repair.n_collapses_ + repair.n_moves_;
+    result.mesh = before->mesh;
+    result.face_patch = before->face_patch;
+    result.vertex_node = before->vertex_node;
+    if (n_frozen == 0) return out;
+  }
+  return out;
+}
+
+}  // namespace nurbsfront::stitch_detail
