@@ -40,13 +40,6 @@ constexpr double kCurvedMaxTerraceRatio = 2.4;
 // Vertices at most sampled per patch (evenly by id).
 constexpr std::size_t kCurvatureJetSamples = 256;
 
-// The median of values (reordered).
-double median_of(std::vector<double>& values) {
-  const auto middle = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2);
-  std::nth_element(values.begin(), middle, values.end());
-  return *middle;
-}
-
 // The largest |principal curvature| at the origin of the quadric w = a0 + a1 u + a2 v + a3 u^2
 // + a4 u v + a5 v^2 fitted (least squares) to `points` (relative to the centre vertex) in the
 // frame of their best plane; -1 if the fit is degenerate.
