@@ -539,9 +539,7 @@ std::vector<double> curve_crease_angles(const TriMesh& mesh, const Segmentation&
       angles.push_back(std::acos(std::clamp(left.dot(right) / l, -1.0, 1.0)) * 180.0 / std::numbers::pi);
     }
     if (angles.empty()) continue;
-    const auto middle = angles.begin() + static_cast<std::ptrdiff_t>(angles.size() / 2);
-    std::nth_element(angles.begin(), middle, angles.end());
-    out[c] = *middle;
+    out[c] = median_of(angles);
   }
   return out;
 }

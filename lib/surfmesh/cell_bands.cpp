@@ -30,18 +30,15 @@ constexpr double kCurvatureJetRadiusCells = 4.5;
 // patch (the torus's inner equator at 64, two or three cells wide) has no two-dimensional
 // neighbourhood of its own.
 constexpr int kCurvatureJetRings = 3;
-// A curved patch's smoothing length is taken only when at most this fraction of
-// smoothing_cells (see curved_smoothing_cells).
-constexpr double kCurvedLengthMargin = 0.9;
+// A patch counts as curved (gets CellGrid::curved_smoothing's length) only when sqrt(2 R) is
+// at most this many smoothing_cells (R <= 14.6 cells with the default 2.25): the terraces'
+// noise biases each quadric's largest |k| up (the sphere at 48, radius 23 cells, came out as
+// 19-21 cells), so only a radius clearly below the smoothing length's own scale is taken. It
+// is 0.9 / 0.375, the gate of the earlier rule (length 0.375 sqrt(2 R) at most 0.9
+// smoothing_cells), so the set of curved patches does not move with curved_smoothing.
+constexpr double kCurvedMaxTerraceRatio = 2.4;
 // Vertices at most sampled per patch (evenly by id).
 constexpr std::size_t kCurvatureJetSamples = 256;
-
-// The median of values (reordered).
-double median_of(std::vector<double>& values) {
-  const auto middle = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2);
-  std::nth_element(values.begin(), middle, values.end());
-  return *middle;
-}
 
 // The largest |principal curvature| at the origin of the quadric w = a0 + a1 u + a2 v + a3 u^2
 // + a4 u v + a5 v^2 fitted (least squares) to `points` (relative to the centre vertex) in the
@@ -183,11 +180,10 @@ double curved_smoothing_cells(const TriMesh& mesh, const Segmentation& segmentat
   const auto upper = largest_abs.begin() + static_cast<std::ptrdiff_t>(3 * largest_abs.size() / 4);
   std::nth_element(largest_abs.begin(), upper, largest_abs.end());
   if (*upper > kCurvedQuartileRatio * median) return grid.smoothing_cells;
-  // The terraces' noise in each quadric biases its largest |k| up (the sphere at 48, radius
-  // 23 cells, came out as 19-21 cells: 2.19-2.25 cells): only a length clearly below
-  // smoothing_cells is taken.
-  const double length = grid.curved_smoothing * std::sqrt(2.0 * radius_cells);
-  return length <= kCurvedLengthMargin * grid.smoothing_cells ? length : grid.smoothing_cells;
+  // Only a radius clearly below the smoothing length's scale (kCurvedMaxTerraceRatio).
+  const double terrace = std::sqrt(2.0 * radius_cells);
+  if (terrace > kCurvedMaxTerraceRatio * grid.smoothing_cells) return grid.smoothing_cells;
+  return std::min(grid.curved_smoothing * terrace, grid.smoothing_cells);
 }
 
 }  // namespace nurbsfront::surfmesh_detail

@@ -181,14 +181,16 @@ struct CellGrid {
   //! 256 of) the patch's vertices of the smallest radius of curvature (cells) of a
   //! least-squares quadric of the marching-cubes vertices within 4.5 cells, estimated before
   //! the band fit (sqrt(2 R) is how far the surface runs from its tangent plane before it
-  //! leaves it by one cell: about a terrace's half-width); only when that is at most 0.9
-  //! smoothing_cells, not below a radius of 5 cells, nor when the upper quartile of the
-  //! curvature exceeds 1.5 times the median (a rounded sharp edge's curvature, not a
-  //! surface's). The tube of the occupancy torus (radius 6 and 8 cells at 48 and 64) was
-  //! flattened by 2.25 cells (docs/surfmesh.md, "Smoothing length of curved patches"). Flat
-  //! patches and the sphere at 48 cells (radius 23) keep smoothing_cells. Finite and >= 0;
-  //! 0 disables. Default 0.375.
-  double curved_smoothing = 0.375;
+  //! leaves it by one cell: about a terrace's half-width), at most smoothing_cells; only for
+  //! a curved patch: sqrt(2 R) at most 2.4 smoothing_cells (R <= 14.6 cells with the default
+  //! 2.25), R not below 5 cells, and the upper quartile of the curvature at most 1.5 times
+  //! the median (else a rounded sharp edge's curvature, not a surface's). The tube of the
+  //! occupancy torus (radius 6 and 8 cells at 48 and 64) was flattened by 2.25 cells
+  //! (docs/surfmesh.md, "Smoothing length of curved patches"). Flat patches and the sphere at
+  //! 48 cells (radius 23) keep smoothing_cells. Finite and >= 0; 0 disables. Default 0.325
+  //! (0.375 left the torus at 48 cells at 2.88 of the 3 of issue 5's mean bound at triangle
+  //! centroids through the tool; docs/surfmesh.md, "Torus at 48 cells").
+  double curved_smoothing = 0.325;
   void validate() const;
 };
 

@@ -3,7 +3,9 @@
 // Internal to the surfmesh module: border discretisation and per-patch work shared by its
 // .cpp files (not installed API).
 
+#include <algorithm>
 #include <array>
+#include <cstddef>
 #include <cstdint>
 #include <functional>
 #include <span>
@@ -41,6 +43,13 @@ struct PatchInputHeights {
 }  // namespace nurbsfront
 
 namespace nurbsfront::surfmesh_detail {
+
+//! The median of values (the upper one of an even count; values reordered, not empty).
+inline double median_of(std::vector<double>& values) {
+  const auto middle = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2);
+  std::nth_element(values.begin(), middle, values.end());
+  return *middle;
+}
 
 //! Target 3D edge length at a world point.
 using SizeAt = std::function<double(const Eigen::Vector3d&)>;
