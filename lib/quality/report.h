@@ -193,10 +193,13 @@ struct MeshReport {
 //! `faces` (any order, repeats allowed), in the same form: (smaller, larger) face indices,
 //! ascending, each pair once. For re-checking a few changed faces of a large soup: a tree
 //! is built over `faces` only and every face of the soup is tested against it, so the cost
-//! is linear in the soup plus the candidates near `faces`.
-//! \throw InvalidInput for out-of-range indices (in the soup or in `faces`) or non-finite points.
+//! is linear in the soup plus the candidates near `faces`. The soup's faces are taken on
+//! n_threads workers; the result does not depend on n_threads.
+//! \throw InvalidInput for out-of-range indices (in the soup or in `faces`), non-finite points
+//! or n_threads == 0.
 [[nodiscard]] std::vector<std::array<std::uint32_t, 2>> intersecting_pairs_of(const TriangleSoup& soup,
-                                                                              const std::vector<std::uint32_t>& faces);
+                                                                              const std::vector<std::uint32_t>& faces,
+                                                                              unsigned n_threads = 1);
 
 //! Two-sided distance by dense sampling: every vertex plus area-proportional samples
 //! (spacing sample_spacing_relative * reference diagonal) on both surfaces, exact

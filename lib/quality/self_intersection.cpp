@@ -416,9 +416,13 @@ std::vector<std::array<std::uint32_t, 2>> self_intersecting_pairs(const Triangle
   return pairs;
 }
 
+// Soup faces per chunk of intersecting_pairs_of's parallel loop.
+constexpr std::size_t kPairsOfChunk = 4096;
+
 std::vector<std::array<std::uint32_t, 2>> intersecting_pairs_of(const TriangleSoup& soup,
-                                                                 const std::vector<std::uint32_t>& faces) {
+                                                                 const std::vector<std::uint32_t>& faces, unsigned n_threads) {
   quality_detail::validate_soup(soup, "intersecting_pairs_of");
+  if (n_threads == 0) throw InvalidInput("nurbsfront: intersecting_pairs_of needs at least one thread");
   const std::size_t n = soup.triangles.size();
   std::vector<std::uint32_t> subset = faces;
   std::sort(subset.begin(), subset.end());
@@ -445,54 +449,61 @@ std::vector<std::array<std::uint32_t, 2>> intersecting_pairs_of(const TriangleSo
   if (subset.empty()) return pairs;
   const quality_detail::AabbTree tree(soup, subset);
   const auto& nodes = tree.nodes();
-  std::vector<std::uint32_t> stack;
-  for (std::uint32_t g = 0; g < n; ++g) {
-    const auto& tg = soup.triangles[g];
-    const Eigen::Vector3d& a = soup.points[tg[0]];
-    const Eigen::Vector3d& b = soup.points[tg[1]];
-    const Eigen::Vector3d& c = soup.points[tg[2]];
-    const Eigen::Vector3d lo = a.cwiseMin(b).cwiseMin(c), hi = a.cwiseMax(b).cwiseMax(c);
-    // Double box tests against the float boxes, which contain the exact boxes: never prunes
-    // an overlapping pair.
-    auto overlaps = [&](const quality_detail::Box3f& box) {
-      for (int k = 0; k < 3; ++k) {
-        if (static_cast<double>(box.hi[k]) < lo[k] || hi[k] < static_cast<double>(box.lo[k])) return false;
-      }
-      return true;
-    };
-    if (!overlaps(nodes[0].box)) continue;
-    bool g_usable = true, g_checked = false;
-    const std::array<std::uint32_t, 3> ids_g{ids[tg[0]], ids[tg[1]], ids[tg[2]]};
-    const std::array<Eigen::Vector3d, 3> points_g{a, b, c};
-    stack.assign(1, 0);
-    while (!stack.empty()) {
-      const auto& node = nodes[stack.back()];
-      stack.pop_back();
-      if (!overlaps(node.box)) continue;
-      if (!node.is_leaf()) {
-        stack.push_back(node.left());
-        stack.push_back(node.right());
-        continue;
-      }
-      for (std::uint32_t i = node.begin(); i < node.end(); ++i) {
-        const std::uint32_t f = tree.faces()[i];
-        // A pair of two subset faces is tested once, from its larger face.
-        if (f == g || (in_subset[g] != 0 && f > g) || !overlaps(tree.face_box(i))) continue;
-        if (!g_checked) {
-          g_usable = usable(g);
-          g_checked = true;
+  // The soup's faces in chunks on n_threads workers, each listing its pairs; the union is
+  // sorted below, so the result does not depend on the thread count.
+  std::vector<std::vector<FacePair>> found(n_threads);
+  parallel::for_chunks(n, n_threads, kPairsOfChunk, [&](std::size_t begin, std::size_t end, unsigned worker) {
+    std::vector<FacePair>& out = found[worker];
+    std::vector<std::uint32_t> stack;
+    for (auto g = static_cast<std::uint32_t>(begin); g < end; ++g) {
+      const auto& tg = soup.triangles[g];
+      const Eigen::Vector3d& a = soup.points[tg[0]];
+      const Eigen::Vector3d& b = soup.points[tg[1]];
+      const Eigen::Vector3d& c = soup.points[tg[2]];
+      const Eigen::Vector3d lo = a.cwiseMin(b).cwiseMin(c), hi = a.cwiseMax(b).cwiseMax(c);
+      // Double box tests against the float boxes, which contain the exact boxes: never prunes
+      // an overlapping pair.
+      auto overlaps = [&](const quality_detail::Box3f& box) {
+        for (int k = 0; k < 3; ++k) {
+          if (static_cast<double>(box.hi[k]) < lo[k] || hi[k] < static_cast<double>(box.lo[k])) return false;
+        }
+        return true;
+      };
+      if (!overlaps(nodes[0].box)) continue;
+      bool g_usable = true, g_checked = false;
+      const std::array<std::uint32_t, 3> ids_g{ids[tg[0]], ids[tg[1]], ids[tg[2]]};
+      const std::array<Eigen::Vector3d, 3> points_g{a, b, c};
+      stack.assign(1, 0);
+      while (!stack.empty()) {
+        const auto& node = nodes[stack.back()];
+        stack.pop_back();
+        if (!overlaps(node.box)) continue;
+        if (!node.is_leaf()) {
+          stack.push_back(node.left());
+          stack.push_back(node.right());
+          continue;
+        }
+        for (std::uint32_t i = node.begin(); i < node.end(); ++i) {
+          const std::uint32_t f = tree.faces()[i];
+          // A pair of two subset faces is tested once, from its larger face.
+          if (f == g || (in_subset[g] != 0 && f > g) || !overlaps(tree.face_box(i))) continue;
+          if (!g_checked) {
+            g_usable = usable(g);
+            g_checked = true;
+          }
+          if (!g_usable) break;
+          const auto& tf = soup.triangles[f];
+          const std::array<std::uint32_t, 3> ids_f{ids[tf[0]], ids[tf[1]], ids[tf[2]]};
+          const std::array<Eigen::Vector3d, 3> points_f{soup.points[tf[0]], soup.points[tf[1]], soup.points[tf[2]]};
+          if (quality_detail::triangles_intersect(ids_f, points_f, ids_g, points_g)) {
+            out.push_back({std::min(f, g), std::max(f, g)});
+          }
         }
         if (!g_usable) break;
-        const auto& tf = soup.triangles[f];
-        const std::array<std::uint32_t, 3> ids_f{ids[tf[0]], ids[tf[1]], ids[tf[2]]};
-        const std::array<Eigen::Vector3d, 3> points_f{soup.points[tf[0]], soup.points[tf[1]], soup.points[tf[2]]};
-        if (quality_detail::triangles_intersect(ids_f, points_f, ids_g, points_g)) {
-          pairs.push_back({std::min(f, g), std::max(f, g)});
-        }
       }
-      if (!g_usable) break;
     }
-  }
+  });
+  for (const auto& f : found) pairs.insert(pairs.end(), f.begin(), f.end());
   std::sort(pairs.begin(), pairs.end());
   pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
   return pairs;

@@ -9,6 +9,8 @@
 #include <array>
 #include <cstdint>
 #include <limits>
+#include <numeric>
+#include <vector>
 
 #include <Eigen/Geometry>
 
@@ -29,6 +31,90 @@ using Vec = Eigen::Vector3d;
 constexpr int kSettleRounds = 3;
 
 }  // namespace
+
+// OpenMesh 9's garbage_collection() (ArrayKernelT_impl.hh) step by step, inline here: its own
+// copy, compiled in its library with its assertions on, looks up the status property per
+// element through the property container and checks every handle it sets (on the liver it
+// cost 0.26 G instructions for 3 swaps); these are a few array passes.
+GarbageMaps collect_garbage(TriMesh& mesh) {
+  using VH = TriMesh::VertexHandle;
+  using HH = TriMesh::HalfedgeHandle;
+  using EH = TriMesh::EdgeHandle;
+  using FH = TriMesh::FaceHandle;
+  const int n_vertices = static_cast<int>(mesh.n_vertices()), n_edges = static_cast<int>(mesh.n_edges());
+  const int n_faces = static_cast<int>(mesh.n_faces());
+  GarbageMaps maps;
+  maps.vertex.resize(static_cast<std::size_t>(n_vertices));
+  maps.face.resize(static_cast<std::size_t>(n_faces));
+  std::vector<int> halfedge(2 * static_cast<std::size_t>(n_edges));
+  std::iota(maps.vertex.begin(), maps.vertex.end(), 0);
+  std::iota(maps.face.begin(), maps.face.end(), 0);
+  std::iota(halfedge.begin(), halfedge.end(), 0);
+  auto swap_props = [](auto begin, auto end, int i0, int i1) {
+    for (auto it = begin; it != end; ++it) {
+      if (*it != nullptr) (*it)->swap(static_cast<std::size_t>(i0), static_cast<std::size_t>(i1));
+    }
+  };
+  // Kept count of one kind: deleted(i) says whether element i is deleted, swap(i0, i1) swaps two.
+  auto compact = [](int n, const auto& deleted, const auto& swap) {
+    if (n == 0) return 0;
+    int i0 = 0, i1 = n - 1;
+    for (;;) {
+      while (!deleted(i0) && i0 < i1) ++i0;
+      while (deleted(i1) && i0 < i1) --i1;
+      if (i0 >= i1) break;
+      swap(i0, i1);
+    }
+    return deleted(i0) ? i0 : i0 + 1;
+  };
+  const int kept_vertices = compact(
+      n_vertices, [&](int i) { return mesh.status(VH(i)).deleted(); },
+      [&](int i0, int i1) {
+        std::swap(mesh.vertex(VH(i0)), mesh.vertex(VH(i1)));
+        std::swap(maps.vertex[static_cast<std::size_t>(i0)], maps.vertex[static_cast<std::size_t>(i1)]);
+        swap_props(mesh.vprops_begin(), mesh.vprops_end(), i0, i1);
+      });
+  const int kept_edges = compact(
+      n_edges, [&](int i) { return mesh.status(EH(i)).deleted(); },
+      [&](int i0, int i1) {
+        std::swap(mesh.edge(EH(i0)), mesh.edge(EH(i1)));
+        std::swap(halfedge[2 * static_cast<std::size_t>(i0)], halfedge[2 * static_cast<std::size_t>(i1)]);
+        std::swap(halfedge[2 * static_cast<std::size_t>(i0) + 1], halfedge[2 * static_cast<std::size_t>(i1) + 1]);
+        swap_props(mesh.eprops_begin(), mesh.eprops_end(), i0, i1);
+        swap_props(mesh.hprops_begin(), mesh.hprops_end(), 2 * i0, 2 * i1);
+        swap_props(mesh.hprops_begin(), mesh.hprops_end(), 2 * i0 + 1, 2 * i1 + 1);
+      });
+  const int kept_faces = compact(
+      n_faces, [&](int i) { return mesh.status(FH(i)).deleted(); },
+      [&](int i0, int i1) {
+        std::swap(mesh.face(FH(i0)), mesh.face(FH(i1)));
+        std::swap(maps.face[static_cast<std::size_t>(i0)], maps.face[static_cast<std::size_t>(i1)]);
+        swap_props(mesh.fprops_begin(), mesh.fprops_end(), i0, i1);
+      });
+  // Cut: the items and every property vector (as garbage_collection's resizes).
+  mesh.resize(static_cast<std::size_t>(kept_vertices), static_cast<std::size_t>(kept_edges), static_cast<std::size_t>(kept_faces));
+  // The swaps are disjoint pairs, so each map sends an old index to its new one (and a new
+  // one to its old one). The handles in garbage_collection's order: vertices' halfedges,
+  // halfedges' vertices, then their next (which sets the next's previous) and faces, faces'
+  // halfedges.
+  auto new_halfedge = [&](HH h) { return HH(halfedge[static_cast<std::size_t>(h.idx())]); };
+  for (int v = 0; v < kept_vertices; ++v) {
+    const HH h = mesh.halfedge_handle(VH(v));
+    if (h.is_valid()) mesh.set_halfedge_handle(VH(v), new_halfedge(h));
+  }
+  for (int h = 0; h < 2 * kept_edges; ++h) {
+    mesh.set_vertex_handle(HH(h), VH(maps.vertex[static_cast<std::size_t>(mesh.to_vertex_handle(HH(h)).idx())]));
+  }
+  for (int h = 0; h < 2 * kept_edges; ++h) {
+    mesh.set_next_halfedge_handle(HH(h), new_halfedge(mesh.next_halfedge_handle(HH(h))));
+    const FH f = mesh.face_handle(HH(h));
+    if (f.is_valid()) mesh.set_face_handle(HH(h), FH(maps.face[static_cast<std::size_t>(f.idx())]));
+  }
+  for (int f = 0; f < kept_faces; ++f) mesh.set_halfedge_handle(FH(f), new_halfedge(mesh.halfedge_handle(FH(f))));
+  maps.vertex.resize(static_cast<std::size_t>(kept_vertices));
+  maps.face.resize(static_cast<std::size_t>(kept_faces));
+  return maps;
+}
 
 void settle_intersections(const SurfaceMesh& surface, const StitchOptions& options,
                           const std::vector<std::uint8_t>& is_feature, StitchResult& result,
@@ -432,19 +518,12 @@ void settle_intersections(const SurfaceMesh& surface, const StitchOptions& optio
   if (any_collapse) {
     // The collapses left deleted elements: removed, with the per-face patch ids and the
     // per-vertex node ids carried along (the caller counts the pairs again).
-    OpenMesh::FPropHandleT<int> patch_of;
-    OpenMesh::VPropHandleT<int> node_of;
-    mesh.add_property(patch_of);
-    mesh.add_property(node_of);
-    for (auto f : mesh.faces()) mesh.property(patch_of, f) = result.face_patch[static_cast<std::size_t>(f.idx())];
-    for (auto v : mesh.vertices()) mesh.property(node_of, v) = result.vertex_node[static_cast<std::size_t>(v.idx())];
-    mesh.garbage_collection();
-    result.face_patch.resize(mesh.n_faces());
-    result.vertex_node.resize(mesh.n_vertices());
-    for (auto f : mesh.faces()) result.face_patch[static_cast<std::size_t>(f.idx())] = mesh.property(patch_of, f);
-    for (auto v : mesh.vertices()) result.vertex_node[static_cast<std::size_t>(v.idx())] = mesh.property(node_of, v);
-    mesh.remove_property(patch_of);
-    mesh.remove_property(node_of);
+    const GarbageMaps old = collect_garbage(mesh);
+    std::vector<int> face_patch(old.face.size()), vertex_node(old.vertex.size());
+    for (std::size_t f = 0; f < old.face.size(); ++f) face_patch[f] = result.face_patch[static_cast<std::size_t>(old.face[f])];
+    for (std::size_t v = 0; v < old.vertex.size(); ++v) vertex_node[v] = result.vertex_node[static_cast<std::size_t>(old.vertex[v])];
+    result.face_patch = std::move(face_patch);
+    result.vertex_node = std::move(vertex_node);
     pairs.clear();
   }
 }

@@ -325,7 +325,7 @@ void collapse(const SurfaceMesh& surface, const StitchOptions& options, const st
       }
     }
     std::vector<FacePair> pairs;
-    if (options.check_self_intersections) pairs = intersecting_pairs_of(to_soup(trial.mesh), touched);
+    if (options.check_self_intersections) pairs = intersecting_pairs_of(to_soup(trial.mesh), touched, options.n_threads);
     if (pairs.empty()) {
       report.n_unused_nodes = trial_report.n_unused_nodes - merges.n_merges;
       report.n_collapses = merges.n_merges;
@@ -467,7 +467,7 @@ void split_obtuse_checked(const SurfaceMesh& surface, const StitchOptions& optio
           }
         }
       }
-      pairs = intersecting_pairs_of(to_soup(result.mesh), touched);
+      pairs = intersecting_pairs_of(to_soup(result.mesh), touched, options.n_threads);
     }
     if (pairs.empty()) {
       report.n_obtuse_splits = split.n_splits;

@@ -140,6 +140,17 @@ struct SplitResult {
 SplitResult split_obtuse(const SurfaceMesh& surface, const StitchOptions& options, std::vector<std::uint8_t>& is_feature,
                          StitchResult& result, const std::vector<std::array<int, 2>>& refused);
 
+//! The old index of every kept element after collect_garbage() (vertices, faces).
+struct GarbageMaps {
+  std::vector<int> vertex, face;
+};
+
+//! mesh.garbage_collection() with the same result bit for bit (element order, every
+//! handle, properties): each kind's first deleted element swaps items and properties with
+//! its last kept one until they meet, the arrays are cut and the kept elements' handles
+//! mapped, as in OpenMesh 9. Returns the kept elements' old indices.
+GarbageMaps collect_garbage(TriMesh& mesh);
+
 //! Intersecting pairs left after the optimisation's repair, i.e. of the assembled mesh
 //! (`pairs`: all pairs of result.mesh, sorted, updated in place). Per pair, the nodes of
 //! both triangles that are neither feature nodes nor on the input's boundary move to the

@@ -13,6 +13,7 @@
 #include <Eigen/Geometry>
 
 #include "nurbsfront/core/error.h"
+#include "nurbsfront/core/parallel.h"
 #include "nurbsfront/core/soup.h"
 #include "nurbsfront/core/tolerances.h"
 #include "nurbsfront/front2d/predicates.h"
@@ -54,6 +55,30 @@ constexpr int kMaxRefinement = 4;
 constexpr double kZigZagRoughness = 3.0;
 // Rings of faces on each side of a curve vertex whose mean normals give its crease angle.
 constexpr int kCreaseRings = 3;
+// Curves per chunk of the parallel crease angles (most curves have a few dozen vertices).
+constexpr std::size_t kCreaseCurveChunk = 16;
+// Patches per chunk of the parallel per-patch border checks.
+constexpr std::size_t kPatchChunk = 8;
+
+// The sorted, distinct curve ids that curves_of(p, out) appends to `out` for the patches p
+// of [0, n_patches), the patches taken on `threads` workers: the same list for any count
+// (each patch's ids depend on that patch only, and the union is sorted).
+template <class CurvesOf>
+std::vector<int> curves_over_patches(std::size_t n_patches, unsigned threads, const CurvesOf& curves_of) {
+  std::vector<int> out;
+  if (threads <= 1) {
+    for (std::size_t p = 0; p < n_patches; ++p) curves_of(p, out);
+  } else {
+    std::vector<std::vector<int>> per_patch(n_patches);
+    parallel::for_chunks(n_patches, threads, kPatchChunk, [&](std::size_t begin, std::size_t end, unsigned) {
+      for (std::size_t p = begin; p < end; ++p) curves_of(p, per_patch[p]);
+    });
+    for (const auto& curves : per_patch) out.insert(out.end(), curves.begin(), curves.end());
+  }
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
+  return out;
+}
 // Share of the crease angle above which that ring-averaged angle marks a feature: the
 // averaging over 3 rings lowers the 90 deg of a bevelled box edge to 60..90 deg (measured on
 // the DRAM cell and the trench); smooth parts stay below 45 deg on the sphere, torus and
@@ -315,9 +340,8 @@ std::vector<Eigen::Vector2d> plane_points(const Eigen::Vector3d& axis, const Pat
 
 }  // namespace
 
-std::vector<int> crossing_curves(const Segmentation& seg, const BorderNodes& borders) {
-  std::vector<int> out;
-  for (std::size_t p = 0; p < seg.patches.size(); ++p) {
+std::vector<int> crossing_curves(const Segmentation& seg, const BorderNodes& borders, unsigned threads) {
+  return curves_over_patches(seg.patches.size(), threads, [&](std::size_t p, std::vector<int>& out) {
     const PatchBorder border = patch_border(seg, static_cast<int>(p), borders);
     const std::vector<Eigen::Vector2d> xy = plane_points(seg.patches[p].axis, border, borders);
     // Sweep along x: segments sorted by their smallest x, each compared with those that
@@ -355,10 +379,7 @@ std::vector<int> crossing_curves(const Segmentation& seg, const BorderNodes& bor
         }
       }
     }
-  }
-  std::sort(out.begin(), out.end());
-  out.erase(std::unique(out.begin(), out.end()), out.end());
-  return out;
+  });
 }
 
 std::vector<int> flipped_loops(const TriMesh& mesh, const Segmentation& seg, const BorderNodes& borders) {
@@ -395,9 +416,8 @@ std::vector<int> flipped_loops(const TriMesh& mesh, const Segmentation& seg, con
   return out;
 }
 
-std::vector<int> extra_outer_loop_curves(const Segmentation& seg, const BorderNodes& borders) {
-  std::vector<int> out;
-  for (std::size_t p = 0; p < seg.patches.size(); ++p) {
+std::vector<int> extra_outer_loop_curves(const Segmentation& seg, const BorderNodes& borders, unsigned threads) {
+  return curves_over_patches(seg.patches.size(), threads, [&](std::size_t p, std::vector<int>& out) {
     const PatchBorder border = patch_border(seg, static_cast<int>(p), borders);
     const std::vector<Eigen::Vector2d> xy = plane_points(seg.patches[p].axis, border, borders);
     std::map<std::pair<int, int>, int> edge_curve;
@@ -430,20 +450,17 @@ std::vector<int> extra_outer_loop_curves(const Segmentation& seg, const BorderNo
         if (it != edge_curve.end()) out.push_back(it->second);
       }
     }
-  }
-  std::sort(out.begin(), out.end());
-  out.erase(std::unique(out.begin(), out.end()), out.end());
-  return out;
+  });
 }
 
-std::vector<int> folded_border_curves(const Segmentation& seg, const BorderNodes& borders, const std::vector<CurveSource>& source) {
-  std::vector<int> out;
-  for (std::size_t p = 0; p < seg.patches.size(); ++p) {
+std::vector<int> folded_border_curves(const Segmentation& seg, const BorderNodes& borders, const std::vector<CurveSource>& source,
+                                      unsigned threads) {
+  return curves_over_patches(seg.patches.size(), threads, [&](std::size_t p, std::vector<int>& out) {
     const PatchBorder border = patch_border(seg, static_cast<int>(p), borders);
-    if (border.edges.size() < 3) continue;
+    if (border.edges.size() < 3) return;
     const std::vector<Eigen::Vector2d> xy = plane_points(seg.patches[p].axis, border, borders);
     const BorderCycles cycles = border_cycles(xy, border.edges);
-    if (cycles.meshable()) continue;
+    if (cycles.meshable()) return;
     // The bad cycles: a winding other than 0 and 1 (a hole poking out of the outer loop, a
     // loop turning the wrong way round), degenerate, or counter-clockwise besides the largest.
     std::size_t largest = cycles.polygons.size();
@@ -478,32 +495,36 @@ std::vector<int> folded_border_curves(const Segmentation& seg, const BorderNodes
     });
     if (all_input) curves = seg.patches[p].curves;
     out.insert(out.end(), curves.begin(), curves.end());
-  }
-  std::sort(out.begin(), out.end());
-  out.erase(std::unique(out.begin(), out.end()), out.end());
-  return out;
+  });
 }
 
-std::vector<double> curve_crease_angles(const TriMesh& mesh, const Segmentation& seg, int rings) {
+std::vector<double> curve_crease_angles(const TriMesh& mesh, const Segmentation& seg, int rings, unsigned threads) {
   std::vector<double> out(seg.curves.size(), 180.0);
-  std::vector<int> stamp(mesh.n_faces(), -1);
-  int epoch = 0;
-  std::vector<int> frontier, next;
+  // Per worker: face stamps and the breadth-first rings. A curve's angle depends only on the
+  // mesh and the segmentation (the stamps only mark faces seen in one side_normal call), so
+  // the curves may be taken in any order, on any worker.
+  struct Scratch {
+    std::vector<int> stamp;
+    int epoch = 0;
+    std::vector<int> frontier, next;
+    std::vector<double> angles;
+  };
+  std::vector<Scratch> scratch(std::max(1U, threads));
   // Area-weighted mean normal (not normalised) of the faces within `rings` edge-adjacent
   // rings of the faces of patch p around vertex v, not entering patch `other`: a narrow
   // patch (a bevel strip) does not hide the faces beyond it.
-  auto side_normal = [&](int v, int p, int other) {
-    ++epoch;
-    frontier.clear();
+  auto side_normal = [&](Scratch& s, int v, int p, int other) {
+    ++s.epoch;
+    s.frontier.clear();
     Eigen::Vector3d sum = Eigen::Vector3d::Zero();
     for (const auto f : mesh.vf_range(TriMesh::VertexHandle(v)))
       if (seg.face_patch[static_cast<std::size_t>(f.idx())] == p) {
-        stamp[static_cast<std::size_t>(f.idx())] = epoch;
-        frontier.push_back(f.idx());
+        s.stamp[static_cast<std::size_t>(f.idx())] = s.epoch;
+        s.frontier.push_back(f.idx());
       }
-    for (int ring = 0; ring <= rings && !frontier.empty(); ++ring) {
-      next.clear();
-      for (const int f : frontier) {
+    for (int ring = 0; ring <= rings && !s.frontier.empty(); ++ring) {
+      s.next.clear();
+      for (const int f : s.frontier) {
         const TriMesh::FaceHandle fh(f);
         const auto h = mesh.halfedge_handle(fh);
         const Eigen::Vector3d a = to_eigen(mesh.point(mesh.from_vertex_handle(h)));
@@ -512,41 +533,45 @@ std::vector<double> curve_crease_angles(const TriMesh& mesh, const Segmentation&
         sum += (b - a).cross(c - a);  // twice the area times the unit normal
         if (ring == rings) continue;
         for (const auto g : mesh.ff_range(fh))
-          if (seg.face_patch[static_cast<std::size_t>(g.idx())] != other && stamp[static_cast<std::size_t>(g.idx())] != epoch) {
-            stamp[static_cast<std::size_t>(g.idx())] = epoch;
-            next.push_back(g.idx());
+          if (seg.face_patch[static_cast<std::size_t>(g.idx())] != other && s.stamp[static_cast<std::size_t>(g.idx())] != s.epoch) {
+            s.stamp[static_cast<std::size_t>(g.idx())] = s.epoch;
+            s.next.push_back(g.idx());
           }
       }
-      std::swap(frontier, next);
+      std::swap(s.frontier, s.next);
     }
     return sum;
   };
-  std::vector<double> angles;
-  for (std::size_t c = 0; c < seg.curves.size(); ++c) {
-    const BorderCurve& curve = seg.curves[c];
-    if (curve.patch_right < 0) continue;
-    angles.clear();
-    const std::size_t n = curve.vertices.size();
-    // Interior vertices of an open curve (its corners also touch other patches), every
-    // vertex of a closed one, both ends of a one-edge curve.
-    const std::size_t first = curve.is_closed || n <= 2 ? 0 : 1;
-    const std::size_t last = curve.is_closed || n <= 2 ? n : n - 1;
-    for (std::size_t i = first; i < last; ++i) {
-      const Eigen::Vector3d left = side_normal(curve.vertices[i], curve.patch_left, curve.patch_right);
-      const Eigen::Vector3d right = side_normal(curve.vertices[i], curve.patch_right, curve.patch_left);
-      const double l = left.norm() * right.norm();
-      if (!(l > 0.0)) continue;
-      angles.push_back(std::acos(std::clamp(left.dot(right) / l, -1.0, 1.0)) * 180.0 / std::numbers::pi);
+  parallel::for_chunks(seg.curves.size(), threads, kCreaseCurveChunk, [&](std::size_t begin, std::size_t end, unsigned worker) {
+    Scratch& s = scratch[worker];
+    if (s.stamp.empty()) s.stamp.assign(mesh.n_faces(), -1);
+    std::vector<double>& angles = s.angles;
+    for (std::size_t c = begin; c < end; ++c) {
+      const BorderCurve& curve = seg.curves[c];
+      if (curve.patch_right < 0) continue;
+      angles.clear();
+      const std::size_t n = curve.vertices.size();
+      // Interior vertices of an open curve (its corners also touch other patches), every
+      // vertex of a closed one, both ends of a one-edge curve.
+      const std::size_t first = curve.is_closed || n <= 2 ? 0 : 1;
+      const std::size_t last = curve.is_closed || n <= 2 ? n : n - 1;
+      for (std::size_t i = first; i < last; ++i) {
+        const Eigen::Vector3d left = side_normal(s, curve.vertices[i], curve.patch_left, curve.patch_right);
+        const Eigen::Vector3d right = side_normal(s, curve.vertices[i], curve.patch_right, curve.patch_left);
+        const double l = left.norm() * right.norm();
+        if (!(l > 0.0)) continue;
+        angles.push_back(std::acos(std::clamp(left.dot(right) / l, -1.0, 1.0)) * 180.0 / std::numbers::pi);
+      }
+      if (angles.empty()) continue;
+      out[c] = median_of(angles);
     }
-    if (angles.empty()) continue;
-    out[c] = median_of(angles);
-  }
+  });
   return out;
 }
 
 std::vector<std::uint8_t> feature_curves(const TriMesh& mesh, const Segmentation& seg, double crease_angle_deg,
-                                         std::vector<double>* crease_angles) {
-  const std::vector<double> angles = curve_crease_angles(mesh, seg, kCreaseRings);
+                                         std::vector<double>* crease_angles, unsigned threads) {
+  const std::vector<double> angles = curve_crease_angles(mesh, seg, kCreaseRings, threads);
   if (crease_angles != nullptr) *crease_angles = angles;
   std::vector<std::uint8_t> out(seg.curves.size(), 0);
   const double cos_crease = std::cos(crease_angle_deg * std::numbers::pi / 180.0);

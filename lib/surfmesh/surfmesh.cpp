@@ -296,7 +296,7 @@ SurfaceMesh surfmesh_detail::mesh_surface(const TriMesh& input, const Segmentati
   std::vector<std::uint8_t> feature_limited;  // feature sizing alone: patches not at the uniform h
   std::vector<double> patch_grid;  // feature sizing alone: per patch sizing grid spacing
   std::vector<double> crease_angles;
-  out.curve_is_feature = feature_curves(input, segmentation, options.crease_angle_deg, &crease_angles);
+  out.curve_is_feature = feature_curves(input, segmentation, options.crease_angle_deg, &crease_angles, threads);
   // Feature sizing where it helps (SizingOptions::feature_size): not on marching-cubes
   // surfaces, not for a few thin parts.
   if (options.sizing.feature_size > 0.0 && (options.sizing.feature_size_everywhere || !marching_cubes)) {
@@ -373,15 +373,15 @@ SurfaceMesh surfmesh_detail::mesh_surface(const TriMesh& input, const Segmentati
   BorderNodes borders = discretise_borders(input, segmentation, size_at, source, corner_target);
   for (bool changed = true; changed;) {
     changed = false;
-    std::vector<int> bad = crossing_curves(segmentation, borders);
+    std::vector<int> bad = crossing_curves(segmentation, borders, threads);
     const std::vector<int> flipped = flipped_loops(input, segmentation, borders);
     bad.insert(bad.end(), flipped.begin(), flipped.end());
-    const std::vector<int> extra = extra_outer_loop_curves(segmentation, borders);
+    const std::vector<int> extra = extra_outer_loop_curves(segmentation, borders, threads);
     bad.insert(bad.end(), extra.begin(), extra.end());
     // Last: borders that still fold with all the above resolved (escalating their curves
     // earlier changed more curves than needed: cheese, 8 of 9 such patches unfold with the
     // crossing curves resampled).
-    if (bad.empty()) bad = folded_border_curves(segmentation, borders, source);
+    if (bad.empty()) bad = folded_border_curves(segmentation, borders, source, threads);
     std::sort(bad.begin(), bad.end());
     bad.erase(std::unique(bad.begin(), bad.end()), bad.end());
     for (const int c : bad) {
@@ -406,13 +406,13 @@ SurfaceMesh surfmesh_detail::mesh_surface(const TriMesh& input, const Segmentati
   if (options.project_border_nodes || options.cell_grid.enabled) {
     // A projection that makes a curve cross another one in a patch plane is undone for that
     // curve's nodes (its corners included), until nothing crosses that did not before.
-    const std::vector<int> crossing_before = crossing_curves(segmentation, borders);
+    const std::vector<int> crossing_before = crossing_curves(segmentation, borders, threads);
     const std::vector<Eigen::Vector3d> unprojected = borders.positions;
     project_border_nodes(segmentation, results, out.curve_is_feature, mean_edge, options.cell_grid.enabled, borders);
     std::vector<std::uint8_t> restored(segmentation.curves.size(), 0);
     for (bool changed = true; changed;) {
       changed = false;
-      for (const int c : crossing_curves(segmentation, borders)) {
+      for (const int c : crossing_curves(segmentation, borders, threads)) {
         if (restored[static_cast<std::size_t>(c)] != 0 ||
             std::binary_search(crossing_before.begin(), crossing_before.end(), c))
           continue;

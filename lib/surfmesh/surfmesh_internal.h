@@ -108,7 +108,10 @@ struct PatchBorder {
 //! Curves (ascending ids) with a segment that meets a segment it shares no node with, or
 //! overlaps a neighbouring one, in the plane of one of their patches (orthogonal to its
 //! axis; exact predicates).
-[[nodiscard]] std::vector<int> crossing_curves(const Segmentation& segmentation, const BorderNodes& borders);
+//! The patches are taken on `threads` workers (the same list for any count); so are those of
+//! extra_outer_loop_curves and folded_border_curves.
+[[nodiscard]] std::vector<int> crossing_curves(const Segmentation& segmentation, const BorderNodes& borders,
+                                               unsigned threads = 1);
 
 //! Closed curves (ascending ids) whose discretised loop turns the other way round (or has no
 //! area) in the plane of one of their patches than their input vertices: a small hole loop
@@ -120,14 +123,17 @@ struct PatchBorder {
 //! edge-adjacent rings around the vertex on each side (starting in one patch, never entering
 //! the other one, so a narrow bevel patch does not hide the faces beyond it); 180 for curves on
 //! the input's boundary. Unlike the dihedral of single edges, this sees a crease that
-//! marching cubes bevelled into steps below the crease angle.
-[[nodiscard]] std::vector<double> curve_crease_angles(const TriMesh& mesh, const Segmentation& segmentation, int rings);
+//! marching cubes bevelled into steps below the crease angle. The curves are taken on
+//! `threads` workers (the same angles for any count).
+[[nodiscard]] std::vector<double> curve_crease_angles(const TriMesh& mesh, const Segmentation& segmentation, int rings,
+                                                      unsigned threads = 1);
 
 //! Per curve: on the input's boundary, or its crease angle (curve_crease_angles, 3 rings)
 //! is above 0.75 x the given angle, or most of its input edges have a dihedral above it.
-//! `angles`, when given, receives those crease angles.
+//! `angles`, when given, receives those crease angles. `threads`: curve_crease_angles's.
 [[nodiscard]] std::vector<std::uint8_t> feature_curves(const TriMesh& mesh, const Segmentation& segmentation,
-                                                       double crease_angle_deg, std::vector<double>* angles = nullptr);
+                                                       double crease_angle_deg, std::vector<double>* angles = nullptr,
+                                                       unsigned threads = 1);
 
 //! SurfMeshOptions::fin_rim_width: the feature curves (surface.curve_is_feature) between two
 //! patches, one of which is in narrow_patches(mesh, segmentation, max_width), whose crease
@@ -325,7 +331,8 @@ std::size_t resolve_shared_chords(const Segmentation& segmentation, const Border
 //! repeated nodes) that turn counter-clockwise in its plane besides its largest one: a
 //! small hole bounded by a few nodes can flip (the segmentation guarantees one
 //! counter-clockwise loop for the input vertices).
-[[nodiscard]] std::vector<int> extra_outer_loop_curves(const Segmentation& segmentation, const BorderNodes& borders);
+[[nodiscard]] std::vector<int> extra_outer_loop_curves(const Segmentation& segmentation, const BorderNodes& borders,
+                                                       unsigned threads = 1);
 
 //! A patch border's traced loops split into simple cycles (split_at_repeated_vertices), as
 //! mesh_patch() checks them: the border is meshable when exactly one traced loop turns
@@ -352,7 +359,8 @@ struct BorderCycles {
 //! segment whose bounding box meets theirs; all its curves when every one of those already
 //! takes its input vertices (`source`). Ascending, no repeats.
 [[nodiscard]] std::vector<int> folded_border_curves(const Segmentation& segmentation, const BorderNodes& borders,
-                                                    const std::vector<CurveSource>& source);
+                                                    const std::vector<CurveSource>& source,
+                                                    unsigned threads = 1);
 
 //! Sets patch p's surface to keep projections within max_offset of the patch's own input
 //! faces along its axis (PatchSurface::input_heights; the patch's faces are a graph over

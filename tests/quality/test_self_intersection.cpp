@@ -195,5 +195,28 @@ TEST(QualitySelfIntersection, PairsOfSubsetMatchTheGlobalPairs) {
   EXPECT_THROW((void)intersecting_pairs_of(s, {static_cast<std::uint32_t>(s.triangles.size())}), InvalidInput);
 }
 
+TEST(QualitySelfIntersection, PairsOfDoNotDependOnTheThreadCount) {
+  // Two overlapping spheres of 5120 faces each: the soup's faces span several chunks.
+  TriangleSoup s = test::icosphere(4);
+  const TriangleSoup other = test::icosphere(4);
+  const auto offset = static_cast<std::uint32_t>(s.points.size());
+  for (const auto& p : other.points) s.points.push_back(p + V(0.93, 0.11, 0.07));
+  for (const auto& t : other.triangles) s.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
+  const auto all = self_intersecting_pairs(s, 1);
+  ASSERT_GT(all.size(), 50u);
+  std::vector<std::uint32_t> subset, everything(s.triangles.size());
+  for (std::uint32_t f = 0; f < s.triangles.size(); ++f) {
+    everything[f] = f;
+    if (f % 7 == 0) subset.push_back(f);
+  }
+  const auto one = intersecting_pairs_of(s, subset, 1);
+  ASSERT_FALSE(one.empty());
+  for (const unsigned threads : {2U, 3U}) {
+    EXPECT_EQ(intersecting_pairs_of(s, subset, threads), one) << threads;
+    EXPECT_EQ(intersecting_pairs_of(s, everything, threads), all) << threads;
+  }
+  EXPECT_THROW((void)intersecting_pairs_of(s, subset, 0), InvalidInput);
+}
+
 }  // namespace
 }  // namespace nurbsfront

@@ -589,6 +589,62 @@ TEST(Surfmesh, FlippedHoleLoopFound) {
   EXPECT_EQ(surfmesh_detail::extra_outer_loop_curves(seg, borders), std::vector<int>{hole});
 }
 
+TEST(Surfmesh, BorderChecksAndCreaseAnglesDoNotDependOnTheThreadCount) {
+  // A wavy grid cut into 8 x 8 blocks of 3 x 3 cells (64 patches, 100+ curves: several
+  // chunks of patches and of curves per worker), with the second node of every fifth curve
+  // pushed far off, the second and third nodes of others swapped, and one-face hole loops
+  // flipped: crossings and extra outer loops in many patches.
+  constexpr int kN = 24, kBlock = 3;
+  TriangleSoup soup = test::grid_patch(kN, kN);
+  for (auto& p : soup.points) p.z() = 0.08 * std::sin(7.0 * p.x()) * std::cos(5.0 * p.y());
+  const TriMesh mesh = to_trimesh(soup);
+  std::vector<int> face_patch(mesh.n_faces(), 0);
+  for (int j = 0; j < kN; ++j)
+    for (int i = 0; i < kN; ++i) {
+      const auto f = static_cast<std::size_t>(2 * (j * kN + i));
+      face_patch[f] = face_patch[f + 1] = (j / kBlock) * (kN / kBlock) + i / kBlock;
+    }
+  // One-face hole patches in every fourth block (their loops are flipped below).
+  int n_patches = (kN / kBlock) * (kN / kBlock);
+  for (int block = 0; block < (kN / kBlock) * (kN / kBlock); block += 4) {
+    const int i = (block % (kN / kBlock)) * kBlock + 1, j = (block / (kN / kBlock)) * kBlock + 1;
+    face_patch[static_cast<std::size_t>(2 * (j * kN + i))] = n_patches++;
+  }
+  const Segmentation seg = labelled_segmentation(mesh, face_patch, n_patches);
+  ASSERT_GT(seg.curves.size(), 100u);
+  const std::vector<surfmesh_detail::CurveSource> source(seg.curves.size(), surfmesh_detail::CurveSource::InputVertices);
+  surfmesh_detail::BorderNodes borders =
+      surfmesh_detail::discretise_borders(mesh, seg, [](const Eigen::Vector3d&) { return 1.0 / kN; }, source);
+  for (std::size_t c = 0; c < seg.curves.size(); ++c) {
+    const std::vector<int>& nodes = borders.curve_nodes[c];
+    if (c % 5 == 0 && nodes.size() >= 3) borders.positions[static_cast<std::size_t>(nodes[1])] += Eigen::Vector3d(0.11, -0.07, 0.0);
+    if (c % 5 == 2 && nodes.size() >= 4)
+      std::swap(borders.positions[static_cast<std::size_t>(nodes[1])], borders.positions[static_cast<std::size_t>(nodes[2])]);
+    // A hole loop turned the other way round (FlippedHoleLoopFound).
+    if (seg.curves[c].is_closed && seg.curves[c].patch_right >= 0 && nodes.size() == 3)
+      std::swap(borders.positions[static_cast<std::size_t>(nodes[1])], borders.positions[static_cast<std::size_t>(nodes[2])]);
+  }
+  const std::vector<int> crossing = surfmesh_detail::crossing_curves(seg, borders);
+  const std::vector<int> extra = surfmesh_detail::extra_outer_loop_curves(seg, borders);
+  const std::vector<int> folded = surfmesh_detail::folded_border_curves(seg, borders, source);
+  const std::vector<double> angles = surfmesh_detail::curve_crease_angles(mesh, seg, 3);
+  EXPECT_GE(crossing.size(), 10u);
+  EXPECT_GE(extra.size(), 10u);
+  EXPECT_TRUE(std::is_sorted(crossing.begin(), crossing.end()));
+  EXPECT_EQ(std::adjacent_find(crossing.begin(), crossing.end()), crossing.end());
+  // Inner curves of the waves bend: angles between 0 and 90 deg, not all equal.
+  EXPECT_GT(*std::max_element(angles.begin(), angles.end()), 1.0);
+  for (const unsigned threads : {2U, 3U}) {
+    EXPECT_EQ(surfmesh_detail::crossing_curves(seg, borders, threads), crossing) << threads;
+    EXPECT_EQ(surfmesh_detail::extra_outer_loop_curves(seg, borders, threads), extra) << threads;
+    EXPECT_EQ(surfmesh_detail::folded_border_curves(seg, borders, source, threads), folded) << threads;
+    // Bit for bit: the same operations on any worker.
+    const std::vector<double> threaded = surfmesh_detail::curve_crease_angles(mesh, seg, 3, threads);
+    ASSERT_EQ(threaded.size(), angles.size());
+    for (std::size_t c = 0; c < angles.size(); ++c) EXPECT_EQ(threaded[c], angles[c]) << "curve " << c;
+  }
+}
+
 TEST(Surfmesh, SmoothedBorderThatFoldsASmallPatchFallsBackToInputPositions) {
   // A flat 12 x 12 grid: patch 0 below y = 0.5, patch 2 above, patch 1 the cells (5, 5) and
   // (6, 5) just below the line, touching patch 2 (corners at (5, 6) and (7, 6) in cells).
