@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <utility>
 
@@ -142,6 +143,18 @@ RemeshResult remesh(const TriMesh& input, const RemeshOptions& options) {
   Stopwatch watch;
   // mean_edge_length(input), once for segment() and surfmesh (a pass over every edge).
   const double mean_edge = mean_edge_length(input);
+  // The input's lattice shares (the marching-cubes gate), computed when first needed.
+  std::optional<surfmesh_detail::LatticeShares> lattice;
+  auto input_lattice = [&]() -> const surfmesh_detail::LatticeShares& {
+    if (!lattice) lattice = surfmesh_detail::lattice_edge_shares(input);
+    return *lattice;
+  };
+  // Sharp creases are for CAD-like meshes: the terraces of a marching-cubes surface are
+  // planar and their steps lines of equal bends (occupancy DRAM cell at 128: 9424 such
+  // edges, 4764 patches), and a band fit takes no creases below the crease angle either.
+  if (segment_options.sharp_crease_angle_deg > 0.0 &&
+      (surfmesh_options.cell_grid.enabled || surfmesh_detail::marching_cubes_lattice(input_lattice())))
+    segment_options.sharp_crease_angle_deg = 0.0;
   // segment()'s face graph and normals, kept for the splits of split_unfitted_patches.
   segment_detail::SplitterPtr splitter;
   Segmentation first_segmentation = segment_detail::segment(input, segment_options, mean_edge, &splitter);
@@ -153,9 +166,8 @@ RemeshResult remesh(const TriMesh& input, const RemeshOptions& options) {
     // Not on label images (0/1 cells: vertices at their lattice edges' midpoints): the liver's
     // merges cost one crossing repair and twice the run's CPU (2.8 -> 5.4 s) for no bound it
     // did not meet already (docs/segment.md, "Narrow patches").
-    const surfmesh_detail::LatticeShares lattice =
-        narrow.empty() ? surfmesh_detail::LatticeShares{} : surfmesh_detail::lattice_edge_shares(input);
-    if (surfmesh_detail::marching_cubes_lattice(lattice) && !surfmesh_detail::label_image_staircase(lattice)) {
+    if (!narrow.empty() && surfmesh_detail::marching_cubes_lattice(input_lattice()) &&
+        !surfmesh_detail::label_image_staircase(input_lattice())) {
       const std::size_t n_before = first_segmentation.patches.size();
       first_segmentation = segment_detail::merge_into_neighbours(*splitter, first_segmentation, narrow);
       report.n_narrow_merged = n_before - first_segmentation.patches.size();
