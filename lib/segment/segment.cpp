@@ -295,6 +295,17 @@ std::vector<int> mark_sharp_creases(FaceGraph& graph, const FaceNormals& normals
       const double d = dihedral[e];
       const auto h = mesh.halfedge_handle(TriMesh::EdgeHandle(e), 0);
       const auto a = mesh.from_vertex_handle(h), b = mesh.to_vertex_handle(h);
+      // The ends first (the same test as for the ring below, cheap): most candidates of a
+      // rough mesh fail here.
+      auto bent_at = [&](TriMesh::VertexHandle v) {
+        int n = 0;
+        for (const auto q : mesh.voh_range(v)) {
+          const double x = dihedral[static_cast<std::size_t>(mesh.edge_handle(q).idx())];
+          if (x > kSharpSideRatio * d && x <= crease_deg) ++n;
+        }
+        return n;
+      };
+      if (bent_at(a) > 2 || bent_at(b) > 2) continue;
       // One ring: the vertices of the faces around both ends; two rings: around those.
       ring.clear();
       for (const auto end_vertex : {a, b}) {
