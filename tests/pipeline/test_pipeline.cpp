@@ -583,6 +583,25 @@ TEST(Pipeline, NarrowFinPatchesJoinANeighbour) {
   EXPECT_THROW((void)remesh(mesh, options), InvalidInput);
 }
 
+// The DRAM cell's marching-cubes surface: its planar faces meet in clean lines of equal bends
+// (bevelled box edges), which segment() takes for sharp creases; remesh() turns them off on inputs
+// that pass the marching-cubes lattice gate (docs/segment.md "Sharp creases"): the same
+// output as with them off.
+TEST(Pipeline, NoSharpCreasesOnMarchingCubesSurfaces) {
+  const TriMesh mesh = scene_input("dram", 24, SampleMode::LevelSet).mesh;
+  const Segmentation own = segment(mesh);
+  EXPECT_FALSE(own.sharp_crease_edges.empty());
+  SegmentOptions off;
+  off.sharp_crease_angle_deg = 0.0;
+  const Segmentation without = segment(mesh, off);
+  EXPECT_EQ(own.n_crease_edges, without.n_crease_edges + own.sharp_crease_edges.size());
+  RemeshOptions options = fast_options();
+  options.compute_distances = false;
+  const RemeshResult r = remesh(mesh, options);
+  EXPECT_TRUE(r.report.ok()) << errors_of(r.report);
+  EXPECT_EQ(r.report.n_crease_edges, without.n_crease_edges);
+}
+
 // The marching-cubes surface of VTK's head CT at iso 500 (the skin), padded.
 TriMesh headsq_skin() {
   MarchingCubesOptions mc;
