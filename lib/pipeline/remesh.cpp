@@ -143,13 +143,22 @@ RemeshResult remesh(const TriMesh& input, const RemeshOptions& options) {
   Stopwatch watch;
   // mean_edge_length(input), once for segment() and surfmesh (a pass over every edge).
   const double mean_edge = mean_edge_length(input);
+  // The input's lattice shares (the marching-cubes gate), computed when first needed.
+  std::optional<surfmesh_detail::LatticeShares> lattice;
+  auto input_lattice = [&]() -> const surfmesh_detail::LatticeShares& {
+    if (!lattice) lattice = surfmesh_detail::lattice_edge_shares(input);
+    return *lattice;
+  };
+  // Sharp creases are for CAD-like meshes: the terraces of a marching-cubes surface are
+  // planar and their steps lines of equal bends (occupancy DRAM cell at 128: 9424 such
+  // edges, 4764 patches), and a band fit takes no creases below the crease angle either.
+  if (segment_options.sharp_crease_angle_deg > 0.0 &&
+      (surfmesh_options.cell_grid.enabled || surfmesh_detail::marching_cubes_lattice(input_lattice())))
+    segment_options.sharp_crease_angle_deg = 0.0;
   // segment()'s face graph and normals, kept for the splits of split_unfitted_patches.
   segment_detail::SplitterPtr splitter;
   Segmentation first_segmentation = segment_detail::segment(input, segment_options, mean_edge, &splitter);
   report.n_crease_edges = first_segmentation.n_crease_edges;
-  // The input's lattice shares when the narrow-patch merge needed them (mesh_surface uses them
-  // too instead of a second pass over the vertices).
-  std::optional<surfmesh_detail::LatticeShares> lattice;
   // Narrow patches (one-voxel fins and strips of marching-cubes surfaces) join a neighbour.
   if (options.narrow_patch_merge > 0.0) {
     const double h = surfmesh_detail::uniform_size(surfmesh_options.sizing, mean_edge);
@@ -157,9 +166,8 @@ RemeshResult remesh(const TriMesh& input, const RemeshOptions& options) {
     // Not on label images (0/1 cells: vertices at their lattice edges' midpoints): the liver's
     // merges cost one crossing repair and twice the run's CPU (2.8 -> 5.4 s) for no bound it
     // did not meet already (docs/segment.md, "Narrow patches").
-    if (!narrow.empty()) lattice = surfmesh_detail::lattice_edge_shares(input);
-    if (lattice && surfmesh_detail::marching_cubes_lattice(*lattice) &&
-        !surfmesh_detail::label_image_staircase(*lattice)) {
+    if (!narrow.empty() && surfmesh_detail::marching_cubes_lattice(input_lattice()) &&
+        !surfmesh_detail::label_image_staircase(input_lattice())) {
       const std::size_t n_before = first_segmentation.patches.size();
       first_segmentation = segment_detail::merge_into_neighbours(*splitter, first_segmentation, narrow);
       report.n_narrow_merged = n_before - first_segmentation.patches.size();
@@ -175,6 +183,7 @@ RemeshResult remesh(const TriMesh& input, const RemeshOptions& options) {
   // The splitter's graph and normals are not held through surfmesh and stitch (about 100 MB
   // on DRAM 256); the rare crossing repair below makes a new one (the same graph and normals).
   splitter.reset();
+  // The shares when computed above (mesh_surface does not compute them again).
   const surfmesh_detail::LatticeShares* shares = lattice ? &*lattice : nullptr;
   SurfaceMesh surface = surfmesh_detail::mesh_surface(input, segmentation, surfmesh_options, mean_edge, shares);
   report.seconds_surfmesh = watch.seconds();

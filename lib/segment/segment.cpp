@@ -31,6 +31,8 @@ void SegmentOptions::validate() const {
     fail("max_slope_deg must be in (0, 90), got " + std::to_string(max_slope_deg));
   if (!(crease_angle_deg > 0.0 && crease_angle_deg <= 180.0))
     fail("crease_angle_deg must be in (0, 180], got " + std::to_string(crease_angle_deg));
+  if (!(sharp_crease_angle_deg >= 0.0 && sharp_crease_angle_deg <= 180.0))
+    fail("sharp_crease_angle_deg must be in [0, 180], got " + std::to_string(sharp_crease_angle_deg));
   if (normal_smoothing_rings < 0)
     fail("normal_smoothing_rings must be >= 0, got " + std::to_string(normal_smoothing_rings));
   if (threads < 0) fail("threads must be >= 0, got " + std::to_string(threads));
@@ -228,6 +230,196 @@ std::size_t mark_bevel_creases(FaceGraph& graph, const FaceNormals& normals) {
     }
   }
   return n_marked;
+}
+
+// Sharp crease chains (SegmentOptions::sharp_crease_angle_deg): a CAD mesh bends by a few
+// degrees across its smooth parts and by much more on its creases, some of which are below
+// the crease angle (fandisk: a straight chain of 20 edges at 78-80 deg between two planes,
+// whose sides bend by 0.5 deg on average; the fit rounded it off by 0.0122, the whole
+// Hausdorff distance). An edge whose dihedral d is at least the sharp crease angle and at
+// most the crease angle passes when
+// - every edge within two vertex rings of it with a dihedral below the sharp crease angle
+//   bends by at most kSharpSideRatio x d,
+// - every vertex within one ring of its ends has at most two edges bending by more than
+//   kSharpSideRatio x d (up to the crease angle): one line of bends, not a crossing or a
+//   rough patch,
+// - every vertex within one ring of its ends with an edge bending by more than
+//   kSharpChainRatio x d is reached from its ends along such edges inside that ring: no
+//   parallel line of bends, as in the facets of a coarsely tessellated fillet or tube
+//   (fandisk's rounded edges: 4 facets of 22.5 deg; knot1: tube facets of 20 deg), whose
+//   smooth surface is the fit's to find.
+// The passing edges joined at their vertices form chains; a chain of at least
+// kSharpMinChainEdges edges becomes creases when its largest dihedral is at most
+// kSharpMaxChainSpread times its smallest (one crease, not one that fades out: fandisk's
+// 18-80 deg chain along the fan, where a shallow end of the crease cost obtuse triangles) and
+// the edges below the sharp crease angle at its vertices bend on average by at most
+// kSharpMaxSideShare of its mean dihedral (measured, scratch script on ../shared/data's CGAL
+// meshes: fandisk 0.006, anchor_dense 0.000; rotor 0.078, turbine 0.068 and head 0.092, a
+// coarse scan whose chain moved its Hausdorff distance 0.32 -> 0.46). No chain of the bunny,
+// armadillo, elephant, femur, bones, blobby, knot1, couplingdown, cheese, pinion, rotor,
+// turbine, head, three_peaks qualifies. Marching-cubes surfaces are not for this rule (their
+// planar terraces qualify): remesh() turns it off on them.
+constexpr double kSharpSideRatio = 0.6;
+constexpr double kSharpChainRatio = 0.75;
+constexpr std::size_t kSharpMinChainEdges = 8;
+constexpr double kSharpMaxChainSpread = 1.5;
+constexpr double kSharpMaxSideShare = 0.05;
+
+// Marks the sharp crease edges (see the constants above) as creases; returns their input
+// edge ids, ascending (none of them was a crease before, none bends by more than crease_deg).
+std::vector<int> mark_sharp_creases(FaceGraph& graph, const FaceNormals& normals, double sharp_deg, double crease_deg,
+                                    unsigned workers) {
+  const TriMesh& mesh = *graph.mesh;
+  const auto n_edges = static_cast<int>(mesh.n_edges());
+  // Dihedral (deg) of every edge between two non-degenerate faces, -1 elsewhere.
+  std::vector<double> dihedral(static_cast<std::size_t>(n_edges), -1.0);
+  segment_detail::parallel_chunks(static_cast<std::size_t>(n_edges), workers, kFaceChunk,
+                                  [&](std::size_t begin, std::size_t end, unsigned) {
+    for (auto e = static_cast<int>(begin); e < static_cast<int>(end); ++e) {
+      const auto h = mesh.halfedge_handle(TriMesh::EdgeHandle(e), 0);
+      const TriMesh::FaceHandle f = mesh.face_handle(h), g = mesh.opposite_face_handle(h);
+      if (!f.is_valid() || !g.is_valid() || normals.degenerate[f.idx()] != 0 || normals.degenerate[g.idx()] != 0)
+        continue;
+      dihedral[e] = std::acos(std::clamp(normals.raw[f.idx()].dot(normals.raw[g.idx()]), -1.0, 1.0)) * 180.0 /
+                    std::numbers::pi;
+    }
+  });
+  std::vector<int> candidates;
+  for (int e = 0; e < n_edges; ++e)
+    if (dihedral[e] >= sharp_deg && dihedral[e] <= crease_deg) candidates.push_back(e);
+  std::vector<std::uint8_t> passes(candidates.size(), 0);
+  segment_detail::parallel_chunks(candidates.size(), workers, 256, [&](std::size_t begin, std::size_t end, unsigned) {
+    std::vector<int> ring, ring2, reached;
+    for (std::size_t k = begin; k < end; ++k) {
+      const int e = candidates[k];
+      const double d = dihedral[e];
+      const auto h = mesh.halfedge_handle(TriMesh::EdgeHandle(e), 0);
+      const auto a = mesh.from_vertex_handle(h), b = mesh.to_vertex_handle(h);
+      // The ends first (the same test as for the ring below, cheap): most candidates of a
+      // rough mesh fail here.
+      auto bent_at = [&](TriMesh::VertexHandle v) {
+        int n = 0;
+        for (const auto q : mesh.voh_range(v)) {
+          const double x = dihedral[static_cast<std::size_t>(mesh.edge_handle(q).idx())];
+          if (x > kSharpSideRatio * d && x <= crease_deg) ++n;
+        }
+        return n;
+      };
+      if (bent_at(a) > 2 || bent_at(b) > 2) continue;
+      // One ring: the vertices of the faces around both ends; two rings: around those.
+      ring.clear();
+      for (const auto end_vertex : {a, b}) {
+        ring.push_back(end_vertex.idx());
+        for (const auto w : mesh.vv_range(end_vertex)) ring.push_back(w.idx());
+      }
+      std::sort(ring.begin(), ring.end());
+      ring.erase(std::unique(ring.begin(), ring.end()), ring.end());
+      auto in_ring = [&](int v) { return std::binary_search(ring.begin(), ring.end(), v); };
+      bool ok = true;
+      // Smooth sides: the edges at the one-ring vertices reach two rings out.
+      for (std::size_t i = 0; i < ring.size() && ok; ++i)
+        for (const auto vh : mesh.voh_range(TriMesh::VertexHandle(ring[i]))) {
+          const double x = dihedral[mesh.edge_handle(vh).idx()];
+          if (x >= 0.0 && x < sharp_deg && x > kSharpSideRatio * d) {
+            ok = false;
+            break;
+          }
+        }
+      // One line of bends, and no parallel line.
+      reached.clear();
+      for (std::size_t i = 0; i < ring.size() && ok; ++i) {
+        int n_bent = 0;
+        for (const auto vh : mesh.voh_range(TriMesh::VertexHandle(ring[i]))) {
+          const double x = dihedral[mesh.edge_handle(vh).idx()];
+          if (x > kSharpSideRatio * d && x <= crease_deg) ++n_bent;
+        }
+        ok = n_bent <= 2;
+      }
+      if (ok) {
+        // Vertices reached from a along edges bending by more than kSharpChainRatio x d
+        // inside the ring; every ring vertex with such an edge must be among them.
+        auto chain_edge = [&](TriMesh::HalfedgeHandle q) {
+          const double x = dihedral[mesh.edge_handle(q).idx()];
+          return x > kSharpChainRatio * d && x <= crease_deg;
+        };
+        ring2.assign(1, a.idx());
+        reached.assign(1, a.idx());
+        while (!ring2.empty()) {
+          const int v = ring2.back();
+          ring2.pop_back();
+          for (const auto q : mesh.voh_range(TriMesh::VertexHandle(v))) {
+            const int w = mesh.to_vertex_handle(q).idx();
+            if (!chain_edge(q) || !in_ring(w) || std::find(reached.begin(), reached.end(), w) != reached.end()) continue;
+            reached.push_back(w);
+            ring2.push_back(w);
+          }
+        }
+        for (std::size_t i = 0; i < ring.size() && ok; ++i) {
+          if (std::find(reached.begin(), reached.end(), ring[i]) != reached.end()) continue;
+          for (const auto q : mesh.voh_range(TriMesh::VertexHandle(ring[i])))
+            if (chain_edge(q)) {
+              ok = false;
+              break;
+            }
+        }
+      }
+      passes[k] = ok ? 1 : 0;
+    }
+  });
+  // Chains: the passing edges joined at shared vertices (breadth first, in edge order).
+  std::vector<std::uint8_t> passing(static_cast<std::size_t>(n_edges), 0), seen(static_cast<std::size_t>(n_edges), 0);
+  for (std::size_t k = 0; k < candidates.size(); ++k)
+    if (passes[k] != 0) passing[static_cast<std::size_t>(candidates[k])] = 1;
+  std::vector<int> queue, members, sharp;
+  for (std::size_t k = 0; k < candidates.size(); ++k) {
+    const int first = candidates[k];
+    if (passes[k] == 0 || seen[static_cast<std::size_t>(first)] != 0) continue;
+    seen[static_cast<std::size_t>(first)] = 1;
+    queue.assign(1, first);
+    members.clear();
+    while (!queue.empty()) {
+      const int e = queue.back();
+      queue.pop_back();
+      members.push_back(e);
+      const auto h = mesh.halfedge_handle(TriMesh::EdgeHandle(e), 0);
+      for (const auto v : {mesh.from_vertex_handle(h), mesh.to_vertex_handle(h)})
+        for (const auto q : mesh.voh_range(v)) {
+          const auto next = static_cast<std::size_t>(mesh.edge_handle(q).idx());
+          if (seen[next] != 0 || passing[next] == 0) continue;
+          seen[next] = 1;
+          queue.push_back(static_cast<int>(next));
+        }
+    }
+    if (members.size() < kSharpMinChainEdges) continue;
+    // One angle along the chain, and smooth sides on average.
+    double lowest = 180.0, highest = 0.0, sum = 0.0, side_sum = 0.0;
+    std::size_t n_side = 0;
+    for (const int e : members) {
+      const double d = dihedral[static_cast<std::size_t>(e)];
+      lowest = std::min(lowest, d);
+      highest = std::max(highest, d);
+      sum += d;
+      const auto h = mesh.halfedge_handle(TriMesh::EdgeHandle(e), 0);
+      for (const auto v : {mesh.from_vertex_handle(h), mesh.to_vertex_handle(h)})
+        for (const auto q : mesh.voh_range(v)) {
+          const double x = dihedral[static_cast<std::size_t>(mesh.edge_handle(q).idx())];
+          if (x >= 0.0 && x < sharp_deg) {
+            side_sum += x;
+            ++n_side;
+          }
+        }
+    }
+    const double mean = sum / static_cast<double>(members.size());
+    const double side_mean = n_side > 0 ? side_sum / static_cast<double>(n_side) : 0.0;
+    if (highest <= kSharpMaxChainSpread * lowest && side_mean <= kSharpMaxSideShare * mean)
+      sharp.insert(sharp.end(), members.begin(), members.end());
+  }
+  std::sort(sharp.begin(), sharp.end());
+  for (int f = 0; f < graph.n_faces(); ++f)
+    for (int i = 0; i < 3; ++i)
+      if (std::binary_search(sharp.begin(), sharp.end(), graph.halfedges[f][i] >> 1))
+        graph.crease[f] |= static_cast<std::uint8_t>(1U << i);
+  return sharp;
 }
 
 // Jacobi iterations of area-weighted averaging over edge-adjacent faces, not across creases.
@@ -1106,6 +1298,9 @@ FaceNormals prepare_normals(FaceGraph& graph, const SegmentOptions& options, Seg
   const unsigned workers = segment_detail::worker_count(options.threads);
   FaceNormals normals = face_normals(graph, bounding_box(*graph.mesh).diagonal(), workers);
   mark_creases(graph, normals, std::cos(radians(options.crease_angle_deg)), workers);
+  if (options.sharp_crease_angle_deg > 0.0 && options.sharp_crease_angle_deg < options.crease_angle_deg)
+    result.sharp_crease_edges =
+        mark_sharp_creases(graph, normals, options.sharp_crease_angle_deg, options.crease_angle_deg, workers);
   if (options.bevel_creases) result.n_bevel_crease_edges = mark_bevel_creases(graph, normals);
   normals.smooth = smooth_normals(graph, normals, options.normal_smoothing_rings, workers);
   const double max_slope = radians(options.max_slope_deg);
@@ -1160,6 +1355,7 @@ struct segment_detail::Splitter {
   FaceGraph graph;
   FaceNormals normals;
   std::size_t n_bevel_crease_edges = 0;
+  std::vector<int> sharp_crease_edges;
   double mean_edge = 0.0;
   // The last result: each of its patches passed split_folds' checks with its axis.
   std::vector<int> last_face_patch;
@@ -1175,6 +1371,7 @@ struct segment_detail::Splitter {
     Segmentation counts;
     normals = prepare_normals(graph, options, counts);
     n_bevel_crease_edges = counts.n_bevel_crease_edges;
+    sharp_crease_edges = std::move(counts.sharp_crease_edges);
     mean_edge = mean_edge_length(mesh);
     prepared = true;
   }
@@ -1232,6 +1429,7 @@ Segmentation finish_edit(const segment_detail::Splitter& s, Patches& patches,
   Segmentation result;
   result.n_fold_splits = n_fold_splits;
   result.n_bevel_crease_edges = s.n_bevel_crease_edges;
+  result.sharp_crease_edges = s.sharp_crease_edges;
   result.n_islands_absorbed = n_islands_absorbed;
   std::sort(island_faces.begin(), island_faces.end());
   island_faces.erase(std::unique(island_faces.begin(), island_faces.end()), island_faces.end());
@@ -1289,6 +1487,7 @@ Segmentation segment_detail::segment(const TriMesh& mesh, const SegmentOptions& 
     kept.graph = std::move(graph);
     kept.normals = std::move(normals);
     kept.n_bevel_crease_edges = result.n_bevel_crease_edges;
+    kept.sharp_crease_edges = result.sharp_crease_edges;
     kept.mean_edge = mean_edge;
     kept.prepared = true;
     kept.scratch = std::move(own_scratch);
@@ -1323,6 +1522,7 @@ Segmentation segment_detail::split(Splitter& s, const Segmentation& segmentation
 
   s.prepare();
   result.n_bevel_crease_edges = s.n_bevel_crease_edges;
+  result.sharp_crease_edges = s.sharp_crease_edges;
   result.n_islands_absorbed = segmentation.n_islands_absorbed;  // they stay where they are
   result.island_faces = segmentation.island_faces;
   const Grouping grouping = splitter_grouping(s);

@@ -78,6 +78,20 @@ struct SegmentOptions {
   //! mesher does not yet stagger the nodes of its two border curves: more obtuse and
   //! small-angle triangles (docs/segment.md, "Bevel creases").
   bool bevel_creases = false;
+  //! Also make creases of sharp edges below the crease angle, as CAD meshes have them: an
+  //! edge bending by at least this angle (deg) and at most crease_angle_deg is a crease when
+  //! its sides are smooth (every edge within two vertex rings that bends by less bends by at
+  //! most 0.6 x its angle), the bends near it form one line (no vertex within one ring with
+  //! more than two edges bending by over 0.6 x its angle; no parallel line of edges bending by
+  //! over 0.75 x it: the facets of a coarsely tessellated fillet or tube are not creases), and
+  //! it lies on a chain of at least 8 such edges whose dihedrals are within a factor 1.5 and
+  //! whose side edges bend on average by at most 5% of its mean dihedral (details in
+  //! segment.cpp). Fandisk: its 78-80 deg crease, Hausdorff distance 0.0121 -> 0.0064; none
+  //! on the scans of the corpus. The planar terraces of marching-cubes surfaces would qualify:
+  //! remesh() turns it off on them (surfmesh's lattice gate) and with a cell grid
+  //! (docs/segment.md, "Sharp creases"). In [0, 180]; 0, or a value not below
+  //! crease_angle_deg, turns it off. Default 15.
+  double sharp_crease_angle_deg = 15.0;
   //! Patches with fewer faces are merged into an edge-adjacent neighbour when the merged
   //! patch still meets the slope bound and no crease separates them (0 disables).
   //! Default 50.
@@ -132,6 +146,10 @@ struct Segmentation {
   std::vector<int> corners;
   std::size_t n_crease_edges = 0;     //!< crease edges (above the crease angle, or bevel bends)
   std::size_t n_bevel_crease_edges = 0;  //!< of those, bends of bevelled edges (SegmentOptions::bevel_creases)
+  //! The input edges made creases as sharp crease edges (SegmentOptions::sharp_crease_angle_deg;
+  //! counted in n_crease_edges), ascending. The surface mesher keeps the curves along them as
+  //! features, at their input positions.
+  std::vector<int> sharp_crease_edges;
   std::size_t n_degenerate_faces = 0; //!< faces without a normal (zero area)
   //! Faces whose raw and smoothed normals are so far apart (over 90 deg + max_slope,
   //! a flipped face) that no axis satisfies both bounds: only the raw bound holds.
@@ -147,8 +165,9 @@ struct Segmentation {
 //! Splits the faces of `mesh` into slope-bounded patches and extracts their borders.
 //!
 //! Algorithm (details and measurements in docs/segment.md):
-//! 1. Raw unit face normals and areas; crease edges (dihedral > crease_angle_deg, and
-//!    the bends of bevelled edges when `bevel_creases`).
+//! 1. Raw unit face normals and areas; crease edges (dihedral > crease_angle_deg, sharp
+//!    crease chains above sharp_crease_angle_deg, and the bends of bevelled edges when
+//!    `bevel_creases`).
 //! 2. Smoothed normals: `normal_smoothing_rings` Jacobi iterations of area-weighted
 //!    averaging over edge-adjacent faces, not across creases.
 //! 3. Region growing, seeds in face-id order, breadth first through non-crease edges:

@@ -569,14 +569,31 @@ std::vector<double> curve_crease_angles(const TriMesh& mesh, const Segmentation&
   return out;
 }
 
+bool is_sharp_crease_curve(const Segmentation& seg, int c) {
+  if (seg.sharp_crease_edges.empty()) return false;
+  const std::vector<int>& edges = seg.curves[static_cast<std::size_t>(c)].edges;
+  const auto n_sharp = std::count_if(edges.begin(), edges.end(), [&](int e) {
+    return std::binary_search(seg.sharp_crease_edges.begin(), seg.sharp_crease_edges.end(), e);
+  });
+  return 2 * static_cast<std::size_t>(n_sharp) > edges.size();
+}
+
+std::vector<std::uint8_t> sharp_crease_curves(const Segmentation& seg) {
+  std::vector<std::uint8_t> out(seg.curves.size(), 0);
+  if (seg.sharp_crease_edges.empty()) return out;
+  for (std::size_t c = 0; c < seg.curves.size(); ++c) out[c] = is_sharp_crease_curve(seg, static_cast<int>(c)) ? 1 : 0;
+  return out;
+}
+
 std::vector<std::uint8_t> feature_curves(const TriMesh& mesh, const Segmentation& seg, double crease_angle_deg,
                                          std::vector<double>* crease_angles, unsigned threads) {
   const std::vector<double> angles = curve_crease_angles(mesh, seg, kCreaseRings, threads);
   if (crease_angles != nullptr) *crease_angles = angles;
-  std::vector<std::uint8_t> out(seg.curves.size(), 0);
+  std::vector<std::uint8_t> out = sharp_crease_curves(seg);
   const double cos_crease = std::cos(crease_angle_deg * std::numbers::pi / 180.0);
   for (std::size_t c = 0; c < seg.curves.size(); ++c) {
     const BorderCurve& curve = seg.curves[c];
+    if (out[c] != 0) continue;
     if (curve.patch_right < 0 || angles[c] > kCreaseShare * crease_angle_deg) {
       out[c] = 1;
       continue;

@@ -345,10 +345,14 @@ SurfaceMesh surfmesh_detail::mesh_surface(const TriMesh& input, const Segmentati
   std::vector<CurveSource> source(segmentation.curves.size(), CurveSource::Smoothed);
   // The input's boundary and its sharpest creases are discretised from their input positions
   // (the smoothing moves them off the corners and folds they follow).
+  // So are the sharp crease curves (SegmentOptions::sharp_crease_angle_deg): found only
+  // between smooth sides of clean (CAD-like) inputs, whose crease edges are the geometry.
+  const std::vector<std::uint8_t> sharp = sharp_crease_curves(segmentation);
   for (std::size_t c = 0; c < source.size() && !options.cell_grid.enabled; ++c) {
     if (out.curve_is_feature[c] == 0) continue;
-    const bool keep = segmentation.curves[c].patch_right < 0 ? options.unsmoothed_boundary_curves
-                                                             : crease_angles[c] > options.unsmoothed_crease_angle_deg;
+    const bool keep = segmentation.curves[c].patch_right < 0
+                          ? options.unsmoothed_boundary_curves
+                          : sharp[c] != 0 || crease_angles[c] > options.unsmoothed_crease_angle_deg;
     if (keep) source[c] = CurveSource::Input;
   }
   // Tiny corner curves merge their corners, except where a curve at such a corner crosses

@@ -128,9 +128,16 @@ struct PatchBorder {
 [[nodiscard]] std::vector<double> curve_crease_angles(const TriMesh& mesh, const Segmentation& segmentation, int rings,
                                                       unsigned threads = 1);
 
+//! Whether most input edges of curve c are sharp crease edges of the segmentation
+//! (Segmentation::sharp_crease_edges).
+[[nodiscard]] bool is_sharp_crease_curve(const Segmentation& segmentation, int c);
+//! Per curve: 1 for a sharp crease curve (is_sharp_crease_curve), else 0.
+[[nodiscard]] std::vector<std::uint8_t> sharp_crease_curves(const Segmentation& segmentation);
+
 //! Per curve: on the input's boundary, or its crease angle (curve_crease_angles, 3 rings)
-//! is above 0.75 x the given angle, or most of its input edges have a dihedral above it.
-//! `angles`, when given, receives those crease angles. `threads`: curve_crease_angles's.
+//! is above 0.75 x the given angle, or most of its input edges have a dihedral above it, or
+//! it is a sharp crease curve (sharp_crease_curves). `angles`, when given, receives those
+//! crease angles. `threads`: curve_crease_angles's.
 [[nodiscard]] std::vector<std::uint8_t> feature_curves(const TriMesh& mesh, const Segmentation& segmentation,
                                                        double crease_angle_deg, std::vector<double>* angles = nullptr,
                                                        unsigned threads = 1);
@@ -191,8 +198,9 @@ struct PatchResult {
 [[nodiscard]] bool fits_own_vertices_only(const Patch& patch);
 
 //! The neighbours' vertices added to patch p's fit: those of the faces of other patches
-//! within `rings` vertex rings of p's border that face its axis, not in p, ascending; none
-//! for a patch of fewer than 40 input faces (it fits its own vertices only).
+//! within `rings` vertex rings of p's border (not counting its sharp crease curves,
+//! is_sharp_crease_curve) that face its axis, not in p, ascending; none for a patch of fewer
+//! than 40 input faces (it fits its own vertices only).
 [[nodiscard]] std::vector<int> overlap_vertices(const TriMesh& mesh, const Segmentation& segmentation, int p, int rings = 1);
 
 //! The positions of a patch's input vertices, in ascending vertex id order.

@@ -145,6 +145,55 @@ TEST(Pipeline, OpenSquareKeepsBoundaryCorners) {
   EXPECT_GT(rounded.report.output.distance->hausdorff, 0.45 * mean_edge);
 }
 
+// A CAD-like roof: two planes meeting at a straight 40 deg ridge (below the 80 deg crease
+// angle), turned so that no coordinate lies on a lattice (not taken for marching cubes). The
+// ridge is a sharp crease (SegmentOptions::sharp_crease_angle_deg): a feature curve
+// discretised from its input polyline, whose nodes never move, so every output node near the
+// ridge lies on it, and the two planar patches are fitted exactly (their fits see no faces
+// across the ridge): the output is within 1e-9 of the input; the input is within 5% of a mean
+// edge of the output (the square's own corners are not segmentation corners: the boundary loop
+// is resampled there). Without sharp creases the ridge is inside one patch and its fit rounds
+// it off by more than a tenth of a mean edge.
+TEST(Pipeline, SharpCreaseNodesStayOnTheRidge) {
+  constexpr int kCells = 24;
+  const double tan_tilt = std::tan(20.0 * std::numbers::pi / 180.0);
+  TriangleSoup soup = test::grid_patch(kCells, kCells);
+  const Eigen::Matrix3d turn = (Eigen::AngleAxisd(0.4, Eigen::Vector3d::UnitZ()) *
+                                Eigen::AngleAxisd(0.3, Eigen::Vector3d(1.0, 2.0, 0.5).normalized()))
+                                   .toRotationMatrix();
+  for (auto& p : soup.points) {
+    p.z() = -std::abs(p.x() - 0.5) * tan_tilt;
+    p = turn * p;
+  }
+  const Eigen::Vector3d ridge_point = turn * Eigen::Vector3d(0.5, 0.0, 0.0);
+  const Eigen::Vector3d ridge_direction = turn * Eigen::Vector3d::UnitY();
+  const TriMesh input = to_trimesh(soup);
+  const RemeshResult r = remesh(input, fast_options());
+  EXPECT_TRUE(r.report.ok()) << errors_of(r.report);
+  EXPECT_EQ(r.report.n_patches, 2u);
+  EXPECT_EQ(r.report.n_crease_edges, static_cast<std::size_t>(kCells));
+  ASSERT_TRUE(r.report.output.distance.has_value());
+  EXPECT_LT(r.report.output.distance->mesh_to_reference_max, 1e-9);
+  const double mean_edge = 1.0 / kCells;  // (the diagonals are longer: a bound on the safe side)
+  EXPECT_LT(r.report.output.distance->hausdorff, 0.05 * mean_edge);
+  // The output nodes within a tenth of the target size of the ridge line lie on it.
+  int n_on_ridge = 0;
+  for (const auto v : r.mesh.vertices()) {
+    const Eigen::Vector3d p = to_eigen(r.mesh.point(v)) - ridge_point;
+    const double off = (p - p.dot(ridge_direction) * ridge_direction).norm();
+    if (off > 0.1 * r.report.target_size) continue;
+    EXPECT_LT(off, 1e-9);
+    ++n_on_ridge;
+  }
+  EXPECT_GE(n_on_ridge, static_cast<int>(0.5 / r.report.target_size));
+  RemeshOptions off = fast_options();
+  off.segment.sharp_crease_angle_deg = 0.0;
+  const RemeshResult rounded = remesh(input, off);
+  ASSERT_TRUE(rounded.report.output.distance.has_value());
+  EXPECT_EQ(rounded.report.n_crease_edges, 0u);
+  EXPECT_GT(rounded.report.output.distance->hausdorff, 0.1 * mean_edge);
+}
+
 TEST(Pipeline, LevelSetTorus) {
   // Resolution 64, the smallest: at 40 cells the tube (minor radius about 5 cells)
   // is too thin for 1.5 mean edges and the obtuse share reaches 1%.
@@ -638,6 +687,25 @@ TEST(Pipeline, FinRimCurvesAreNoFeatures) {
   options.surfmesh.fin_rim_width = 1.0;
   options.surfmesh.fin_rim_max_angle_deg = 181.0;
   EXPECT_THROW((void)remesh(mesh, options), InvalidInput);
+}
+
+// The DRAM cell's marching-cubes surface: its planar faces meet in clean lines of equal bends
+// (bevelled box edges), which segment() takes for sharp creases; remesh() turns them off on inputs
+// that pass the marching-cubes lattice gate (docs/segment.md "Sharp creases"): the same
+// output as with them off.
+TEST(Pipeline, NoSharpCreasesOnMarchingCubesSurfaces) {
+  const TriMesh mesh = scene_input("dram", 24, SampleMode::LevelSet).mesh;
+  const Segmentation own = segment(mesh);
+  EXPECT_FALSE(own.sharp_crease_edges.empty());
+  SegmentOptions off;
+  off.sharp_crease_angle_deg = 0.0;
+  const Segmentation without = segment(mesh, off);
+  EXPECT_EQ(own.n_crease_edges, without.n_crease_edges + own.sharp_crease_edges.size());
+  RemeshOptions options = fast_options();
+  options.compute_distances = false;
+  const RemeshResult r = remesh(mesh, options);
+  EXPECT_TRUE(r.report.ok()) << errors_of(r.report);
+  EXPECT_EQ(r.report.n_crease_edges, without.n_crease_edges);
 }
 
 // The marching-cubes surface of VTK's head CT at iso 500 (the skin), padded.

@@ -103,7 +103,8 @@ TEST(Segment, FlatGridIsOnePatchWithOneClosedBoundaryCurve) {
 }
 
 TEST(Segment, RoofBelowTheCreaseAngleIsOnePatchAboveItTwo) {
-  const SegmentOptions options;
+  SegmentOptions options;
+  options.sharp_crease_angle_deg = 0.0;  // the ridge between two planes would be a sharp crease
   {
     const TriMesh mesh = to_trimesh(roof(16, 20.0));  // 40 deg dihedral
     const Segmentation seg = run(mesh, options, 0.0);
@@ -129,8 +130,85 @@ TEST(Segment, RoofBelowTheCreaseAngleIsOnePatchAboveItTwo) {
   }
 }
 
+// The ridge of a roof between two planes is a sharp crease below the crease angle: exactly
+// its edges, when it is a chain of at least 8 edges and the sharp crease angle is below its
+// dihedral.
+TEST(Segment, RidgeBetweenPlanesIsASharpCrease) {
+  const SegmentOptions options;  // sharp creases from 15 deg, crease angle 80
+  const TriMesh mesh = to_trimesh(roof(16, 20.0));  // 40 deg dihedral
+  const Segmentation seg = run(mesh, options, 0.0);
+  ASSERT_EQ(seg.patches.size(), 2u);
+  ASSERT_EQ(seg.sharp_crease_edges.size(), 16u);
+  EXPECT_EQ(seg.n_crease_edges, 16u);
+  EXPECT_TRUE(std::is_sorted(seg.sharp_crease_edges.begin(), seg.sharp_crease_edges.end()));
+  for (const int e : seg.sharp_crease_edges) {
+    const auto h = mesh.halfedge_handle(mesh.edge_handle(e), 0);
+    EXPECT_NEAR(mesh.point(mesh.from_vertex_handle(h))[0], 0.5, 1e-12) << "edge " << e;
+    EXPECT_NEAR(mesh.point(mesh.to_vertex_handle(h))[0], 0.5, 1e-12) << "edge " << e;
+  }
+  // Each patch is one plane.
+  for (const Patch& patch : seg.patches) {
+    const Eigen::Vector3d first = segment_test::raw_normal(mesh, patch.faces.front());
+    for (const int f : patch.faces) EXPECT_NEAR(segment_test::raw_normal(mesh, f).dot(first), 1.0, 1e-12);
+  }
+  // Off, or a sharp crease angle above the dihedral: one patch.
+  for (const double angle : {0.0, 45.0}) {
+    SegmentOptions off;
+    off.sharp_crease_angle_deg = angle;
+    const Segmentation one = run(mesh, off, 0.0);
+    EXPECT_EQ(one.patches.size(), 1u) << angle;
+    EXPECT_TRUE(one.sharp_crease_edges.empty()) << angle;
+  }
+  // A ridge of 6 edges is too short a chain; 8 is enough.
+  EXPECT_TRUE(run(to_trimesh(roof(6, 20.0)), options, 0.0).sharp_crease_edges.empty());
+  EXPECT_EQ(run(to_trimesh(roof(8, 20.0)), options, 0.0).sharp_crease_edges.size(), 8u);
+  // Splitting patches keeps them.
+  const Segmentation split = split_patches(mesh, seg, {0}, options);
+  EXPECT_EQ(split.sharp_crease_edges, seg.sharp_crease_edges);
+}
+
+// The facets of a coarsely tessellated cylinder bend by the same angle on parallel lines one
+// face apart: no line is a sharp crease (its smooth surface is the fit's to find). The same
+// lines 4 faces apart are creases, and a rough side (every edge bending) is none.
+TEST(Segment, ParallelFacetLinesAndRoughSidesAreNoSharpCreases) {
+  // Half a cylinder along y of radius 1: `facets` planar facets of `rows` strips each
+  // (x = cos, z = sin), 16 cells along y.
+  auto half_cylinder = [](int facets, int rows) {
+    TriangleSoup s;
+    const int nu = facets * rows, nv = 16;
+    for (int i = 0; i <= nu; ++i) {
+      const int k = i / rows;
+      const double t = static_cast<double>(i % rows) / rows;
+      const double a0 = kPi * k / facets, a1 = kPi * std::min(k + 1, facets) / facets;
+      const Eigen::Vector2d p = (1.0 - t) * Eigen::Vector2d(std::cos(a0), std::sin(a0)) +
+                                t * Eigen::Vector2d(std::cos(a1), std::sin(a1));
+      for (int j = 0; j <= nv; ++j) s.points.emplace_back(p.x(), 2.0 * j / nv, p.y());
+    }
+    auto id = [&](int i, int j) { return static_cast<std::uint32_t>(i * (nv + 1) + j); };
+    for (int i = 0; i < nu; ++i)
+      for (int j = 0; j < nv; ++j) {
+        s.triangles.push_back({id(i, j), id(i, j + 1), id(i + 1, j + 1)});
+        s.triangles.push_back({id(i, j), id(i + 1, j + 1), id(i + 1, j)});
+      }
+    return s;
+  };
+  SegmentOptions options;
+  options.max_slope_deg = 89.0;  // (the segmentation itself is not what is tested)
+  options.min_patch_faces = 0;
+  // 8 facets of 22.5 deg, one strip each: no sharp crease.
+  EXPECT_TRUE(segment(to_trimesh(half_cylinder(8, 1)), options).sharp_crease_edges.empty());
+  // 4 strips per facet: the 7 facet lines of 16 edges are.
+  EXPECT_EQ(segment(to_trimesh(half_cylinder(8, 4)), options).sharp_crease_edges.size(), 7u * 16u);
+  // The roof's ridge with every side edge bending by 3 deg (a rough, scanned side): none.
+  TriangleSoup rough = roof(16, 20.0);
+  for (std::size_t v = 0; v < rough.points.size(); ++v)
+    if (std::abs(rough.points[v].x() - 0.5) > 1e-9) rough.points[v].z() += 0.004 * static_cast<double>(v % 3);
+  EXPECT_TRUE(segment(to_trimesh(rough)).sharp_crease_edges.empty());
+}
+
 TEST(SplitPatches, RoofSplitsAtItsRidgeIntoTwoPlanes) {
-  const SegmentOptions options;
+  SegmentOptions options;
+  options.sharp_crease_angle_deg = 0.0;  // (else the ridge is a sharp crease)
   const TriMesh mesh = to_trimesh(roof(16, 20.0));  // one patch (40 deg dihedral)
   const Segmentation seg = run(mesh, options, 0.0);
   ASSERT_EQ(seg.patches.size(), 1u);
@@ -409,6 +487,8 @@ TEST(Segment, InvalidOptionsAndMeshesThrow) {
   EXPECT_THROW((void)segment(mesh, with([](SegmentOptions& o) { o.max_slope_deg = 90.0; })), InvalidInput);
   EXPECT_THROW((void)segment(mesh, with([](SegmentOptions& o) { o.max_slope_deg = 0.0; })), InvalidInput);
   EXPECT_THROW((void)segment(mesh, with([](SegmentOptions& o) { o.crease_angle_deg = 181.0; })), InvalidInput);
+  EXPECT_THROW((void)segment(mesh, with([](SegmentOptions& o) { o.sharp_crease_angle_deg = -1.0; })), InvalidInput);
+  EXPECT_THROW((void)segment(mesh, with([](SegmentOptions& o) { o.sharp_crease_angle_deg = 181.0; })), InvalidInput);
   EXPECT_THROW((void)segment(mesh, with([](SegmentOptions& o) { o.normal_smoothing_rings = -1; })), InvalidInput);
   EXPECT_THROW((void)segment(mesh, with([](SegmentOptions& o) { o.threads = -1; })), InvalidInput);
   EXPECT_THROW((void)segment(mesh, with([](SegmentOptions& o) { o.border_smoothing.lambda = 0.0; })), InvalidInput);

@@ -63,6 +63,7 @@ struct RemeshArgs {
   std::optional<double> split_above;
   std::optional<double> crease;
   bool bevel_creases = false;
+  std::optional<double> sharp_crease;
   std::optional<double> unsmoothed_crease_angle;
   std::optional<double> tiny_curve_merge;
   std::optional<double> chord_compensation;
@@ -127,6 +128,7 @@ void run_remesh(RemeshArgs& args) {
   if (args.split_above) options.surfmesh.fit.split_above_edges = *args.split_above;
   if (args.crease) options.segment.crease_angle_deg = *args.crease;
   if (args.bevel_creases) options.segment.bevel_creases = true;
+  if (args.sharp_crease) options.segment.sharp_crease_angle_deg = *args.sharp_crease;
   if (args.unsmoothed_crease_angle) options.surfmesh.unsmoothed_crease_angle_deg = *args.unsmoothed_crease_angle;
   if (args.smoothed_boundary) options.surfmesh.unsmoothed_boundary_curves = false;
   if (args.tiny_curve_merge) options.surfmesh.tiny_curve_merge_size = *args.tiny_curve_merge;
@@ -279,6 +281,10 @@ void add_remesh_command(CLI::App& app) {
   cmd->add_option("--split-above", args->split_above,
                   "Split patches whose fit leaves their input by more than this many mean edges (default 4; 0 = never)");
   cmd->add_option("--crease", args->crease, "Dihedral angle (deg) above which an edge is a crease (default 80)");
+  cmd->add_option("--sharp-crease", args->sharp_crease,
+                  "Edges bending by at least this (deg) are creases where they form a clean line of at least 8 "
+                  "edges between smooth sides, as a CAD mesh's shallow creases (default 15; 0 = off; "
+                  "docs/segment.md \"Sharp creases\")");
   cmd->add_flag("--bevel-creases", args->bevel_creases,
                 "Also make creases of the ~45 deg bends of bevelled (marching-cubes) sharp edges: closer to "
                 "the input at box edges, more narrow patches (docs/segment.md)");
