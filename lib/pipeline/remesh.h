@@ -20,8 +20,13 @@ namespace nurbsfront {
 
 //! Options of remesh(): one sub-struct per stage.
 struct RemeshOptions {
-  //! Segmentation into slope-bounded patches (max slope, crease angle, ...).
-  SegmentOptions segment;
+  //! Segmentation into slope-bounded patches (max slope, crease angle, ...); sharp creases
+  //! on from kRemeshSharpCreaseAngleDeg (off on marching-cubes inputs and with a cell grid).
+  SegmentOptions segment = [] {
+    SegmentOptions o;
+    o.sharp_crease_angle_deg = kRemeshSharpCreaseAngleDeg;
+    return o;
+  }();
   //! Sizing, fit and per-patch meshing (target edge length, threads, ...).
   //! surfmesh.crease_angle_deg is replaced by segment.crease_angle_deg.
   SurfMeshOptions surfmesh;

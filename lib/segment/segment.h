@@ -47,6 +47,10 @@ struct BorderSmoothingOptions {
   void validate() const;
 };
 
+//! RemeshOptions::segment's sharp crease angle (SegmentOptions::sharp_crease_angle_deg):
+//! remesh() has the marching-cubes gate that segment() alone lacks.
+inline constexpr double kRemeshSharpCreaseAngleDeg = 15.0;
+
 //! Options of segment().
 struct SegmentOptions {
   //! Maximal angle (deg) between a face's smoothed normal and its patch axis, in (0, 90).
@@ -90,8 +94,9 @@ struct SegmentOptions {
   //! on the scans of the corpus. The planar terraces of marching-cubes surfaces would qualify:
   //! remesh() turns it off on them (surfmesh's lattice gate) and with a cell grid
   //! (docs/segment.md, "Sharp creases"). In [0, 180]; 0, or a value not below
-  //! crease_angle_deg, turns it off. Default 15.
-  double sharp_crease_angle_deg = 15.0;
+  //! crease_angle_deg, turns it off. Default 0 (off) for segment() alone, which has no
+  //! marching-cubes gate; RemeshOptions::segment has 15 (kRemeshSharpCreaseAngleDeg).
+  double sharp_crease_angle_deg = 0.0;
   //! Patches with fewer faces are merged into an edge-adjacent neighbour when the merged
   //! patch still meets the slope bound and no crease separates them (0 disables).
   //! Default 50.

@@ -695,8 +695,11 @@ TEST(Pipeline, FinRimCurvesAreNoFeatures) {
 // output as with them off.
 TEST(Pipeline, NoSharpCreasesOnMarchingCubesSurfaces) {
   const TriMesh mesh = scene_input("dram", 24, SampleMode::LevelSet).mesh;
-  const Segmentation own = segment(mesh);
+  SegmentOptions sharp;
+  sharp.sharp_crease_angle_deg = kRemeshSharpCreaseAngleDeg;
+  const Segmentation own = segment(mesh, sharp);
   EXPECT_FALSE(own.sharp_crease_edges.empty());
+  EXPECT_TRUE(segment(mesh).sharp_crease_edges.empty());  // off in segment() alone
   SegmentOptions off;
   off.sharp_crease_angle_deg = 0.0;
   const Segmentation without = segment(mesh, off);

@@ -134,7 +134,8 @@ TEST(Segment, RoofBelowTheCreaseAngleIsOnePatchAboveItTwo) {
 // its edges, when it is a chain of at least 8 edges and the sharp crease angle is below its
 // dihedral.
 TEST(Segment, RidgeBetweenPlanesIsASharpCrease) {
-  const SegmentOptions options;  // sharp creases from 15 deg, crease angle 80
+  SegmentOptions options;  // crease angle 80
+  options.sharp_crease_angle_deg = kRemeshSharpCreaseAngleDeg;  // sharp creases from 15 deg
   const TriMesh mesh = to_trimesh(roof(16, 20.0));  // 40 deg dihedral
   const Segmentation seg = run(mesh, options, 0.0);
   ASSERT_EQ(seg.patches.size(), 2u);
@@ -195,6 +196,7 @@ TEST(Segment, ParallelFacetLinesAndRoughSidesAreNoSharpCreases) {
   SegmentOptions options;
   options.max_slope_deg = 89.0;  // (the segmentation itself is not what is tested)
   options.min_patch_faces = 0;
+  options.sharp_crease_angle_deg = kRemeshSharpCreaseAngleDeg;
   // 8 facets of 22.5 deg, one strip each: no sharp crease.
   EXPECT_TRUE(segment(to_trimesh(half_cylinder(8, 1)), options).sharp_crease_edges.empty());
   // 4 strips per facet: the 7 facet lines of 16 edges are.
@@ -203,7 +205,10 @@ TEST(Segment, ParallelFacetLinesAndRoughSidesAreNoSharpCreases) {
   TriangleSoup rough = roof(16, 20.0);
   for (std::size_t v = 0; v < rough.points.size(); ++v)
     if (std::abs(rough.points[v].x() - 0.5) > 1e-9) rough.points[v].z() += 0.004 * static_cast<double>(v % 3);
-  EXPECT_TRUE(segment(to_trimesh(rough)).sharp_crease_edges.empty());
+  SegmentOptions sharp;
+  sharp.sharp_crease_angle_deg = kRemeshSharpCreaseAngleDeg;
+  EXPECT_TRUE(segment(to_trimesh(rough), sharp).sharp_crease_edges.empty());
+  EXPECT_EQ(segment(to_trimesh(roof(16, 20.0)), sharp).sharp_crease_edges.size(), 16u);  // (without the roughness)
 }
 
 TEST(SplitPatches, RoofSplitsAtItsRidgeIntoTwoPlanes) {
