@@ -601,9 +601,9 @@ class AdvancingFront {
   }
 
   // Corner rule. Triangle (a, b, v) is valid; when it closes the front corner at b (front edge
-  // (b, v)) or at a (front edge (v, a)) whose inner angle in the metric is over the
-  // threshold, it would have that angle: a new node on the corner's bisector, at the mean
-  // metric length of its two legs, makes triangle (a, b, q) now and leaves the corner's other
+  // (b, v)) or at a (front edge (v, a)), that corner is an input node and its inner angle in
+  // the metric is over the threshold, it would have that angle: a new node on the corner's
+  // bisector, at the mean metric length of its two legs, makes triangle (a, b, q) now and leaves the corner's other
   // half (half the angle) to the front. Not in a loop of under kCornerMinLoop nodes (the new
   // node would have too few neighbours to be free of obtuse angles). Returns true when the
   // new node passed the usual tests (clearances included) and was accepted.
@@ -621,7 +621,10 @@ class AdvancingFront {
     }
     const int c = at_b ? b : a;
     const int n1 = at_b ? a : v, n2 = at_b ? v : b;
-    if (c >= first_new_ || n1 >= first_new_ || n2 >= first_new_) return false;  // not a corner of the input border
+    // The corner must be an input node (it never moves: an obtuse angle there stays), its legs
+    // may end at new points: a border node whose first-row triangles leave a wide gap between
+    // them would get an obtuse closure (docs/front2d.md "Corner rule at border nodes").
+    if (c >= first_new_) return false;
     const Vec& C = pt(c);
     const Vec d1 = pt(n1) - C, d2 = pt(n2) - C;
     Eigen::Matrix2d R = Eigen::Matrix2d::Identity();

@@ -79,8 +79,10 @@ struct FrontOptions {
   //! (circumcentres inserted, encroached segment pieces split; triangles at input angles
   //! below 60 deg excused). Runs only with split_segments and without a metric. Default true.
   bool refine_min_angle = true;
-  //! A front corner whose inner angle (in the metric) exceeds this many degrees is not closed
-  //! by one triangle joining its two neighbours (that triangle has this angle at the corner):
+  //! A front corner at an input point (its two neighbours may be new points) whose inner
+  //! angle (in the metric) exceeds this many degrees is not closed by one triangle joining
+  //! its two neighbours (that triangle has this angle at the corner, and input points never
+  //! move):
   //! a new node on the corner's bisector makes two triangles instead, when it passes the
   //! front's usual tests and the loop has at least 6 nodes (otherwise the old closure).
   //! In (0, 180]; 180 = off. Default 180 (off): on the planar test domains it did not lower

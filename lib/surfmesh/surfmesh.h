@@ -203,9 +203,10 @@ struct SurfMeshOptions {
   CellGrid cell_grid;
   //! Smoothing passes of the 2D front per patch (FrontOptions::smoothing_passes). Default 3.
   int smoothing_passes = 3;
-  //! The front's corner rule (FrontOptions::corner_split_angle_deg): a patch border corner
-  //! wider than this in the patch metric gets a node on its bisector instead of one closing
-  //! triangle (a right corner closed by one triangle is 90.0001 deg on the surface: obtuse).
+  //! The front's corner rule (FrontOptions::corner_split_angle_deg): a front corner at a
+  //! border node wider than this in the patch metric gets a node on its bisector instead of
+  //! one closing triangle (a right corner closed by one triangle is 90.0001 deg on the
+  //! surface: obtuse; border nodes never move).
   //! In (0, 180]; 180 = off. Default 89.5 (measured: docs/front2d.md "Corner rule").
   double corner_split_angle_deg = 89.5;
   //! Crease angle (deg) for SurfaceMesh::curve_is_feature. Pass the segmentation's

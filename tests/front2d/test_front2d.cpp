@@ -331,6 +331,53 @@ TEST(Front2d, ObtuseBorderCornerGetsANodeOnItsBisector) {
   EXPECT_THROW((void)mesh_pslg(p, o), InvalidInput);
 }
 
+// Rectangles of fixed border nodes (nx pieces along, ny across; the surface mesher's narrow
+// patches) where the front's first triangles leave a corner wider than 90 deg at a border node
+// between two new points. Issue 5: the corner rule applies at every input node, whatever its
+// two neighbours, so these meshes have no obtuse triangle at all; without the rule (180) they
+// have obtuse angles at input nodes (the rule restricted to corners of three input nodes left
+// them too: 2 in the first domain, 2 in the second).
+TEST(Front2d, CornerRuleAtBorderNodesBetweenNewPoints) {
+  struct Domain {
+    double height;
+    int nx, ny;
+  };
+  for (const Domain d : {Domain{0.3, 5, 2}, Domain{0.45, 5, 3}}) {
+    SCOPED_TRACE(::testing::Message() << "1 x " << d.height << ", " << d.nx << " x " << d.ny << " pieces");
+    const std::vector<Vec> corners{{0, 0}, {1, 0}, {1, d.height}, {0, d.height}};
+    Pslg p;
+    for (std::size_t i = 0; i < 4; ++i) {
+      const int n = i % 2 == 0 ? d.nx : d.ny;
+      for (int k = 0; k < n; ++k) p.points.push_back(corners[i] + (corners[(i + 1) % 4] - corners[i]) * (static_cast<double>(k) / n));
+    }
+    const auto n_input = static_cast<int>(p.points.size());
+    for (int i = 0; i < n_input; ++i) p.segments.push_back({i, (i + 1) % n_input});
+    // Obtuse angles in all, and those at input nodes.
+    auto obtuse = [&](const Mesh2d& m) {
+      std::pair<int, int> count{0, 0};
+      for (const auto& t : m.triangles)
+        for (int i = 0; i < 3; ++i) {
+          const Vec& a = m.points[t[i]];
+          if ((m.points[t[(i + 1) % 3]] - a).dot(m.points[t[(i + 2) % 3]] - a) >= 0) continue;
+          ++count.first;
+          if (t[i] < n_input) ++count.second;
+        }
+      return count;
+    };
+    FrontOptions o = uniform(0.18);
+    o.split_segments = false;
+    o.corner_split_angle_deg = 180.0;
+    const Mesh2d off = mesh_pslg(p, o);
+    EXPECT_EQ(check_mesh(p, off, d.height), "");
+    EXPECT_GT(obtuse(off).second, 0) << "the domain no longer exercises the rule";
+    o.corner_split_angle_deg = 89.5;
+    const Mesh2d on = mesh_pslg(p, o);
+    EXPECT_EQ(check_mesh(p, on, d.height), "");
+    EXPECT_GT(on.report.n_corner_points, 0u);
+    EXPECT_EQ(obtuse(on), std::make_pair(0, 0));
+  }
+}
+
 TEST(Front2d, GradedAndAnisotropicSizing) {
   const Pslg sq = polygon({{0, 0}, {1, 0}, {1, 1}, {0, 1}});
   FrontOptions o;
