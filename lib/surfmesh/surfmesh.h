@@ -270,7 +270,9 @@ struct SurfMeshOptions {
   //! held by a few vertices and is free between them, and the nodes of a small patch of long
   //! faces on a curved wall sat up to 0.7 mean edges off its faces (CGAL cheese: +4.3%
   //! volume; docs/surfmesh.md, "Small patches keep their nodes on their faces"). Not for
-  //! band-fitted patches (cell_grid). 0 = only max_node_offset_edges. Default 0.02.
+  //! band-fitted patches (cell_grid), nor on marching-cubes surfaces (the lattice-edge gate;
+  //! with the fin rims of headsq@1150 unlocked it doubled the Hausdorff distance there).
+  //! 0 = only max_node_offset_edges. Default 0.02.
   double small_patch_node_offset_edges = 0.02;
   //! Worker threads for the patches; 0 = all hardware threads. The output is bit-identical
   //! for every thread count. Default 0.

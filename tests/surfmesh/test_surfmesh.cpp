@@ -846,10 +846,23 @@ TEST(Surfmesh, SmallPatchNodesStayOnTheirFaces) {
   // raised by one edge: the bicubic fit cannot follow the piecewise-linear tent, so nodes
   // lifted onto it are off the faces; small_patch_node_offset_edges keeps them within 0.02
   // mean edges. A 5 x 5 grid (50 faces, with the overlap ring) keeps the 1-edge bound only.
-  for (const int n : {4, 5}) {
+  // The grid's vertices are moved in its plane by up to 0.07 edges (irregularly): a regular
+  // grid passes the marching-cubes lattice gate, where the bound does not apply (below).
+  auto tent = [](int n, bool jitter) {
     TriMesh mesh = to_trimesh(test::grid_patch(n, n));
     const double edge = 1.0 / n;
+    if (jitter)
+      for (const auto v : mesh.vertices()) {
+        const double k = static_cast<double>(v.idx());
+        mesh.point(v)[0] += 0.07 * edge * std::sin(3.1 * k);
+        mesh.point(v)[1] += 0.07 * edge * std::cos(1.7 * k);
+      }
     mesh.point(TriMesh::VertexHandle((n / 2) * (n + 1) + n / 2))[2] = edge;
+    return mesh;
+  };
+  for (const int n : {4, 5}) {
+    const TriMesh mesh = tent(n, true);
+    const double edge = 1.0 / n;
     const Segmentation seg = labelled_segmentation(mesh, std::vector<int>(mesh.n_faces(), 0), 1);
     SurfMeshOptions options;
     options.sizing.size = 0.3 * edge;
@@ -866,6 +879,16 @@ TEST(Surfmesh, SmallPatchNodesStayOnTheirFaces) {
     } else {
       EXPECT_EQ(held.nodes, free.nodes);
     }
+  }
+  {  // The regular 4 x 4 grid is a marching-cubes lattice: no small-patch bound there.
+    const TriMesh mesh = tent(4, false);
+    const Segmentation seg = labelled_segmentation(mesh, std::vector<int>(mesh.n_faces(), 0), 1);
+    SurfMeshOptions options;
+    options.sizing.size = 0.3 / 4.0;
+    const SurfaceMesh with = mesh_surface(mesh, seg, options);
+    options.small_patch_node_offset_edges = 0.0;
+    EXPECT_EQ(with.nodes, mesh_surface(mesh, seg, options).nodes);
+    EXPECT_GT(max_inner_offset(mesh, with), 0.05 * with.input_mean_edge);
   }
   SurfMeshOptions bad;
   bad.small_patch_node_offset_edges = -0.1;
