@@ -39,17 +39,6 @@ constexpr int kCheckRounds = 4;
 // moved node within as much of its old triangles.
 constexpr double kMaxCollapseOffsetEdges = 0.5;
 
-Vec point(const TriMesh& mesh, TriMesh::VertexHandle v) { return to_eigen(mesh.point(v)); }
-
-int rank(NodeKind kind) {
-  switch (kind) {
-    case NodeKind::Inner: return 0;
-    case NodeKind::Border: return 1;
-    case NodeKind::Corner: return 2;
-  }
-  return 2;
-}
-
 bool is_obtuse(const Vec& a, const Vec& b, const Vec& c) {
   return (b - a).dot(c - a) < 0.0 || (a - b).dot(c - b) < 0.0 || (a - c).dot(b - c) < 0.0;
 }
@@ -138,7 +127,7 @@ class AngleRepair {
   // A node made by an obtuse split (no node of the SurfaceMesh) ranks as a border node.
   int rank_of(TriMesh::VertexHandle v) const {
     const auto g = static_cast<std::size_t>(node(v));
-    return g < surface_.node_kind.size() ? rank(surface_.node_kind[g]) : 1;
+    return g < surface_.node_kind.size() ? node_rank(surface_.node_kind[g]) : 1;
   }
   bool is_frozen(TriMesh::VertexHandle v) const { return is_frozen_[static_cast<std::size_t>(node(v))] != 0; }
 

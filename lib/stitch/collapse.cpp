@@ -22,17 +22,6 @@ namespace {
 
 using Vec = Eigen::Vector3d;
 
-Vec point(const TriMesh& mesh, TriMesh::VertexHandle v) { return to_eigen(mesh.point(v)); }
-
-int rank(NodeKind kind) {
-  switch (kind) {
-    case NodeKind::Inner: return 0;
-    case NodeKind::Border: return 1;
-    case NodeKind::Corner: return 2;
-  }
-  return 2;
-}
-
 // Two feature corners closer than this (in target edge lengths) may merge.
 constexpr double kCoincidentCornersSize = 0.05;
 
@@ -118,7 +107,7 @@ class Collapser {
     if (is_frozen_[b] != 0 || mesh_.is_boundary(vb) || mesh_.is_boundary(va)) return 0;
     const NodeKind kb = surface_.node_kind[b];
     const NodeKind ka = surface_.node_kind[a];
-    if (rank(kb) > rank(ka)) return 0;
+    if (node_rank(kb) > node_rank(ka)) return 0;
     const Vec pa = point(mesh_, va), pb = point(mesh_, vb);
     const Vec middle = 0.5 * (pa + pb);
     q[0] = pa;

@@ -22,8 +22,6 @@ namespace {
 
 using Vec = Eigen::Vector3d;
 
-Vec point(const TriMesh& mesh, TriMesh::VertexHandle v) { return to_eigen(mesh.point(v)); }
-
 // Twice the area vector (a, b, c counter-clockwise).
 Vec area_vector(const Vec& a, const Vec& b, const Vec& c) { return (b - a).cross(c - a); }
 

@@ -14,6 +14,20 @@
 
 namespace nurbsfront::stitch_detail {
 
+//! A vertex's position as an Eigen vector.
+inline Eigen::Vector3d point(const TriMesh& mesh, TriMesh::VertexHandle v) { return to_eigen(mesh.point(v)); }
+
+//! Node kinds ranked inner 0 < border 1 < corner 2 (a node merges only into one of equal or
+//! higher rank).
+inline int node_rank(NodeKind kind) {
+  switch (kind) {
+    case NodeKind::Inner: return 0;
+    case NodeKind::Border: return 1;
+    case NodeKind::Corner: return 2;
+  }
+  return 2;
+}
+
 //! Node merges of collapse_short_edges: target[g] is the node g merged into (g itself when
 //! it stays); moved holds the new positions of survivors, in order (later ones win).
 struct NodeMerges {
