@@ -73,6 +73,16 @@ void replace_pairs(std::vector<std::array<std::uint32_t, 2>>& pairs, IsChanged i
   pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
 }
 
+//! The sine of the smallest interior angle of triangle (a, b, c): twice the area over the
+//! product of the two longest edges (the smallest angle is at most 60 deg, so the sine orders
+//! it); 0 for a degenerate triangle.
+inline double smallest_angle_sine(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
+  std::array<double, 3> l2{(b - a).squaredNorm(), (c - b).squaredNorm(), (a - c).squaredNorm()};
+  std::sort(l2.begin(), l2.end());
+  const double product = std::sqrt(l2[1] * l2[2]);
+  return product > 0.0 ? (b - a).cross(c - a).norm() / product : 0.0;
+}
+
 //! False only when triangle (a, b, c) surely has no angle below the angle whose sine is
 //! sin_bound (an angle below 60 deg): the sine of its smallest angle (twice the area over the
 //! product of the two longest edges, off by a few ulps of 1 at most, slivers included)
@@ -82,21 +92,7 @@ void replace_pairs(std::vector<std::array<std::uint32_t, 2>>& pairs, IsChanged i
 inline bool may_have_angle_below(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c,
                                  double sin_bound) {
   constexpr double kSineMargin = 1e-9;
-  std::array<double, 3> l2{(b - a).squaredNorm(), (c - b).squaredNorm(), (a - c).squaredNorm()};
-  std::sort(l2.begin(), l2.end());
-  const double product = std::sqrt(l2[1] * l2[2]);
-  if (!(product > 0.0)) return true;
-  return !((b - a).cross(c - a).norm() / product > sin_bound + kSineMargin);
-}
-
-//! The sine of the smallest interior angle of triangle (a, b, c): twice the area over the
-//! product of the two longest edges (the smallest angle is at most 60 deg, so the sine orders
-//! it); 0 for a degenerate triangle.
-inline double smallest_angle_sine(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
-  std::array<double, 3> l2{(b - a).squaredNorm(), (c - b).squaredNorm(), (a - c).squaredNorm()};
-  std::sort(l2.begin(), l2.end());
-  const double product = std::sqrt(l2[1] * l2[2]);
-  return product > 0.0 ? (b - a).cross(c - a).norm() / product : 0.0;
+  return !(smallest_angle_sine(a, b, c) > sin_bound + kSineMargin);
 }
 
 //! What repair_small_angles() did.
