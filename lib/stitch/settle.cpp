@@ -10,12 +10,14 @@
 #include <cstdint>
 #include <limits>
 #include <numeric>
+#include <string>
 #include <vector>
 
 #include <Eigen/Geometry>
 
 #include <OpenMesh/Core/Utils/Property.hh>
 
+#include "nurbsfront/core/error.h"
 #include "nurbsfront/core/tolerances.h"
 #include "nurbsfront/quality/aabb_tree.h"
 #include "nurbsfront/quality/report.h"
@@ -116,10 +118,20 @@ GarbageMaps collect_garbage(TriMesh& mesh) {
   return maps;
 }
 
-void settle_intersections(const SurfaceMesh& surface, const StitchOptions& options,
-                          const std::vector<std::uint8_t>& is_feature, StitchResult& result,
-                          std::vector<std::array<std::uint32_t, 2>>& pairs, StitchReport& report) {
-  if (pairs.empty()) return;
+GarbageMaps collect_garbage(StitchResult& result) {
+  GarbageMaps old = collect_garbage(result.mesh);
+  std::vector<int> face_patch(old.face.size()), vertex_node(old.vertex.size());
+  for (std::size_t f = 0; f < old.face.size(); ++f) face_patch[f] = result.face_patch[static_cast<std::size_t>(old.face[f])];
+  for (std::size_t v = 0; v < old.vertex.size(); ++v) vertex_node[v] = result.vertex_node[static_cast<std::size_t>(old.vertex[v])];
+  result.face_patch = std::move(face_patch);
+  result.vertex_node = std::move(vertex_node);
+  return old;
+}
+
+GarbageMaps settle_intersections(const SurfaceMesh& surface, const StitchOptions& options,
+                                 const std::vector<std::uint8_t>& is_feature, StitchResult& result,
+                                 std::vector<std::array<std::uint32_t, 2>>& pairs, StitchReport& report) {
+  if (pairs.empty()) return {};
   TriMesh& mesh = result.mesh;
   // The patches' surfaces with no offset allowed from their input faces (the projection
   // then lands on the input face straight above or below, where there is one).
@@ -518,14 +530,59 @@ void settle_intersections(const SurfaceMesh& surface, const StitchOptions& optio
   if (any_collapse) {
     // The collapses left deleted elements: removed, with the per-face patch ids and the
     // per-vertex node ids carried along (the caller counts the pairs again).
-    const GarbageMaps old = collect_garbage(mesh);
-    std::vector<int> face_patch(old.face.size()), vertex_node(old.vertex.size());
-    for (std::size_t f = 0; f < old.face.size(); ++f) face_patch[f] = result.face_patch[static_cast<std::size_t>(old.face[f])];
-    for (std::size_t v = 0; v < old.vertex.size(); ++v) vertex_node[v] = result.vertex_node[static_cast<std::size_t>(old.vertex[v])];
-    result.face_patch = std::move(face_patch);
-    result.vertex_node = std::move(vertex_node);
+    const GarbageMaps old = collect_garbage(result);
     pairs.clear();
+    return old;
   }
+  return {};
+}
+
+std::vector<std::array<std::uint32_t, 2>> recount_pairs(const TriangleSoup& before,
+                                                        const std::vector<std::array<std::uint32_t, 2>>& before_pairs,
+                                                        const TriangleSoup& after, const GarbageMaps& old,
+                                                        unsigned n_threads) {
+  const std::size_t n_before = before.triangles.size(), n_after = after.triangles.size();
+  if ((!old.vertex.empty() && old.vertex.size() != after.points.size()) ||
+      (!old.face.empty() && old.face.size() != n_after)) {
+    throw InternalError("nurbsfront: recount_pairs: maps of " + std::to_string(old.vertex.size()) + " vertices and " +
+                        std::to_string(old.face.size()) + " faces for a soup of " +
+                        std::to_string(after.points.size()) + " and " + std::to_string(n_after));
+  }
+  if (bounding_box(before).diagonal() != bounding_box(after).diagonal()) return self_intersecting_pairs(after, n_threads);
+  auto old_vertex = [&](std::uint32_t v) {
+    return old.vertex.empty() ? static_cast<std::size_t>(v) : static_cast<std::size_t>(old.vertex[v]);
+  };
+  // Per triangle of `before`, its index in `after` when it is there unchanged (else -1).
+  std::vector<std::int64_t> kept(n_before, -1);
+  std::vector<std::uint32_t> changed;
+  for (std::size_t f = 0; f < n_after; ++f) {
+    const auto o = old.face.empty() ? f : static_cast<std::size_t>(old.face[f]);
+    bool same = o < n_before;
+    for (std::size_t k = 0; k < 3 && same; ++k) {
+      const std::uint32_t v = after.triangles[f][k];
+      const std::size_t ov = old_vertex(v);
+      same = ov < before.points.size() && before.triangles[o][k] == ov && before.points[ov] == after.points[v];
+    }
+    if (same) {
+      kept[o] = static_cast<std::int64_t>(f);
+    } else {
+      changed.push_back(static_cast<std::uint32_t>(f));
+    }
+  }
+  std::vector<std::array<std::uint32_t, 2>> pairs;
+  for (const auto& p : before_pairs) {
+    if (p[0] >= n_before || p[1] >= n_before) {
+      throw InternalError("nurbsfront: recount_pairs: pair of face " + std::to_string(std::max(p[0], p[1])) + " of " +
+                          std::to_string(n_before));
+    }
+    const std::int64_t a = kept[p[0]], b = kept[p[1]];
+    if (a >= 0 && b >= 0) pairs.push_back({static_cast<std::uint32_t>(std::min(a, b)), static_cast<std::uint32_t>(std::max(a, b))});
+  }
+  const std::vector<std::array<std::uint32_t, 2>> fresh = intersecting_pairs_of(after, changed, n_threads);
+  pairs.insert(pairs.end(), fresh.begin(), fresh.end());
+  std::sort(pairs.begin(), pairs.end());
+  pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
+  return pairs;
 }
 
 }  // namespace nurbsfront::stitch_detail

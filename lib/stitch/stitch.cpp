@@ -567,7 +567,16 @@ StitchResult stitch_impl(const SurfaceMesh& surface, const TriMesh* input, const
   if (options.check_self_intersections) {
     soup = to_soup(mesh);
     pairs = self_intersecting_pairs(*soup, options.n_threads);
-    if (!pairs.empty()) soup.reset();
+    // The last whole-mesh count and its soup, while pairs are left: settling's changes are
+    // counted again from them (recount_pairs checks again every face not as it was then:
+    // those the repair and settling changed).
+    std::optional<TriangleSoup> counted;
+    std::vector<FacePair> counted_pairs;
+    if (!pairs.empty()) {
+      counted = std::move(soup);
+      counted_pairs = pairs;
+      soup.reset();
+    }
     report_progress(options.progress, "stitch: verify", 0.5);
     if (optimise && !repair_intersections(assembled, mesh, pairs, report)) {
       // Local repair did not converge: the assembled mesh (whose own intersections are
@@ -575,12 +584,19 @@ StitchResult stitch_impl(const SurfaceMesh& surface, const TriMesh* input, const
       mesh = std::move(assembled);
       result.face_patch = std::move(assembled_patch);
       report.optimisation_undone = true;
-      pairs = self_intersecting_pairs(to_soup(mesh), options.n_threads);
+      counted = to_soup(mesh);
+      pairs = self_intersecting_pairs(*counted, options.n_threads);
+      counted_pairs = pairs;
     }
-    // What remains was in the assembly (the surface mesh's own crossings). The count is
-    // taken again over the whole mesh when settling changed anything.
-    stitch_detail::settle_intersections(surface, options, feature, result, pairs, report);
-    if (report.n_settled_nodes + report.n_settled_flips + report.n_settled_collapses > 0) pairs = self_intersecting_pairs(to_soup(mesh), options.n_threads);
+    // The soup's indices are the mesh's (no deleted element), so the garbage maps apply.
+    if (counted && (counted->points.size() != mesh.n_vertices() || counted->triangles.size() != mesh.n_faces())) counted.reset();
+    // What remains was in the assembly (the surface mesh's own crossings). The pairs are
+    // counted again when settling changed anything.
+    const stitch_detail::GarbageMaps old = stitch_detail::settle_intersections(surface, options, feature, result, pairs, report);
+    if (report.n_settled_nodes + report.n_settled_flips + report.n_settled_collapses > 0) {
+      pairs = counted ? stitch_detail::recount_pairs(*counted, counted_pairs, to_soup(mesh), old, options.n_threads)
+                      : self_intersecting_pairs(to_soup(mesh), options.n_threads);
+    }
   }
   if (options.obtuse_split_rounds > 0 && pairs.empty() && mesh.n_faces() > 0) {
     split_obtuse_checked(surface, options, feature, result, report);

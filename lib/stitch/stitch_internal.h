@@ -161,6 +161,24 @@ struct GarbageMaps {
 //! mapped, as in OpenMesh 9. Returns the kept elements' old indices.
 GarbageMaps collect_garbage(TriMesh& mesh);
 
+//! collect_garbage(result.mesh) with result.face_patch and result.vertex_node carried along.
+GarbageMaps collect_garbage(StitchResult& result);
+
+//! All self-intersecting pairs of `after` (sorted, each once: self_intersecting_pairs(after)),
+//! from `before_pairs`, all the pairs of `before` (sorted), where `after` is `before` with
+//! some triangles changed (other corners, or a corner moved), removed or renumbered:
+//! old.vertex / old.face name the index in `before` of every point / triangle of `after`
+//! (collect_garbage's maps; empty: the same indices). A pair of two triangles `before` has as
+//! they are (same corners in the same order, same positions) is kept; the other triangles
+//! are checked again against all of `after` (intersecting_pairs_of). The pair test depends
+//! only on the two triangles' corners, their coincidences and the degenerate-area tolerance
+//! (from the bounding box's diagonal): when that diagonal differs, all of `after` is
+//! counted again.
+std::vector<std::array<std::uint32_t, 2>> recount_pairs(const TriangleSoup& before,
+                                                        const std::vector<std::array<std::uint32_t, 2>>& before_pairs,
+                                                        const TriangleSoup& after, const GarbageMaps& old,
+                                                        unsigned n_threads);
+
 //! Intersecting pairs left after the optimisation's repair, i.e. of the assembled mesh
 //! (`pairs`: all pairs of result.mesh, sorted, updated in place). Per pair, the nodes of
 //! both triangles that are neither feature nodes nor on the input's boundary move to the
@@ -178,9 +196,10 @@ GarbageMaps collect_garbage(TriMesh& mesh);
 //! removed node lies within one input mean edge of the new triangles, none of these folds
 //! over or degenerates, and they take part in fewer pairs. Up to 3 rounds. Counts in
 //! report.n_settled_nodes, n_settled_flips and n_settled_collapses. After a collapse the
-//! mesh is garbage-collected (face_patch and vertex_node follow) and `pairs` is left empty:
-//! the caller counts again.
-void settle_intersections(const SurfaceMesh& surface, const StitchOptions& options,
+//! mesh is garbage-collected (face_patch and vertex_node follow), `pairs` is left empty (the
+//! caller counts again, recount_pairs) and the garbage collection's maps are returned (else
+//! empty maps: indices unchanged).
+GarbageMaps settle_intersections(const SurfaceMesh& surface, const StitchOptions& options,
                           const std::vector<std::uint8_t>& is_feature, StitchResult& result,
                           std::vector<std::array<std::uint32_t, 2>>& pairs, StitchReport& report);
 

@@ -1,13 +1,20 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // stitch_detail::collect_garbage against OpenMesh's garbage_collection(): the same mesh
-// (element order, every handle, points, statuses, properties) after collapses and deletions.
+// (element order, every handle, points, statuses, properties) after collapses and deletions;
+// stitch_detail::recount_pairs against a whole-mesh count after moves, flips and collapses.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
+#include <cmath>
 #include <cstddef>
+#include <cstdint>
 #include <vector>
 
 #include "fixtures/shapes.h"
+#include "nurbsfront/core/error.h"
 #include "nurbsfront/core/soup.h"
+#include "nurbsfront/quality/report.h"
 #include "nurbsfront/stitch/stitch_internal.h"
 
 namespace nurbsfront {
@@ -103,6 +110,121 @@ TEST(CollectGarbage, NothingDeletedChangesNothing) {
   expect_same(mesh, actual);
   for (std::size_t v = 0; v < old.vertex.size(); ++v) EXPECT_EQ(old.vertex[v], static_cast<int>(v));
   for (std::size_t f = 0; f < old.face.size(); ++f) EXPECT_EQ(old.face[f], static_cast<int>(f));
+}
+
+using Pairs = std::vector<std::array<std::uint32_t, 2>>;
+
+// Two unit spheres (icosphere 3, 1280 triangles each) 0.8 apart along x: they cross along
+// the circle x = 0.4, in one mesh of two components.
+TriMesh crossing_spheres() {
+  TriangleSoup soup = test::icosphere(3);
+  const TriangleSoup other = test::icosphere(3);
+  const auto offset = static_cast<std::uint32_t>(soup.points.size());
+  for (const auto& p : other.points) soup.points.push_back(p + Eigen::Vector3d(0.8, 0.0, 0.0));
+  for (const auto& t : other.triangles) soup.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
+  return to_trimesh(soup);
+}
+
+// The vertices near the crossing (|x - 0.4| < 0.25): every third moves 3% towards its
+// sphere's centre, every edge between two of them whose index is a multiple of 5 flips and
+// every 4th collapsible edge there collapses; the mesh is garbage-collected when `collect`.
+// None of these vertices is on the bounding box, so its diagonal stays.
+stitch_detail::GarbageMaps settle_like_changes(TriMesh& mesh, bool collect) {
+  auto near = [&](VH v) { return std::abs(mesh.point(v)[0] - 0.4) < 0.25; };
+  for (int v = 0; v < static_cast<int>(mesh.n_vertices()); v += 3) {
+    if (!near(VH(v))) continue;
+    const OpenMesh::Vec3d centre(v < static_cast<int>(mesh.n_vertices()) / 2 ? 0.0 : 0.8, 0.0, 0.0);
+    mesh.set_point(VH(v), centre + 0.97 * (mesh.point(VH(v)) - centre));
+  }
+  for (int e = 0; e < static_cast<int>(mesh.n_edges()); e += 5) {
+    const HH h = mesh.halfedge_handle(EH(e), 0);
+    if (near(mesh.from_vertex_handle(h)) && near(mesh.to_vertex_handle(h)) && mesh.is_flip_ok(EH(e))) mesh.flip(EH(e));
+  }
+  if (!collect) return {};
+  int n = 0;
+  for (int e = 0; e < static_cast<int>(mesh.n_edges()); ++e) {
+    if (mesh.status(EH(e)).deleted()) continue;
+    const HH h = mesh.halfedge_handle(EH(e), 0);
+    if (!near(mesh.from_vertex_handle(h)) || !mesh.is_collapse_ok(h) || ++n % 4 != 0) continue;
+    mesh.collapse(h);
+  }
+  return stitch_detail::collect_garbage(mesh);
+}
+
+// The pairs of `before` between faces that are in `after` unchanged (by the maps), without
+// any new pair: what a recount that checked nothing again would return.
+Pairs kept_pairs_only(const TriangleSoup& before, const Pairs& pairs, const TriangleSoup& after,
+                      const stitch_detail::GarbageMaps& old) {
+  std::vector<std::int64_t> now(before.triangles.size(), -1);
+  for (std::size_t f = 0; f < after.triangles.size(); ++f) {
+    const std::size_t o = old.face.empty() ? f : static_cast<std::size_t>(old.face[f]);
+    bool same = true;
+    for (std::size_t k = 0; k < 3; ++k) {
+      const std::uint32_t v = after.triangles[f][k];
+      const std::size_t ov = old.vertex.empty() ? v : static_cast<std::size_t>(old.vertex[v]);
+      same = same && before.triangles[o][k] == ov && before.points[ov] == after.points[v];
+    }
+    if (same) now[o] = static_cast<std::int64_t>(f);
+  }
+  Pairs out;
+  for (const auto& p : pairs) {
+    if (now[p[0]] >= 0 && now[p[1]] >= 0) {
+      out.push_back({static_cast<std::uint32_t>(std::min(now[p[0]], now[p[1]])),
+                     static_cast<std::uint32_t>(std::max(now[p[0]], now[p[1]]))});
+    }
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+void check_recount(bool collect) {
+  TriMesh mesh = crossing_spheres();
+  const TriangleSoup before = to_soup(mesh);
+  const Pairs before_pairs = self_intersecting_pairs(before, 1);
+  ASSERT_GT(before_pairs.size(), 50U);
+  const stitch_detail::GarbageMaps old = settle_like_changes(mesh, collect);
+  const TriangleSoup after = to_soup(mesh);
+  ASSERT_EQ(after.triangles.size(), mesh.n_faces());  // no deleted face left
+  if (collect) {
+    ASSERT_LT(after.triangles.size(), before.triangles.size());
+  }
+  ASSERT_EQ(bounding_box(after).diagonal(), bounding_box(before).diagonal());
+  const Pairs expected = self_intersecting_pairs(after, 1);
+  ASSERT_GT(expected.size(), 50U);
+  // The changes made and removed pairs: keeping the old ones only would be wrong.
+  ASSERT_NE(kept_pairs_only(before, before_pairs, after, old), expected);
+  EXPECT_EQ(stitch_detail::recount_pairs(before, before_pairs, after, old, 1), expected);
+  EXPECT_EQ(stitch_detail::recount_pairs(before, before_pairs, after, old, 2), expected);
+}
+
+TEST(RecountPairs, EqualsTheWholeCountAfterMovesFlipsAndCollapses) { check_recount(true); }
+
+TEST(RecountPairs, EqualsTheWholeCountAfterMovesAndFlipsWithoutMaps) { check_recount(false); }
+
+TEST(RecountPairs, CountsTheWholeMeshWhenTheDiagonalChanges) {
+  TriMesh mesh = crossing_spheres();
+  const TriangleSoup before = to_soup(mesh);
+  const Pairs before_pairs = self_intersecting_pairs(before, 1);
+  settle_like_changes(mesh, false);
+  // The first sphere's vertex furthest along -x moves out: a larger box, another tolerance.
+  VH far(0);
+  for (const auto v : mesh.vertices()) {
+    if (mesh.point(v)[0] < mesh.point(far)[0]) far = v;
+  }
+  mesh.set_point(far, mesh.point(far) * 1.5);
+  const TriangleSoup after = to_soup(mesh);
+  ASSERT_NE(bounding_box(after).diagonal(), bounding_box(before).diagonal());
+  EXPECT_EQ(stitch_detail::recount_pairs(before, before_pairs, after, {}, 2), self_intersecting_pairs(after, 1));
+}
+
+TEST(RecountPairs, RefusesMapsOfAnotherMesh) {
+  const TriMesh mesh = crossing_spheres();
+  const TriangleSoup soup = to_soup(mesh);
+  stitch_detail::GarbageMaps wrong;
+  wrong.vertex.assign(soup.points.size() - 1, 0);
+  EXPECT_THROW((void)stitch_detail::recount_pairs(soup, {}, soup, wrong, 1), InternalError);
+  EXPECT_THROW((void)stitch_detail::recount_pairs(soup, {{0, static_cast<std::uint32_t>(soup.triangles.size())}}, soup, {}, 1),
+               InternalError);
 }
 
 }  // namespace
