@@ -99,22 +99,11 @@ class AngleRepair {
     return n_changes;
   }
 
-  // Removes the deleted elements, carrying face_patch and vertex_node along.
+  // Removes the deleted elements, carrying face_patch and vertex_node along (OpenMesh's
+  // garbage_collection() bit for bit, without its per-element property lookups).
   void collect_garbage() {
     if (n_collapses_ == 0) return;
-    OpenMesh::FPropHandleT<int> patch_of;
-    OpenMesh::VPropHandleT<int> node_of;
-    mesh_.add_property(patch_of);
-    mesh_.add_property(node_of);
-    for (auto f : mesh_.faces()) mesh_.property(patch_of, f) = result_.face_patch[static_cast<std::size_t>(f.idx())];
-    for (auto v : mesh_.vertices()) mesh_.property(node_of, v) = result_.vertex_node[static_cast<std::size_t>(v.idx())];
-    mesh_.garbage_collection();
-    result_.face_patch.resize(mesh_.n_faces());
-    result_.vertex_node.resize(mesh_.n_vertices());
-    for (auto f : mesh_.faces()) result_.face_patch[static_cast<std::size_t>(f.idx())] = mesh_.property(patch_of, f);
-    for (auto v : mesh_.vertices()) result_.vertex_node[static_cast<std::size_t>(v.idx())] = mesh_.property(node_of, v);
-    mesh_.remove_property(patch_of);
-    mesh_.remove_property(node_of);
+    stitch_detail::collect_garbage(result_);
   }
 
   std::size_t n_flips_ = 0, n_collapses_ = 0, n_moves_ = 0;
