@@ -187,27 +187,42 @@ namespace {
 // Maps every point to the lowest index of a point at exactly the same position, so that
 // unwelded copies of a vertex count as shared corners and not as a touching contact.
 // Points are grouped by a hash of their coordinates (radix-sorted, stable, so each group
-// lists its points in index order); inside a group, exact comparisons decide.
-std::vector<std::uint32_t> canonical_ids(const TriangleSoup& soup) {
+// lists its points in index order); inside a group, exact comparisons decide. With `within`,
+// only the points in that closed box are grouped, each other point keeps its own index: the
+// same ids for the points in the box (a point at the same position as one in the box is in
+// it), and ids equal only at equal positions for all points.
+std::vector<std::uint32_t> canonical_ids(const TriangleSoup& soup, const BoundingBox* within = nullptr) {
   const std::size_t n = soup.points.size();
-  std::vector<std::uint64_t> hashes(n);
-  std::vector<std::uint32_t> order(n);
-  for (std::size_t i = 0; i < n; ++i) {
+  std::vector<std::uint32_t> id(n);
+  std::vector<std::uint32_t> order;
+  if (within == nullptr) {
+    order.resize(n);
+    std::iota(order.begin(), order.end(), 0u);
+  } else {
+    std::iota(id.begin(), id.end(), 0u);
+    for (std::size_t i = 0; i < n; ++i) {
+      const Eigen::Vector3d& p = soup.points[i];
+      if ((within->min.array() <= p.array()).all() && (p.array() <= within->max.array()).all()) {
+        order.push_back(static_cast<std::uint32_t>(i));
+      }
+    }
+  }
+  const std::size_t m = order.size();
+  std::vector<std::uint64_t> hashes(m);
+  for (std::size_t i = 0; i < m; ++i) {
     std::uint64_t h = 0x9e3779b97f4a7c15ULL;
     for (int k = 0; k < 3; ++k) {
       // + 0.0 turns -0.0 into 0.0: equal coordinates hash equally.
-      h = (h ^ std::bit_cast<std::uint64_t>(soup.points[i][k] + 0.0)) * 0xff51afd7ed558ccdULL;
+      h = (h ^ std::bit_cast<std::uint64_t>(soup.points[order[i]][k] + 0.0)) * 0xff51afd7ed558ccdULL;
       h ^= h >> 33;
     }
     hashes[i] = h;
-    order[i] = static_cast<std::uint32_t>(i);
   }
   quality_detail::radix_sort(hashes, order);
-  std::vector<std::uint32_t> id(n);
   std::vector<std::uint32_t> distinct;  // first point of each distinct position in the group
-  for (std::size_t i = 0; i < n;) {
+  for (std::size_t i = 0; i < m;) {
     std::size_t j = i;
-    while (j < n && hashes[j] == hashes[i]) ++j;
+    while (j < m && hashes[j] == hashes[i]) ++j;
     distinct.clear();
     for (std::size_t k = i; k < j; ++k) {
       const std::uint32_t v = order[k];
@@ -433,7 +448,13 @@ std::vector<std::array<std::uint32_t, 2>> intersecting_pairs_of(const TriangleSo
   }
   std::vector<FacePair> pairs;
   if (subset.empty()) return pairs;
-  const std::vector<std::uint32_t> ids = canonical_ids(soup);
+  // Only the faces whose box meets the subset's are tested: the corners shared with a
+  // subset face are in the subset's box, so canonical ids are needed there only.
+  BoundingBox subset_box;
+  for (const std::uint32_t f : subset) {
+    for (const std::uint32_t v : soup.triangles[f]) subset_box.extend(soup.points[v]);
+  }
+  const std::vector<std::uint32_t> ids = canonical_ids(soup, &subset_box);
   const double diagonal = bounding_box(soup).diagonal();
   const double area_floor = tolerance::kDegenerateAreaRelative * diagonal * diagonal;
   // The same faces as count_self_intersections_with() skips (repeated corner, degenerate area).

@@ -195,6 +195,54 @@ TEST(QualitySelfIntersection, PairsOfSubsetMatchTheGlobalPairs) {
   EXPECT_THROW((void)intersecting_pairs_of(s, {static_cast<std::uint32_t>(s.triangles.size())}), InvalidInput);
 }
 
+TEST(QualitySelfIntersection, PairsOfALocalSubsetOfAnUnweldedSoup) {
+  // Two interpenetrating spheres with every triangle on its own three points (neighbours
+  // share corners only by position) and a face with two corners at one position far from
+  // the subset: the pairs of a subset in a small region (its box holds a few of the
+  // soup's points) are the global pairs with a face in it; a neighbour of a subset face
+  // touching it along an edge is no pair.
+  TriangleSoup welded = test::icosphere(3);
+  const TriangleSoup other = test::icosphere(3);
+  const auto offset = static_cast<std::uint32_t>(welded.points.size());
+  for (const auto& p : other.points) welded.points.push_back(p + V(0.93, 0.11, 0.07));
+  for (const auto& t : other.triangles) welded.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
+  TriangleSoup s;
+  for (const auto& t : welded.triangles) {
+    const auto first = static_cast<std::uint32_t>(s.points.size());
+    for (const std::uint32_t v : t) s.points.push_back(welded.points[v]);
+    s.triangles.push_back({first, first + 1, first + 2});
+  }
+  const auto far = static_cast<std::uint32_t>(s.points.size());
+  s.points.push_back(V(-0.9, 0.0, 0.0));
+  s.points.push_back(V(-0.9, 0.0, 0.0));
+  s.points.push_back(V(-0.9, 0.3, 0.0));
+  s.triangles.push_back({far, far + 1, far + 2});
+  const auto all = self_intersecting_pairs(s, 1);
+  ASSERT_EQ(all, self_intersecting_pairs(welded, 1));  // the same pairs, welded or not
+  // The faces with a corner within 0.3 of the first crossing pair's first corner.
+  ASSERT_FALSE(all.empty());
+  const V centre = s.points[s.triangles[all.front()[0]][0]];
+  std::vector<std::uint32_t> subset;
+  std::vector<char> chosen(s.triangles.size(), 0);
+  for (std::uint32_t f = 0; f < s.triangles.size(); ++f) {
+    for (const std::uint32_t v : s.triangles[f]) {
+      if ((s.points[v] - centre).norm() < 0.3 && chosen[f] == 0) {
+        subset.push_back(f);
+        chosen[f] = 1;
+      }
+    }
+  }
+  ASSERT_LT(subset.size(), s.triangles.size() / 10);
+  std::vector<std::array<std::uint32_t, 2>> expected;
+  for (const auto& p : all) {
+    if (chosen[p[0]] != 0 || chosen[p[1]] != 0) expected.push_back(p);
+  }
+  ASSERT_FALSE(expected.empty());
+  EXPECT_EQ(intersecting_pairs_of(s, subset, 1), expected);
+  EXPECT_EQ(intersecting_pairs_of(s, subset, 2), expected);
+  EXPECT_TRUE(intersecting_pairs_of(s, {far / 3}, 1).empty());  // degenerate: skipped
+}
+
 TEST(QualitySelfIntersection, PairsOfDoNotDependOnTheThreadCount) {
   // Two overlapping spheres of 5120 faces each: the soup's faces span several chunks.
   TriangleSoup s = test::icosphere(4);
