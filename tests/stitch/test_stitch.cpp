@@ -404,6 +404,7 @@ TEST(Stitch, AnObtuseSplitThroughANearbySheetIsUndone) {
   EXPECT_EQ(kept.vertex_node.size(), kept.mesh.n_vertices());
   EXPECT_EQ(kept.face_patch.size(), kept.mesh.n_faces());
 }
+
 // Issue 5, the largest class on the CAD meshes: a node V of a straight feature border (here
 // the input's boundary, y = 0) with two triangles of its patch. Their angles at V sum to
 // 180 deg, so one of them is at least 90 deg wherever the inner node W goes, and neither a
@@ -468,8 +469,8 @@ TEST(Stitch, AStraightBorderNodeWithTwoTrianglesGetsAThirdOne) {
     ASSERT_EQ(r.mesh.n_vertices(), fan.points.size() + 1);
     const Eigen::Vector3d m = to_eigen(r.mesh.point(TriMesh::VertexHandle(static_cast<int>(fan.points.size()))));
     EXPECT_NEAR(m.z(), 0.0, 1e-9);
-    const Eigen::Vector3d ab = fan.points[kW] - fan.points[kA];
-    EXPECT_GT(ab.cross(m - fan.points[kA]).norm() / ab.norm(), 0.01);
+    const Eigen::Vector3d aw = fan.points[kW] - fan.points[kA];
+    EXPECT_GT(aw.cross(m - fan.points[kA]).norm() / aw.norm(), 0.01);
   }
 }
 
