@@ -288,7 +288,7 @@ class Optimiser {
         // Not far off the edge: a fit far off there (a border of a patch fitted badly).
         if (!m.allFinite() || (m - m0).norm() > kSplitMaxOffset * (b - a).norm()) continue;
         for (const bool with_flips : {false, true}) {
-          const int n = evaluate_split(h, one_sided, m, on_segment, with_flips, flips_);
+          const int n = evaluate_split(h, one_sided, m, on_segment, with_flips, false, flips_);
           if (n >= 0 && (best < 0 || n < best)) {
             best = n;
             best_m = m;
@@ -296,6 +296,7 @@ class Optimiser {
           }
         }
       }
+      if (!on_segment) relaxed_split(h, one_sided, info, a, b, best, best_m);
       if (best < 0) continue;
       const auto v = mesh_.add_vertex(to_openmesh(best_m));
       const int patch_c = face_patch_[fi];
@@ -329,6 +330,51 @@ class Optimiser {
 
   static bool is_obtuse(const Vec& a, const Vec& b, const Vec& c) {
     return (b - a).dot(c - a) < 0.0 || (c - b).dot(a - b) < 0.0 || (a - c).dot(b - c) < 0.0;
+  }
+
+  // Relaxed split nodes (issue 5; docs/stitch.md "Relaxed split nodes"). The largest class
+  // of obtuse triangles on the CAD meshes: a node of a straight feature border with two
+  // triangles of its patch. Their angles there sum to 180 deg, so one is at least 90 deg
+  // wherever the other nodes go, and nothing moves the node: only a third triangle removes
+  // it, which the split of the opposite edge gives. At the altitude's foot or the midpoint
+  // the new node makes right angles at itself (the split then holds as many obtuse
+  // triangles); so for every split off the segments the node is also tried at the mean of
+  // its ring after the split (and its flips), projected as the split's node, a few times
+  // over (each mean from the ring of the last position): where smoothing would take it.
+  // These candidates are evaluated `relaxed` (evaluate_split): the obtuse repair's angle
+  // floor (at angle_floor_deg itself the DRAM scene's smallest angle away from features fell
+  // 27.4 -> 25.2 deg), and a split that moves an obtuse angle off a fixed node passes. Updates
+  // best (fewest obtuse new triangles; only a strictly better one replaces it), best_m and
+  // best_flips_ as split_sweep's own candidates do.
+  void relaxed_split(TriMesh::HalfedgeHandle h, bool one_sided, const NodeInfo& info, const Vec& a, const Vec& b, int& best,
+                     Vec& best_m) {
+    const auto o = mesh_.opposite_halfedge_handle(h);
+    const Vec c = point(mesh_, mesh_.to_vertex_handle(mesh_.next_halfedge_handle(h)));
+    const Vec d = one_sided ? Vec::Zero() : point(mesh_, mesh_.to_vertex_handle(mesh_.next_halfedge_handle(o)));
+    Vec m = best >= 0 ? best_m : Vec(0.5 * (a + b));
+    for (int iteration = 0; iteration < kRelaxedSplitIterations; ++iteration) {
+      // The ring of m after the split with flips: a, c, b (, d) and the far corners of the flips.
+      (void)evaluate_split(h, one_sided, m, false, true, true, flips_);
+      Vec sum = a + b + c + (one_sided ? Vec::Zero() : d);
+      int n_ring = one_sided ? 3 : 4;
+      for (const auto& [u, w] : flips_) {
+        const auto g = mesh_.find_halfedge(w, u);
+        sum += point(mesh_, mesh_.to_vertex_handle(mesh_.next_halfedge_handle(g)));
+        ++n_ring;
+      }
+      const Vec target = sum / static_cast<double>(n_ring);
+      const Vec q = project(info, target);
+      if (!q.allFinite() || (q - target).norm() > kSplitMaxOffset * (b - a).norm()) return;
+      m = q;
+      for (const bool with_flips : {false, true}) {
+        const int n = evaluate_split(h, one_sided, m, false, with_flips, true, flips_);
+        if (n >= 0 && (best < 0 || n < best)) {
+          best = n;
+          best_m = m;
+          best_flips_ = flips_;
+        }
+      }
+    }
   }
 
 
@@ -375,12 +421,17 @@ class Optimiser {
   // and angle tests against the old ones (the split triangles and those across the flipped
   // edges) and they hold fewer obtuse angles. Returns the number of obtuse new triangles
   // (-1 when the split fails) and the edges to flip in `flips`.
+  // `relaxed` (relaxed_split's candidates): the angle floor is angle_floor_deg +
+  // kObtuseAngleMarginDeg, and as many obtuse triangles as before also pass when fewer of
+  // them have their obtuse angle at a node that nothing moves (the repair after the splits
+  // may then remove it).
   // A new triangle none of whose corners is a feature node (m_is_feature for m) also keeps
   // its smallest angle at least min(that of the old triangles without a feature node,
   // angle_floor_deg): issue 5's bound away from features.
-  int evaluate_split(TriMesh::HalfedgeHandle h, bool one_sided, const Vec& m, bool m_is_feature, bool with_flips,
+  int evaluate_split(TriMesh::HalfedgeHandle h, bool one_sided, const Vec& m, bool m_is_feature, bool with_flips, bool relaxed,
                      std::vector<std::array<TriMesh::VertexHandle, 2>>& flips) const {
     flips.clear();
+    const double sin_floor = relaxed ? sin_obtuse_floor_ : sin_angle_floor_;
     auto away = [&](std::initializer_list<TriMesh::VertexHandle> vs) {
       for (const auto v : vs) {
         if ((*is_split_feature_)[static_cast<std::size_t>((*vertex_node_)[static_cast<std::size_t>(v.idx())])] != 0) return false;
@@ -397,8 +448,17 @@ class Optimiser {
     double old_alpha = alpha_with_area(a, b, c, n_c.norm());
     double old_sine = alpha_and_min_angle_sine(a, b, c, n_c.norm())[1];
     double old_sine_away = away({va, vb, vc}) ? old_sine : 1.0;
+    auto movable = [&](TriMesh::VertexHandle v) { return nodes_[static_cast<std::size_t>(v.idx())].is_movable; };
+    // 1 when (p0, p1, p2) has its obtuse angle at a node that nothing moves.
+    auto fixed_obtuse = [&](TriMesh::VertexHandle h0, const Vec& p0, TriMesh::VertexHandle h1, const Vec& p1,
+                            TriMesh::VertexHandle h2, const Vec& p2) {
+      return int((!movable(h0) && (p1 - p0).dot(p2 - p0) < 0.0) || (!movable(h1) && (p2 - p1).dot(p0 - p1) < 0.0) ||
+                 (!movable(h2) && (p0 - p2).dot(p1 - p2) < 0.0));
+    };
+    int old_fixed = fixed_obtuse(va, a, vb, b, vc, c);
     int old_obtuse = int(is_obtuse(a, b, c));
     if (!one_sided) {
+      old_fixed += fixed_obtuse(vb, b, va, a, vd, d);
       old_alpha = std::min(old_alpha, alpha_with_area(b, a, d, n_d.norm()));
       const double sine_d = alpha_and_min_angle_sine(b, a, d, n_d.norm())[1];
       old_sine = std::min(old_sine, sine_d);
@@ -417,6 +477,7 @@ class Optimiser {
       std::array<Vec, 3> p;
       const Vec* parent;
       bool is_away;
+      TriMesh::VertexHandle h1, h2;
     };
     std::array<Tri, 8> tris;
     std::size_t n_tris = 0;
@@ -441,28 +502,31 @@ class Optimiser {
             old_sine = std::min(old_sine, sine_x);
             if (away({t.w, t.u, vx})) old_sine_away = std::min(old_sine_away, sine_x);
             old_obtuse += int(is_obtuse(w, u, x));
-            tris[n_tris++] = {{m, u, x}, nullptr, !m_is_feature && away({t.u, vx})};
-            tris[n_tris++] = {{m, x, w}, nullptr, !m_is_feature && away({vx, t.w})};
+            old_fixed += fixed_obtuse(t.w, w, t.u, u, vx, x);
+            tris[n_tris++] = {{m, u, x}, nullptr, !m_is_feature && away({t.u, vx}), t.u, vx};
+            tris[n_tris++] = {{m, x, w}, nullptr, !m_is_feature && away({vx, t.w}), vx, t.w};
             flips.push_back({t.u, t.w});
             continue;
           }
         }
       }
-      tris[n_tris++] = {{m, u, w}, t.parent, !m_is_feature && away({t.u, t.w})};
+      tris[n_tris++] = {{m, u, w}, t.parent, !m_is_feature && away({t.u, t.w}), t.u, t.w};
     }
-    int new_obtuse = 0;
+    int new_obtuse = 0, new_fixed = 0;
     for (std::size_t k = 0; k < n_tris; ++k) {
-      const auto& [p, parent, is_away] = tris[k];
+      const auto& [p, parent, is_away, h1, h2] = tris[k];
       const Vec n = area_vector(p[0], p[1], p[2]);
       const double l = n.norm();
       if (l <= min_double_area_) return -1;
       if (parent != nullptr && n.dot(*parent) <= options_.min_normal_dot * l * parent->norm()) return -1;
       const auto [alpha, sine] = alpha_and_min_angle_sine(p[0], p[1], p[2], l);
       if (alpha < std::min(old_alpha, options_.alpha_floor)) return -1;
-      if (sine < std::min(old_sine, sin_angle_floor_) * (1.0 - kSplitSineTolerance)) return -1;
-      if (is_away && sine < std::min(old_sine_away, sin_angle_floor_) * (1.0 - kSplitSineTolerance)) return -1;
+      if (sine < std::min(old_sine, sin_floor) * (1.0 - kSplitSineTolerance)) return -1;
+      if (is_away && sine < std::min(old_sine_away, sin_floor) * (1.0 - kSplitSineTolerance)) return -1;
       new_obtuse += int(is_obtuse(p[0], p[1], p[2]));
+      new_fixed += int((!movable(h1) && (p[2] - p[1]).dot(p[0] - p[1]) < 0.0) || (!movable(h2) && (p[0] - p[2]).dot(p[1] - p[2]) < 0.0));
     }
+    if (relaxed && new_obtuse == old_obtuse && new_fixed < old_fixed) return new_obtuse;
     return new_obtuse < old_obtuse ? new_obtuse : -1;
   }
 
@@ -674,6 +738,8 @@ class Optimiser {
   // A split's node projected onto the fitted surface(s) stays within this share of the
   // edge's length from the edge (a chord's sag over a radius of the edge's length is 1/8).
   static constexpr double kSplitMaxOffset = 0.125;
+  // relaxed_split's rounds of moving the split's node to the mean of its ring.
+  static constexpr int kRelaxedSplitIterations = 3;
   // split_sweep's node ids and feature flags (they grow with the splits).
   const std::vector<int>* vertex_node_ = nullptr;
   const std::vector<std::uint8_t>* is_split_feature_ = nullptr;

@@ -65,8 +65,8 @@ struct StitchOptions {
   //! switches them off): the longest edge of a triangle still obtuse is split at the foot of
   //! the altitude from the obtuse corner (clamped to [0.2, 0.8] of the edge, or at its
   //! midpoint), the new node on the segment for a crease, boundary edge or chord between two
-  //! feature nodes of two patches (a feature node then), else on the fitted surface(s), when
-  //! the new triangles hold fewer obtuse angles and pass the smoothing's normal, alpha and
+  //! feature nodes of two patches (a feature node then), else on the fitted surface(s) (or its
+  //! ring's mean), when the new triangles hold fewer obtuse angles and pass the smoothing's normal, alpha and
   //! angle floors; then the obtuse repair's flips and moves once around the new nodes. Splits
   //! whose triangles cross others are given up. Adds vertices (StitchReport::n_obtuse_splits);
   //! docs/stitch.md "Obtuse splits". Only when the mesh has no crossing left. Default 2.

@@ -231,12 +231,17 @@ TEST(Stitch, ObtuseRepairLeavesFewerObtuseTriangles) {
     const TriangleSoup soup = jittered_sphere(3, jitter);
     const SurfaceMesh surface = cube_map_surface(soup);
     const TriMesh input = to_trimesh(soup);
+    // Without the obtuse splits on both sides: they add vertices (a different count
+    // after the repair), the repair none.
     StitchOptions plain;
     plain.obtuse_repair_rounds = 0;
+    plain.obtuse_split_rounds = 0;
     const StitchResult before = stitch(surface, input, plain);
     ASSERT_TRUE(before.report.ok()) << joined(before.report.errors);
     ASSERT_GT(before.report.output.quality.obtuse_fraction, 0.0);  // something to repair
-    const StitchResult r = stitch(surface, input);
+    StitchOptions repair;
+    repair.obtuse_split_rounds = 0;
+    const StitchResult r = stitch(surface, input, repair);
     EXPECT_TRUE(r.report.ok()) << joined(r.report.errors);
     EXPECT_EQ(r.report.output.topology.euler_characteristic, 2);
     EXPECT_EQ(r.report.output.topology.n_faces, before.report.output.topology.n_faces);
@@ -399,6 +404,76 @@ TEST(Stitch, AnObtuseSplitThroughANearbySheetIsUndone) {
   EXPECT_EQ(kept.vertex_node.size(), kept.mesh.n_vertices());
   EXPECT_EQ(kept.face_patch.size(), kept.mesh.n_faces());
 }
+
+// Issue 5, the largest class on the CAD meshes: a node V of a straight feature border (here
+// the input's boundary, y = 0) with two triangles of its patch. Their angles at V sum to
+// 180 deg, so one of them is at least 90 deg wherever the inner node W goes, and neither a
+// flip (the border edges are locked) nor a move (V is fixed) can help: V needs a third
+// triangle. The split of the edge A-W opposite V's obtuse angle gives it one, with its
+// node where the smoothing would put it (relaxed_split); at the altitude's foot or the
+// midpoint the node makes right angles at itself. The patch is flat (z = 0), a fan of 7
+// triangles around W, only (A, V, W) obtuse (97.1 deg at V).
+TEST(Stitch, AStraightBorderNodeWithTwoTrianglesGetsAThirdOne) {
+  TriangleSoup fan;
+  fan.points = {{0.0, 0.0, 0.0}, {1.0, 0.0, 0.0}, {2.0, 0.0, 0.0}, {2.5, 0.9, 0.0}, {1.5, 1.7, 0.0},
+                {0.5, 1.7, 0.0}, {-0.5, 0.9, 0.0}, {1.1, 0.8, 0.0}};
+  constexpr int kA = 0, kV = 1, kW = 7;
+  fan.triangles = {{0, 1, 7}, {1, 2, 7}, {2, 3, 7}, {3, 4, 7}, {4, 5, 7}, {5, 6, 7}, {6, 0, 7}};
+  const SurfaceMesh surface = make_surface(fan, std::vector<int>(fan.triangles.size(), 0), 1);
+  const TriMesh input = to_trimesh(fan);
+  // V's triangles and whether one of them is obtuse at V.
+  auto at_v = [&](const StitchResult& r, bool& obtuse_at_v) {
+    obtuse_at_v = false;
+    std::size_t n = 0;
+    for (auto v : r.mesh.vertices()) {
+      if (r.vertex_node[static_cast<std::size_t>(v.idx())] != kV) continue;
+      EXPECT_EQ(to_eigen(r.mesh.point(v)), fan.points[kV]);  // a feature node: it never moves
+      for (auto h : r.mesh.voh_range(v)) {
+        if (r.mesh.is_boundary(h)) continue;
+        ++n;
+        const Eigen::Vector3d p = to_eigen(r.mesh.point(v));
+        const Eigen::Vector3d b = to_eigen(r.mesh.point(r.mesh.to_vertex_handle(h)));
+        const Eigen::Vector3d c = to_eigen(r.mesh.point(r.mesh.to_vertex_handle(r.mesh.next_halfedge_handle(h))));
+        obtuse_at_v = obtuse_at_v || (b - p).dot(c - p) < 0.0;
+      }
+    }
+    return n;
+  };
+  StitchOptions off;
+  off.obtuse_split_rounds = 0;
+  const StitchResult before = stitch(surface, input, off);
+  ASSERT_TRUE(before.report.ok()) << joined(before.report.errors);
+  bool obtuse_before = false;
+  EXPECT_EQ(at_v(before, obtuse_before), 2u);
+  EXPECT_TRUE(obtuse_before);  // the planted defect survives the flips and the obtuse repair
+  ASSERT_GT(before.report.output.quality.obtuse_fraction, 0.0);
+  for (const bool sweeps : {true, false}) {
+    SCOPED_TRACE(sweeps);
+    StitchOptions options;
+    if (!sweeps) {
+      options.optimisation_passes = 0;
+      options.obtuse_repair_rounds = 0;
+    }
+    const StitchResult r = stitch(surface, input, options);
+    EXPECT_TRUE(r.report.ok()) << joined(r.report.errors);
+    EXPECT_EQ(r.report.n_obtuse_splits, 1u);
+    bool obtuse_at_v = true;
+    EXPECT_EQ(at_v(r, obtuse_at_v), 3u);
+    EXPECT_FALSE(obtuse_at_v);
+    EXPECT_EQ(r.report.output.quality.obtuse_fraction, 0.0);
+    EXPECT_EQ(r.report.output.topology.euler_characteristic, 1);
+    EXPECT_EQ(r.report.output.topology.n_boundary_loops, 1u);
+    EXPECT_TRUE(r.report.output.topology.is_manifold);
+    EXPECT_GE(r.report.output.quality.alpha_min, std::min(before.report.output.quality.alpha_min, options.alpha_floor));
+    // The new node is an inner node of the patch, on its (flat) surface, off the edge A-W.
+    ASSERT_EQ(r.mesh.n_vertices(), fan.points.size() + 1);
+    const Eigen::Vector3d m = to_eigen(r.mesh.point(TriMesh::VertexHandle(static_cast<int>(fan.points.size()))));
+    EXPECT_NEAR(m.z(), 0.0, 1e-9);
+    const Eigen::Vector3d aw = fan.points[kW] - fan.points[kA];
+    EXPECT_GT(aw.cross(m - fan.points[kA]).norm() / aw.norm(), 0.01);
+  }
+}
+
 // The obtuse repair and the chord compensation have their own switches: they run with the
 // flip and smoothing sweeps off, and nothing moves with all three off. Bad strengths are
 // refused.
