@@ -8,10 +8,13 @@
 #include <numbers>
 
 #include "fixtures/shapes.h"
+#include "nurbsfront/io/mesh_io.h"
 #include "nurbsfront/core/soup.h"
 #include "nurbsfront/segment/segment.h"
 #include "nurbsfront/stitch/stitch.h"
 #include "nurbsfront/surfmesh/surfmesh.h"
+#include "nurbsfront/surfmesh/surfmesh_internal.h"
+#include "support/test_data.h"
 
 namespace nurbsfront {
 namespace {
@@ -73,6 +76,43 @@ TEST(StitchDetailNodes, DetailFittedNodesStayWithinTheirBoundAfterTheStitch) {
   EXPECT_GT(compensated.report.n_chord_compensation_moves, 0u);
   EXPECT_LE(worst_detail_offset(surface, compensated, n_checked), bound * (1.0 + 1e-9));
   EXPECT_GT(n_checked, 20u);
+}
+
+TEST(StitchDetailNodes, NoInnerNodeOfADetailFittedPatchIsMovedWhereItsPatchHasNoInputFaceBelow) {
+  // The brain with the detail fit: PatchSurface::project holds a node to its patch's input
+  // faces only where one lies straight above or below it; elsewhere the fit's own point is
+  // off the input by up to the fit's miss, and the stitch makes no move there. (Without the
+  // rule 6 moved inner nodes had no face below.) Without the chord compensation every move
+  // of an inner node is such a projection, which keeps its position in the patch plane.
+  const TriMesh input = read_mesh(test::test_data("io/brainImageSmooth.vtk"));
+  const Segmentation seg = segment(input);
+  SurfMeshOptions options;
+  options.sizing.adaptive = true;
+  options.sizing.size = 4.0;
+  options.fit.detail_spacing_edges = 1.0;
+  const SurfaceMesh surface = mesh_surface(input, seg, options);
+  StitchOptions stitch_options;
+  stitch_options.chord_compensation = 0.0;
+  const StitchResult result = stitch(surface, input, stitch_options);
+  EXPECT_TRUE(result.report.ok());
+  std::size_t n_moved = 0, n_without_face = 0;
+  for (const auto v : result.mesh.vertices()) {
+    const int node = result.vertex_node[static_cast<std::size_t>(v.idx())];
+    if (node < 0 || static_cast<std::size_t>(node) >= surface.nodes.size() ||
+        surface.node_kind[static_cast<std::size_t>(node)] != NodeKind::Inner)
+      continue;
+    const auto p = static_cast<std::size_t>(surface.node_owner[static_cast<std::size_t>(node)]);
+    const Eigen::Vector3d q = to_eigen(result.mesh.point(v));
+    if (!surface.patches[p].detail_fit || q == surface.nodes[static_cast<std::size_t>(node)]) continue;
+    ++n_moved;
+    const PatchSurface& s = surface.surfaces[p];
+    ASSERT_TRUE(s.input_heights);
+    const Eigen::Vector3d local = s.frame.to_local(q);
+    double z = 0.0;
+    if (!s.input_heights->height(local.x(), local.y(), z)) ++n_without_face;
+  }
+  EXPECT_GT(n_moved, 100u);
+  EXPECT_EQ(n_without_face, 0u);
 }
 
 }  // namespace
