@@ -552,6 +552,7 @@ StitchResult stitch_impl(const SurfaceMesh& surface, const TriMesh* input, const
     stitch_detail::optimise(surface, options, feature, result, report);
     report.n_chord_compensation_moves = stitch_detail::compensate_chords(mesh, result.vertex_node, feature,
                                                                          options.chord_compensation, surface.input_mean_edge);
+    if (report.n_chord_compensation_moves > 0) stitch_detail::hold_detail_nodes(mesh, surface, result.vertex_node);
   }
   report.seconds_optimise = watch.seconds();
 

@@ -52,7 +52,9 @@ struct StitchOptions {
   //! no feature node nor on the input's boundary moves along its normal by this factor times
   //! the area-weighted mean gap of its triangles, less the part an edge as long as the
   //! input's mean edge has (the input's own chords; SurfaceMesh::input_mean_edge), at most
-  //! 0.1 of its edges. In [0, 2]; 0 switches it off. Default 1.
+  //! 0.1 of its edges; an inner node of a detail-fitted patch then goes back within its
+  //! patch's node bound of the input (PatchSurface::max_offset, along the patch axis).
+  //! In [0, 2]; 0 switches it off. Default 1.
   double chord_compensation = 1.0;
   //! Sweeps of the obtuse repair after the optimisation passes (>= 0; 0 switches it off):
   //! flips that leave fewer obtuse angles in their two triangles, then each movable node of
@@ -219,7 +221,9 @@ struct StitchResult {
 //!       of a non-feature curve onto the mean of its two patch surfaces' projections.
 //!       A corner of smooth curves only onto the mean of all its patches' projections.
 //!       Feature nodes (nodes of feature curves, corners ending one) and boundary nodes
-//!       never move. A move is kept only if it turns
+//!       never move. No move whose projection would use a detail-fitted patch
+//!       (SurfaceMesh::patches[p].detail_fit) that has no input face straight above or
+//!       below it (its fit is not held to the input there). A move is kept only if it turns
 //!       no incident triangle's normal too far and keeps their smallest alpha (bounds in
 //!       StitchOptions).
 //!    If the result has self-intersections (one exact check over the whole mesh, when

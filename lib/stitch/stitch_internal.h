@@ -124,6 +124,12 @@ AngleRepairResult repair_small_angles(const SurfaceMesh& surface, const StitchOp
 std::size_t compensate_chords(TriMesh& mesh, const std::vector<int>& vertex_node, const std::vector<std::uint8_t>& is_feature,
                               double strength, double reference_edge);
 
+//! Moves each vertex that is an inner node of a detail-fitted patch (SurfaceMesh::patches[p].
+//! detail_fit) back within the patch's PatchSurface::max_offset of its input faces along the
+//! patch axis, keeping its other two coordinates (after the chord compensation, which moves
+//! nodes along their normals). Returns the number of vertices moved.
+std::size_t hold_detail_nodes(TriMesh& mesh, const SurfaceMesh& surface, const std::vector<int>& vertex_node);
+
 //! alpha of every face, in face order.
 std::vector<double> face_alphas(const TriMesh& mesh);
 

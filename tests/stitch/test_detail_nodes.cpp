@@ -1,0 +1,119 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// The node bound of detail-fitted patches holds after the stitch (docs/surfmesh.md "Detail
+// fit: the node bound after the stitch").
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include "fixtures/shapes.h"
+#include "nurbsfront/io/mesh_io.h"
+#include "nurbsfront/core/soup.h"
+#include "nurbsfront/segment/segment.h"
+#include "nurbsfront/stitch/stitch.h"
+#include "nurbsfront/surfmesh/surfmesh.h"
+#include "nurbsfront/surfmesh/surfmesh_internal.h"
+#include "support/test_data.h"
+
+namespace nurbsfront {
+namespace {
+
+// Largest distance, in input mean edges, along its patch's axis between an output vertex that
+// is an inner node of a detail-fitted patch and that patch's input faces (the projection onto
+// the patch surface with no offset allowed lands on them). n_checked counts those vertices.
+double worst_detail_offset(const SurfaceMesh& surface, const StitchResult& result, std::size_t& n_checked) {
+  double worst = 0.0;
+  n_checked = 0;
+  for (const auto v : result.mesh.vertices()) {
+    const int node = result.vertex_node[static_cast<std::size_t>(v.idx())];
+    if (node < 0 || static_cast<std::size_t>(node) >= surface.nodes.size() ||
+        surface.node_kind[static_cast<std::size_t>(node)] != NodeKind::Inner)
+      continue;
+    const auto p = static_cast<std::size_t>(surface.node_owner[static_cast<std::size_t>(node)]);
+    if (!surface.patches[p].detail_fit) continue;
+    PatchSurface on_input = surface.surfaces[p];
+    on_input.max_offset = 0.0;
+    const Eigen::Vector3d q = to_eigen(result.mesh.point(v));
+    const double below = on_input.frame.to_local(on_input.project(q)).z();
+    const double offset = std::abs(on_input.frame.to_local(q).z() - below);
+    worst = std::max(worst, offset / surface.input_mean_edge);
+    ++n_checked;
+  }
+  return worst;
+}
+
+TEST(StitchDetailNodes, DetailFittedNodesStayWithinTheirBoundAfterTheStitch) {
+  // Ridges about 4 edges apart, half an edge high (as in
+  // Surfmesh.DetailFitFollowsDetailTheDefaultLatticeSmooths):
+  // the detail fit keeps the inner nodes within detail_node_offset_edges of the input faces;
+  // the stitch's smoothing and repairs project onto the surface with that bound, while the
+  // chord compensation moves the nodes along their normals, by up to a tenth of their edges
+  // (here up to 0.063 mean edges off the input without stitch_detail::hold_detail_nodes).
+  constexpr int kN = 16;
+  const double edge = 1.0 / kN;
+  TriMesh input = to_trimesh(test::grid_patch(kN, kN));
+  for (const auto v : input.vertices())
+    input.point(v)[2] = 0.5 * edge * std::sin(2.0 * std::numbers::pi * input.point(v)[0] / (4.37 * edge));
+  const Segmentation seg = segment(input);
+  SurfMeshOptions options;
+  options.sizing.size = 1.5 * edge;
+  options.fit.detail_spacing_edges = 1.0;
+  const SurfaceMesh surface = mesh_surface(input, seg, options);
+  ASSERT_TRUE(std::any_of(surface.patches.begin(), surface.patches.end(),
+                          [](const auto& p) { return p.detail_fit; }));
+  const double bound = options.fit.detail_node_offset_edges;
+  std::size_t n_checked = 0;
+  StitchOptions stitch_options;
+  stitch_options.chord_compensation = 0.0;
+  const StitchResult plain = stitch(surface, input, stitch_options);
+  EXPECT_TRUE(plain.report.ok());
+  EXPECT_LE(worst_detail_offset(surface, plain, n_checked), bound * (1.0 + 1e-9));
+  EXPECT_GT(n_checked, 20u);
+  stitch_options.chord_compensation = 1.0;
+  const StitchResult compensated = stitch(surface, input, stitch_options);
+  EXPECT_TRUE(compensated.report.ok());
+  EXPECT_GT(compensated.report.n_chord_compensation_moves, 0u);
+  EXPECT_LE(worst_detail_offset(surface, compensated, n_checked), bound * (1.0 + 1e-9));
+  EXPECT_GT(n_checked, 20u);
+}
+
+TEST(StitchDetailNodes, NoInnerNodeOfADetailFittedPatchIsMovedWhereItsPatchHasNoInputFaceBelow) {
+  // The brain with the detail fit: PatchSurface::project holds a node to its patch's input
+  // faces only where one lies straight above or below it; elsewhere the fit's own point is
+  // off the input by up to the fit's miss, and the stitch makes no move there. (Without the
+  // rule 6 moved inner nodes had no face below.) Without the chord compensation every move
+  // of an inner node is such a projection, which keeps its position in the patch plane.
+  const TriMesh input = read_mesh(test::test_data("io/brainImageSmooth.vtk"));
+  const Segmentation seg = segment(input);
+  SurfMeshOptions options;
+  options.sizing.adaptive = true;
+  options.sizing.size = 4.0;
+  options.fit.detail_spacing_edges = 1.0;
+  const SurfaceMesh surface = mesh_surface(input, seg, options);
+  StitchOptions stitch_options;
+  stitch_options.chord_compensation = 0.0;
+  const StitchResult result = stitch(surface, input, stitch_options);
+  EXPECT_TRUE(result.report.ok());
+  std::size_t n_moved = 0, n_without_face = 0;
+  for (const auto v : result.mesh.vertices()) {
+    const int node = result.vertex_node[static_cast<std::size_t>(v.idx())];
+    if (node < 0 || static_cast<std::size_t>(node) >= surface.nodes.size() ||
+        surface.node_kind[static_cast<std::size_t>(node)] != NodeKind::Inner)
+      continue;
+    const auto p = static_cast<std::size_t>(surface.node_owner[static_cast<std::size_t>(node)]);
+    const Eigen::Vector3d q = to_eigen(result.mesh.point(v));
+    if (!surface.patches[p].detail_fit || q == surface.nodes[static_cast<std::size_t>(node)]) continue;
+    ++n_moved;
+    const PatchSurface& s = surface.surfaces[p];
+    ASSERT_TRUE(s.input_heights);
+    const Eigen::Vector3d local = s.frame.to_local(q);
+    double z = 0.0;
+    if (!s.input_heights->height(local.x(), local.y(), z)) ++n_without_face;
+  }
+  EXPECT_GT(n_moved, 100u);
+  EXPECT_EQ(n_without_face, 0u);
+}
+
+}  // namespace
+}  // namespace nurbsfront
