@@ -540,7 +540,9 @@ class Optimiser {
     std::vector<std::uint8_t> on_rim(surface_.nodes.size(), 0);
     for (std::size_t c = 0; c < rim.size(); ++c) {
       if (rim[c] == 0) continue;
-      for (const int g : surface_.curve_nodes[c]) on_rim[static_cast<std::size_t>(g)] = 1;
+      for (const int g : surface_.curve_nodes[c]) {
+        if (g >= 0 && static_cast<std::size_t>(g) < on_rim.size()) on_rim[static_cast<std::size_t>(g)] = 1;
+      }
     }
     const double bound = options_.fin_rim_max_move * surface_.input_mean_edge;
     for (auto v : mesh_.vertices()) {
