@@ -60,6 +60,10 @@ struct NodeInfo {
   int curve = -1;           // border: its curve; -1 otherwise
   bool is_corner = false;
   int corner_slot = -1;     // movable corner: index into Optimiser::corner_patches_
+  // A node of a fin rim curve (StitchOptions::fin_rim_max_move): its moves stay within
+  // max_move of origin, where the front put it; infinity: no bound.
+  double max_move = std::numeric_limits<double>::infinity();
+  Vec origin = Vec::Zero();
 };
 
 class Optimiser {
@@ -537,12 +541,25 @@ class Optimiser {
     return l > 0.0 ? x.dot(y) / l : 1.0;
   }
 
-  // target moved onto the fitted surface(s) of a movable node (see smoothing_sweep).
+  // target moved onto the fitted surface(s) of a movable node (see smoothing_sweep); for a
+  // node of a fin rim curve, no farther than info.max_move from info.origin.
   Vec project(const NodeInfo& info, const Vec& target) const {
     // Not where a detail-fitted patch has none of its input faces below: its projection
     // there is the fit's, unheld, off the input by up to the fit's miss (headsq@500 with the
     // detail fit: a movable corner 1.8 voxels off, the run's Hausdorff 2.47 -> 1.74 without).
     if (!detail_faces_below(info, target)) return Vec::Constant(std::numeric_limits<double>::quiet_NaN());
+    const Vec q = project_unbounded(info, target);
+    return std::isfinite(info.max_move) ? clamp_to_ball(q, info.origin, info.max_move) : q;
+  }
+
+  // q, or the point of segment (origin, q) at distance r from origin when q lies farther.
+  static Vec clamp_to_ball(const Vec& q, const Vec& origin, double r) {
+    const Vec d = q - origin;
+    const double l = d.norm();
+    return l > r ? Vec(origin + (r / l) * d) : q;
+  }
+
+  Vec project_unbounded(const NodeInfo& info, const Vec& target) const {
     if (info.corner_slot >= 0) {
       const auto& patches = corner_patches_[static_cast<std::size_t>(info.corner_slot)];
       Vec q = Vec::Zero();
@@ -607,8 +624,31 @@ class Optimiser {
     return true;
   }
 
+  // StitchOptions::fin_rim_max_move: the vertices of the nodes of fin rim curves (corners
+  // included) get their bound and origin.
+  void bound_fin_rim_nodes(const std::vector<int>& vertex_node) {
+    const std::vector<std::uint8_t>& rim = surface_.curve_is_fin_rim;
+    if (rim.empty() || !std::isfinite(options_.fin_rim_max_move) || surface_.curve_nodes.size() != rim.size()) return;
+    std::vector<std::uint8_t> on_rim(surface_.nodes.size(), 0);
+    for (std::size_t c = 0; c < rim.size(); ++c) {
+      if (rim[c] == 0) continue;
+      for (const int g : surface_.curve_nodes[c]) {
+        if (g >= 0 && static_cast<std::size_t>(g) < on_rim.size()) on_rim[static_cast<std::size_t>(g)] = 1;
+      }
+    }
+    const double bound = options_.fin_rim_max_move * surface_.input_mean_edge;
+    for (auto v : mesh_.vertices()) {
+      const auto node = static_cast<std::size_t>(vertex_node[static_cast<std::size_t>(v.idx())]);
+      if (on_rim[node] == 0) continue;
+      NodeInfo& info = nodes_[static_cast<std::size_t>(v.idx())];
+      info.max_move = bound;
+      info.origin = surface_.nodes[node];
+    }
+  }
+
   void classify_nodes(const std::vector<int>& vertex_node) {
     nodes_.assign(mesh_.n_vertices(), NodeInfo{});
+    bound_fin_rim_nodes(vertex_node);
     for (auto v : mesh_.vertices()) {
       const auto node = static_cast<std::size_t>(vertex_node[static_cast<std::size_t>(v.idx())]);
       NodeInfo& info = nodes_[static_cast<std::size_t>(v.idx())];

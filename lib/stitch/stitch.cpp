@@ -34,6 +34,7 @@ void StitchOptions::validate() const {
   if (!(alpha_floor >= 0.0 && alpha_floor <= 1.0)) fail("alpha_floor must be in [0, 1]");
   if (!(angle_floor_deg >= 0.0 && angle_floor_deg < 60.0)) fail("angle_floor_deg must be in [0, 60)");
   if (!(collapse_below_angle_deg >= 0.0 && collapse_below_angle_deg < 60.0)) fail("collapse_below_angle_deg must be in [0, 60)");
+  if (!(fin_rim_max_move >= 0.0)) fail("fin_rim_max_move must be >= 0 (infinity: no bound)");
   if (n_threads == 0) fail("n_threads must be >= 1");
 }
 
@@ -69,6 +70,10 @@ void validate_surface(const SurfaceMesh& s) {
       default:
         fail("node " + std::to_string(i) + " has an unknown kind");
     }
+  }
+  if (!s.curve_is_fin_rim.empty() && s.curve_is_fin_rim.size() != s.curve_is_feature.size()) {
+    fail("curve_is_fin_rim has " + std::to_string(s.curve_is_fin_rim.size()) + " entries for " +
+         std::to_string(s.curve_is_feature.size()) + " curves");
   }
   for (std::size_t t = 0; t < s.triangles.size(); ++t) {
     for (int k : s.triangles[t]) {

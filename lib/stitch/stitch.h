@@ -88,6 +88,13 @@ struct StitchOptions {
   //! docs/stitch.md), in [0, 60); 0
   //! switches it off. Default 25 (issue 5's bound away from features).
   double collapse_below_angle_deg = 25.0;
+  //! The smoothing, the obtuse repair and the obtuse splits' flips and moves keep every
+  //! node of a fin rim curve (SurfaceMesh::curve_is_fin_rim; its corners included) within
+  //! this many input mean edges (SurfaceMesh::input_mean_edge) of where the front put it
+  //! (SurfaceMesh::nodes): a move beyond stops at the bound on the way to its target. A fin
+  //! rim is a crease the fits of its two narrow patches may round off (docs/stitch.md "Fin
+  //! rims"). >= 0 (0: such nodes stay); infinity: no bound. Default 0.25.
+  double fin_rim_max_move = 0.25;
   //! Run the exact self-intersection check on the result (the most expensive check).
   //! Default true.
   bool check_self_intersections = true;

@@ -22,10 +22,6 @@ namespace nurbsfront {
 
 namespace {
 
-// SurfMeshOptions::fin_rim_width: the two fits of a fin rim curve agree within this many mean
-// input edges at each of its nodes.
-constexpr double kFinRimMaxGapEdges = 0.25;
-
 [[noreturn]] void bad_option(const std::string& what) { throw InvalidInput("SurfMeshOptions: " + what); }
 
 bool finite_positive(double x) { return std::isfinite(x) && x > 0.0; }
@@ -213,6 +209,8 @@ void SurfMeshOptions::validate() const {
     bad_option("fin_rim_width must be finite and >= 0, got " + std::to_string(fin_rim_width));
   if (!(fin_rim_max_angle_deg >= 0.0 && fin_rim_max_angle_deg <= 180.0))
     bad_option("fin_rim_max_angle_deg must be in [0, 180], got " + std::to_string(fin_rim_max_angle_deg));
+  if (!(fin_rim_max_gap_edges >= 0.0))
+    bad_option("fin_rim_max_gap_edges must be >= 0 (infinity: no test), got " + std::to_string(fin_rim_max_gap_edges));
   if (!(tiny_curve_merge_size >= 0.0 && tiny_curve_merge_size <= 0.5))
     bad_option("tiny_curve_merge_size must be in [0, 0.5], got " + std::to_string(tiny_curve_merge_size));
   if (!(std::isfinite(max_node_offset_edges) && max_node_offset_edges >= 0.0))
@@ -480,8 +478,10 @@ SurfaceMesh surfmesh_detail::mesh_surface(const TriMesh& input, const Segmentati
   // (their sources, the unsmoothed sharp ones).
   if (fin_rims && marching_cubes && !label_image_staircase(lattice)) {
     for (const int c : fin_rim_curves(input, segmentation, out, crease_angles, options.fin_rim_width * h,
-                                      options.fin_rim_max_angle_deg, kFinRimMaxGapEdges * mean_edge)) {
+                                      options.fin_rim_max_angle_deg, options.fin_rim_max_gap_edges * mean_edge)) {
       out.curve_is_feature[static_cast<std::size_t>(c)] = 0;
+      if (out.curve_is_fin_rim.empty()) out.curve_is_fin_rim.assign(out.curve_is_feature.size(), 0);
+      out.curve_is_fin_rim[static_cast<std::size_t>(c)] = 1;
       ++out.n_fin_rim_curves;
     }
   }

@@ -16,6 +16,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -258,8 +259,15 @@ struct SurfMeshOptions {
   //! Default 1.
   double fin_rim_width = 1.0;
   //! The largest crease angle (deg) of a fin rim curve (fin_rim_width): sharper folds stay
-  //! features (their nodes would round the fold off). In [0, 180]. Default 120.
-  double fin_rim_max_angle_deg = 120.0;
+  //! features. In [0, 180]. Default 180 (every angle; 120 before
+  //! StitchOptions::fin_rim_max_move bounded the moves of their nodes).
+  double fin_rim_max_angle_deg = 180.0;
+  //! A fin rim curve's nodes have their projections onto both patches' fits within this many
+  //! mean input edges of each other, and their mean within it of the node; infinity: no test.
+  //! Stitch bounds how far it moves the nodes of fin rims (StitchOptions::fin_rim_max_move),
+  //! which makes this test unnecessary (docs/stitch.md "Fin rims: a bound on the moves").
+  //! >= 0. Default infinity.
+  double fin_rim_max_gap_edges = std::numeric_limits<double>::infinity();
   //! Largest distance, in mean input edges, of a new inner node from the patch's own input
   //! faces along the patch axis: a node the fit lifts further (the fit smooths thin fins,
   //! tips and sharp bends by several edges, and such a node can pass through the
@@ -349,6 +357,9 @@ struct SurfaceMesh {
   //! Crease curves that are no feature because they border a fin's narrow strip
   //! (SurfMeshOptions::fin_rim_width).
   std::size_t n_fin_rim_curves = 0;
+  //! Per curve, 1 for those fin rim curves (else 0; may be empty: none). Stitch keeps their
+  //! nodes within StitchOptions::fin_rim_max_move of where the front put them.
+  std::vector<std::uint8_t> curve_is_fin_rim;
   //! Per curve, its global node ids along the curve (an open curve starts and ends at its
   //! corners; a closed one does not repeat its first node; a tiny curve whose corners
   //! merged is {survivor, survivor}). May be empty (a hand-made SurfaceMesh): stitch then

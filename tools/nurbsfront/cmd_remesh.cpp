@@ -52,6 +52,8 @@ struct RemeshArgs {
   std::optional<double> narrow_merge;
   std::optional<double> fin_rim_width;
   std::optional<double> fin_rim_angle;
+  std::optional<double> fin_rim_gap;
+  std::optional<double> fin_rim_max_move;
   std::optional<int> obtuse_repair_rounds;
   std::optional<int> obtuse_split_rounds;
   std::optional<int> angle_repair_rounds;
@@ -117,6 +119,8 @@ void run_remesh(RemeshArgs& args) {
   if (args.narrow_merge) options.narrow_patch_merge = *args.narrow_merge;
   if (args.fin_rim_width) options.surfmesh.fin_rim_width = *args.fin_rim_width;
   if (args.fin_rim_angle) options.surfmesh.fin_rim_max_angle_deg = *args.fin_rim_angle;
+  if (args.fin_rim_gap) options.surfmesh.fin_rim_max_gap_edges = *args.fin_rim_gap;
+  if (args.fin_rim_max_move) options.stitch.fin_rim_max_move = *args.fin_rim_max_move;
   if (args.obtuse_repair_rounds) options.stitch.obtuse_repair_rounds = *args.obtuse_repair_rounds;
   if (args.obtuse_split_rounds) options.stitch.obtuse_split_rounds = *args.obtuse_split_rounds;
   if (args.angle_repair_rounds) options.stitch.angle_repair_rounds = *args.angle_repair_rounds;
@@ -250,7 +254,13 @@ void add_remesh_command(CLI::App& app) {
                   "On marching-cubes inputs, crease curves beside a strip narrower than this many target edges "
                   "are no features for stitch (fin rims; docs/stitch.md); 0 = off (default 1)");
   cmd->add_option("--fin-rim-angle", args->fin_rim_angle,
-                  "Largest crease angle (deg) of such a fin rim curve (default 120)");
+                  "Largest crease angle (deg) of such a fin rim curve (default 180)");
+  cmd->add_option("--fin-rim-gap", args->fin_rim_gap,
+                  "A fin rim's nodes have their projections onto both sides' fits within this many mean input "
+                  "edges (default: no test; 0.25 before the move bound)");
+  cmd->add_option("--fin-rim-max-move", args->fin_rim_max_move,
+                  "Stitch moves the nodes of fin rims at most this many mean input edges from where the front "
+                  "put them (default 0.25; inf = no bound; docs/stitch.md \"Fin rims\")");
   cmd->add_option("--narrow-merge", args->narrow_merge,
                   "On marching-cubes inputs, patches narrower than this many target edges join a neighbour "
                   "(default 0.5; 0 = off; docs/segment.md \"Narrow patches\")")
