@@ -77,8 +77,9 @@ struct StitchOptions {
   //! of its edges (the survivor stays) that raises the smallest angle of the triangles it
   //! touches, leaves no more of them below the bound and no more obtuse ones; changes whose
   //! triangles cross others are given up. Only when the mesh has no crossing left.
-  //! docs/stitch.md "Small angles left after the optimisation". Default 2.
-  int angle_repair_rounds = 2;
+  //! docs/stitch.md "Small angles left after the optimisation". Default 4 (the sweeps stop
+  //! early when one changes nothing; the liver needs 3).
+  int angle_repair_rounds = 4;
   //! Triangles whose smallest angle (deg) is below this get their shortest edge collapsed
   //! before the optimisation, when the merge is allowed and improves the worst triangle
   //! around it (feature nodes never moved, and removed only into a feature corner less
