@@ -7,9 +7,12 @@
 // "Small angles left after the optimisation"). What the collapse before the optimisation
 // and the sweeps leave: triangles of patches of one or two input faces between corners a
 // fraction of h apart, whose nodes are all border nodes and corners (no collapse along a
-// curve helps), and triangles the flips and moves made next to a worse one.
+// curve helps), and triangles the flips and moves made next to a worse one. Where no single
+// change is better, a pair of changes is tried on a copy of the triangle's neighbourhood
+// (repair_in_two_steps).
 #include <algorithm>
 #include <array>
+#include <cassert>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -72,6 +75,13 @@ class AngleRepair {
     max_offset_ = kMaxCollapseOffsetEdges * (surface.input_mean_edge > 0.0 ? surface.input_mean_edge : mean_edge_length(mesh_));
   }
 
+  // The repair on a copy of a part of whole's mesh, with whole's bounds.
+  AngleRepair(const SurfaceMesh& surface, const StitchOptions& options, const std::vector<std::uint8_t>& is_feature,
+              const std::vector<std::uint8_t>& is_frozen, StitchResult& part, const AngleRepair& whole)
+      : surface_(surface), options_(options), is_feature_(is_feature), is_frozen_(is_frozen), result_(part),
+        mesh_(part.mesh), min_double_area_(whole.min_double_area_), sin_bound_(whole.sin_bound_),
+        cos_dihedral_(whole.cos_dihedral_), max_offset_(whole.max_offset_) {}
+
   // Whether some triangle has no feature node and an angle below the bound.
   bool any_small() const {
     double s = 0.0;
@@ -106,7 +116,7 @@ class AngleRepair {
     stitch_detail::collect_garbage(result_);
   }
 
-  std::size_t n_flips_ = 0, n_collapses_ = 0, n_moves_ = 0;
+  std::size_t n_flips_ = 0, n_collapses_ = 0, n_moves_ = 0, n_two_steps_ = 0;
   //! Nodes whose triangles a change made (for the crossing check).
   std::vector<int> changed_nodes_;
 
@@ -132,67 +142,240 @@ class AngleRepair {
     return s < sin_bound_;
   }
 
-  // The best change around f (a flip or a collapse of one of its edges), made; false when
-  // none is better.
+  // One change of the repair: a flip of the edge between from and to, a collapse of from
+  // into to (which stays), or a move of from to q.
+  struct Step {
+    enum class Kind { Flip, Collapse, Move } kind = Kind::Flip;
+    TriMesh::VertexHandle from, to;
+    Vec q = Vec::Zero();
+  };
+
+  // The best change around f (a flip or a collapse of one of its edges, or a move of one of
+  // its nodes), made; else the best pair of changes there (repair_in_two_steps); false when
+  // neither is better.
   bool repair(TriMesh::FaceHandle f) {
+    Step step;
+    if (best_step(f, step) >= 0.0) {
+      apply(step);
+      return true;
+    }
+    return repair_in_two_steps(f);
+  }
+
+  // The best change around f (see repair) and the sine of the smallest angle of the
+  // triangles it makes; -1 when none is better.
+  double best_step(TriMesh::FaceHandle f, Step& step) const {
     double best = -1.0;
-    TriMesh::HalfedgeHandle best_flip, best_collapse;
     for (auto h : mesh_.fh_range(f)) {
       const double s = flip_gain(mesh_.edge_handle(h));
       if (s > best) {
         best = s;
-        best_flip = h;
-        best_collapse.reset();
+        step = {Step::Kind::Flip, mesh_.from_vertex_handle(h), mesh_.to_vertex_handle(h), Vec::Zero()};
       }
       for (const auto g : {h, mesh_.opposite_halfedge_handle(h)}) {
         const double c = collapse_gain(g);
         if (c > best) {
           best = c;
-          best_collapse = g;
-          best_flip.reset();
+          step = {Step::Kind::Collapse, mesh_.from_vertex_handle(g), mesh_.to_vertex_handle(g), Vec::Zero()};
         }
       }
     }
-    TriMesh::VertexHandle best_vertex;
-    Vec best_q = Vec::Zero();
     for (auto v : mesh_.fv_range(f)) {
       Vec q = Vec::Zero();
       const double s = move_gain(v, q);
       if (s > best) {
         best = s;
-        best_vertex = v;
-        best_q = q;
-        best_flip.reset();
-        best_collapse.reset();
+        step = {Step::Kind::Move, v, TriMesh::VertexHandle(), q};
       }
     }
-    if (best_vertex.is_valid()) {
-      mesh_.set_point(best_vertex, to_openmesh(best_q));
+    return best;
+  }
+
+  // The changes allowed around f, better or not: flips and collapses of its edges, and the
+  // best move of each of its nodes.
+  void candidates(TriMesh::FaceHandle f, std::vector<Step>& out) const {
+    for (auto h : mesh_.fh_range(f)) {
+      if (flip_gain(mesh_.edge_handle(h), false) >= 0.0) out.push_back({Step::Kind::Flip, mesh_.from_vertex_handle(h), mesh_.to_vertex_handle(h), Vec::Zero()});
+      for (const auto g : {h, mesh_.opposite_halfedge_handle(h)}) {
+        if (collapse_gain(g, false) >= 0.0) out.push_back({Step::Kind::Collapse, mesh_.from_vertex_handle(g), mesh_.to_vertex_handle(g), Vec::Zero()});
+      }
+    }
+    for (auto v : mesh_.fv_range(f)) {
+      Vec q = Vec::Zero();
+      if (move_gain(v, q) >= 0.0) out.push_back({Step::Kind::Move, v, TriMesh::VertexHandle(), q});
+    }
+  }
+
+  // Makes a change; false (and nothing made) when its edge is gone or OpenMesh refuses it.
+  bool apply(const Step& step) {
+    if (step.kind == Step::Kind::Move) {
+      mesh_.set_point(step.from, to_openmesh(step.q));
       ++n_moves_;
-      changed_nodes_.push_back(node(best_vertex));
+      changed_nodes_.push_back(node(step.from));
       return true;
     }
-    if (best_flip.is_valid()) {
-      const auto e = mesh_.edge_handle(best_flip);
+    const auto h = mesh_.find_halfedge(step.from, step.to);
+    if (!h.is_valid()) return false;
+    if (step.kind == Step::Kind::Flip) {
+      const auto e = mesh_.edge_handle(h);
+      if (!mesh_.is_flip_ok(e)) return false;
       mesh_.flip(e);
       ++n_flips_;
-      for (const auto h : {mesh_.halfedge_handle(e, 0), mesh_.halfedge_handle(e, 1)}) changed_nodes_.push_back(node(mesh_.to_vertex_handle(h)));
+      for (const auto g : {mesh_.halfedge_handle(e, 0), mesh_.halfedge_handle(e, 1)}) changed_nodes_.push_back(node(mesh_.to_vertex_handle(g)));
       return true;
     }
-    if (best_collapse.is_valid()) {
-      const auto va = mesh_.to_vertex_handle(best_collapse);
-      mesh_.collapse(best_collapse);
-      ++n_collapses_;
-      changed_nodes_.push_back(node(va));
-      return true;
+    if (!mesh_.is_collapse_ok(h)) return false;
+    mesh_.collapse(h);
+    ++n_collapses_;
+    changed_nodes_.push_back(node(step.to));
+    return true;
+  }
+
+  // Two changes where no single one is better (two border nodes of tiny curves next to two
+  // corners, each merge alone lowering the smallest angle a little because of the other):
+  // each change at f that is allowed but not better by itself (candidates()), then each
+  // allowed change at a triangle below the bound around the node(s) the first changed. Both
+  // are made on a copy of the faces within three rings of f; the best pair (largest
+  // smallest angle) is made on the whole mesh when, over the triangles the pair removes and
+  // those it makes, the smallest angle rises, fewer are below the bound and at most one more
+  // is obtuse per triangle lifted (is_better). The changes touch only nodes within two rings
+  // of f, whose neighbours have all their faces in the copy, so OpenMesh's link and flip
+  // checks answer there as on the whole mesh (apply() checks them again).
+  bool repair_in_two_steps(TriMesh::FaceHandle f) {
+    constexpr int kCopyRings = 3;
+    // The copy: vertices by depth (ring) from f, faces of the vertices up to kCopyRings.
+    local_of_.resize(mesh_.n_vertices(), -1);
+    std::vector<TriMesh::VertexHandle> global_of;
+    std::vector<int> depth;
+    auto visit = [&](TriMesh::VertexHandle v, int d) {
+      auto& l = local_of_[static_cast<std::size_t>(v.idx())];
+      if (l >= 0) return;
+      l = static_cast<int>(global_of.size());
+      global_of.push_back(v);
+      depth.push_back(d);
+    };
+    for (auto v : mesh_.fv_range(f)) visit(v, 0);
+    for (std::size_t i = 0; i < global_of.size(); ++i) {
+      if (depth[i] >= kCopyRings) continue;
+      for (auto w : mesh_.vv_range(global_of[i])) visit(w, depth[i] + 1);
     }
-    return false;
+    std::vector<int> faces;
+    const std::size_t n_inner = global_of.size();
+    for (std::size_t i = 0; i < n_inner; ++i) {
+      for (auto g : mesh_.vf_range(global_of[i])) faces.push_back(g.idx());
+    }
+    std::sort(faces.begin(), faces.end());
+    faces.erase(std::unique(faces.begin(), faces.end()), faces.end());
+    StitchResult copy;
+    for (const int g : faces) {
+      for (auto v : mesh_.fv_range(TriMesh::FaceHandle(g))) visit(v, kCopyRings + 1);
+    }
+    for (const auto v : global_of) {
+      copy.mesh.add_vertex(mesh_.point(v));
+      copy.vertex_node.push_back(node(v));
+    }
+    bool ok = true;
+    for (const int g : faces) {
+      std::array<TriMesh::VertexHandle, 3> t;
+      int k = 0;
+      for (auto v : mesh_.fv_range(TriMesh::FaceHandle(g))) t[static_cast<std::size_t>(k++)] = TriMesh::VertexHandle(local_of_[static_cast<std::size_t>(v.idx())]);
+      if (!copy.mesh.add_face(t[0], t[1], t[2]).is_valid()) {
+        ok = false;
+        break;
+      }
+      copy.face_patch.push_back(result_.face_patch[static_cast<std::size_t>(g)]);
+    }
+    for (const auto v : global_of) local_of_[static_cast<std::size_t>(v.idx())] = -1;
+    if (!ok) return false;
+    // The copy's vertices are numbered as found, so f's are 0, 1, 2.
+    const auto local_f = copy.mesh.face_handle(copy.mesh.find_halfedge(TriMesh::VertexHandle(0), TriMesh::VertexHandle(1)));
+    AngleRepair local(surface_, options_, is_feature_, is_frozen_, copy, *this);
+    std::vector<Step> firsts;
+    local.candidates(local_f, firsts);
+    double best = -1.0;
+    std::array<Step, 2> best_pair;
+    for (const Step& first : firsts) {
+      StitchResult trial;
+      trial.mesh = copy.mesh;
+      trial.face_patch = copy.face_patch;
+      trial.vertex_node = copy.vertex_node;
+      AngleRepair after_first(surface_, options_, is_feature_, is_frozen_, trial, *this);
+      if (!after_first.apply(first)) continue;
+      // The second: a change at a triangle below the bound that the first made.
+      std::vector<TriMesh::VertexHandle> touched{first.kind == Step::Kind::Collapse ? first.to : first.from};
+      if (first.kind == Step::Kind::Flip) touched.push_back(first.to);
+      std::vector<Step> seconds;
+      for (const auto t : touched) {
+        for (auto g : trial.mesh.vf_range(t)) {
+          std::array<Vec, 3> p;
+          int k = 0;
+          for (auto v : trial.mesh.fv_range(g)) p[static_cast<std::size_t>(k++)] = point(trial.mesh, v);
+          if (!(smallest_angle_sine(p[0], p[1], p[2]) < sin_bound_)) continue;
+          after_first.candidates(g, seconds);
+        }
+      }
+      for (const Step& second : seconds) {
+        StitchResult trial2;
+        trial2.mesh = trial.mesh;
+        trial2.face_patch = trial.face_patch;
+        trial2.vertex_node = trial.vertex_node;
+        AngleRepair after_second(surface_, options_, is_feature_, is_frozen_, trial2, *this);
+        if (!after_second.apply(second)) continue;
+        Shape removed, added;
+        compare(copy.mesh, trial2.mesh, removed, added);
+        if (!is_better(removed, added) || added.n_small >= removed.n_small || !(added.min_sine > best)) continue;
+        best = added.min_sine;
+        best_pair = {first, second};
+      }
+    }
+    if (best < 0.0) return false;
+    // Made on the whole mesh (the copy's vertices mapped back).
+    for (Step step : best_pair) {
+      step.from = global_of[static_cast<std::size_t>(step.from.idx())];
+      if (step.to.is_valid()) step.to = global_of[static_cast<std::size_t>(step.to.idx())];
+      const bool made = apply(step);
+      assert(made);
+      if (!made) break;
+    }
+    ++n_two_steps_;
+    return true;
+  }
+
+  // What the triangles of `before` that `after` (the same vertices, changed) no longer has
+  // are (removed) and what its new ones are (added); a triangle with a moved vertex counts
+  // as both.
+  void compare(const TriMesh& before, const TriMesh& after, Shape& removed, Shape& added) const {
+    auto triangles = [](const TriMesh& m) {
+      std::vector<std::array<int, 3>> t;
+      for (auto g : m.faces()) {
+        std::array<int, 3> x;
+        int k = 0;
+        for (auto v : m.fv_range(g)) x[static_cast<std::size_t>(k++)] = v.idx();
+        std::rotate(x.begin(), std::min_element(x.begin(), x.end()), x.end());
+        t.push_back(x);
+      }
+      std::sort(t.begin(), t.end());
+      return t;
+    };
+    const auto t_before = triangles(before), t_after = triangles(after);
+    auto moved = [&](const std::array<int, 3>& x) {
+      return std::any_of(x.begin(), x.end(), [&](int i) { return before.point(TriMesh::VertexHandle(i)) != after.point(TriMesh::VertexHandle(i)); });
+    };
+    auto add = [&](const TriMesh& m, const std::array<int, 3>& x, Shape& shape) {
+      shape.add(point(m, TriMesh::VertexHandle(x[0])), point(m, TriMesh::VertexHandle(x[1])), point(m, TriMesh::VertexHandle(x[2])), sin_bound_);
+    };
+    for (const auto& x : t_before) {
+      if (moved(x) || !std::binary_search(t_after.begin(), t_after.end(), x)) add(before, x, removed);
+    }
+    for (const auto& x : t_after) {
+      if (moved(x) || !std::binary_search(t_before.begin(), t_before.end(), x)) add(after, x, added);
+    }
   }
 
   // The sine of the smallest angle of the two new triangles when flipping e is better than
   // leaving it (see Shape), the flip allowed and within the dihedral bound before and after,
   // the new triangles on the old side; else -1.
-  double flip_gain(TriMesh::EdgeHandle e) const {
+  double flip_gain(TriMesh::EdgeHandle e, bool require_better = true) const {
     if (mesh_.is_boundary(e)) return -1.0;
     const auto h0 = mesh_.halfedge_handle(e, 0), h1 = mesh_.halfedge_handle(e, 1);
     const auto va = mesh_.from_vertex_handle(h0), vb = mesh_.to_vertex_handle(h0);
@@ -214,7 +397,7 @@ class AngleRepair {
     before.add(b, a, d, sin_bound_);
     after.add(a, d, c, sin_bound_);
     after.add(d, b, c, sin_bound_);
-    if (!is_better(before, after) || !mesh_.is_flip_ok(e)) return -1.0;
+    if ((require_better && !is_better(before, after)) || !mesh_.is_flip_ok(e)) return -1.0;
     return after.min_sine;
   }
 
@@ -225,7 +408,7 @@ class AngleRepair {
   // condition holds, no two faces end on the same nodes, no triangle degenerates or turns its
   // normal by more than acos(min_normal_dot), and the removed node stays within
   // kMaxCollapseOffsetEdges input mean edges of the new triangles.
-  double collapse_gain(TriMesh::HalfedgeHandle h) const {
+  double collapse_gain(TriMesh::HalfedgeHandle h, bool require_better = true) const {
     const auto vb = mesh_.from_vertex_handle(h), va = mesh_.to_vertex_handle(h);
     if (is_feature(vb) || is_frozen(vb) || is_frozen(va) || mesh_.is_boundary(vb) || mesh_.is_boundary(va)) return -1.0;
     if (rank_of(vb) > rank_of(va)) return -1.0;
@@ -250,7 +433,7 @@ class AngleRepair {
       after.add(x[0], x[1], x[2], sin_bound_);
       offset = std::min(offset, (quality_detail::closest_point_on_triangle(pb, x[0], x[1], x[2]) - pb).norm());
     }
-    if (!(offset <= max_offset_) || !is_better(before, after) || after.n_small >= before.n_small) return -1.0;
+    if (!(offset <= max_offset_) || (require_better && (!is_better(before, after) || after.n_small >= before.n_small))) return -1.0;
     return after.min_sine;
   }
 
@@ -344,6 +527,8 @@ class AngleRepair {
     Vec b, c, n;
   };
   mutable std::vector<RingTriangle> ring_;
+  // Per vertex of mesh_, its index in repair_in_two_steps's copy (-1 between calls).
+  std::vector<int> local_of_;
 };
 
 }  // namespace
@@ -388,6 +573,7 @@ AngleRepairResult repair_small_angles(const SurfaceMesh& surface, const StitchOp
       out.n_flips = repair.n_flips_;
       out.n_collapses = repair.n_collapses_;
       out.n_moves = repair.n_moves_;
+      out.n_two_steps = repair.n_two_steps_;
       return out;
     }
     // The nodes of the crossing faces are frozen and the repair made again from the start.

@@ -77,10 +77,12 @@ struct StitchOptions {
   //! (>= 0; 0 switches it off): each triangle with no feature node and a smallest angle
   //! below kAwayFromFeaturesAngleBoundDeg, worst first, gets the best flip or collapse of one
   //! of its edges (the survivor stays) that raises the smallest angle of the triangles it
-  //! touches, leaves no more of them below the bound and no more obtuse ones; changes whose
+  //! touches, leaves no more of them below the bound and no more obtuse ones (else the best
+  //! such pair of changes, the first not better by itself); changes whose
   //! triangles cross others are given up. Only when the mesh has no crossing left.
-  //! docs/stitch.md "Small angles left after the optimisation". Default 2.
-  int angle_repair_rounds = 2;
+  //! docs/stitch.md "Small angles left after the optimisation". Default 4 (the sweeps stop
+  //! early when one changes nothing; the liver needs 3).
+  int angle_repair_rounds = 4;
   //! Triangles whose smallest angle (deg) is below this get their shortest edge collapsed
   //! before the optimisation, when the merge is allowed and improves the worst triangle
   //! around it (feature nodes never moved, and removed only into a feature corner less
@@ -168,6 +170,9 @@ struct StitchReport {
   std::size_t n_angle_flips = 0;
   std::size_t n_angle_collapses = 0;
   std::size_t n_angle_moves = 0;
+  //! Pairs of changes of the small-angle repair where no single change was better (each
+  //! change also counted above; docs/stitch.md "Two-step changes").
+  std::size_t n_angle_two_steps = 0;
   std::size_t n_angle_repairs_undone = 0;
   double alpha_mean_before = 0.0;      //!< mean alpha after assembly, before optimisation
   double alpha_min_before = 0.0;       //!< min alpha after assembly, before optimisation

@@ -98,6 +98,7 @@ inline bool may_have_angle_below(const Eigen::Vector3d& a, const Eigen::Vector3d
 //! What repair_small_angles() did.
 struct AngleRepairResult {
   std::size_t n_flips = 0, n_collapses = 0, n_moves = 0;
+  std::size_t n_two_steps = 0;  //!< pairs of changes (each also counted above)
   std::size_t n_undone = 0;  //!< changes given up because their triangles crossed others
 };
 
@@ -109,7 +110,8 @@ struct AngleRepairResult {
 //! inner < border < corner; link condition; no duplicate face; no normal turned by more than
 //! acos(min_normal_dot); the removed node within half an input mean edge of the new
 //! triangles), when the triangles it touches then have a larger smallest angle, no more of
-//! them below the bound (a collapse: fewer) and no more obtuse ones. When
+//! them below the bound (a collapse: fewer) and no more obtuse ones; where no single change
+//! is better, the best pair of changes there that is (docs/stitch.md "two-step changes"). When
 //! check_self_intersections, the faces around the changes are checked exactly; if some
 //! cross, the mesh goes back and the repair is made again with the nodes of the crossing
 //! faces left alone (4 rounds). Collapses are garbage-collected (face_patch and vertex_node

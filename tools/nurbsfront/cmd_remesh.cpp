@@ -273,7 +273,7 @@ void add_remesh_command(CLI::App& app) {
                   "0 = off; docs/stitch.md \"Obtuse splits\")");
   cmd->add_option("--angle-repair-rounds", args->angle_repair_rounds,
                   "Sweeps of the stitch's small-angle repair (flips and collapses at the triangles below 25 deg away "
-                  "from features; default 2; 0 = off; docs/stitch.md \"Small angles left after the optimisation\")");
+                  "from features; default 4; 0 = off; docs/stitch.md \"Small angles left after the optimisation\")");
   cmd->add_option("--corner-angle", args->corner_angle,
                   "Patch corners wider than this (deg, in the surface metric) get a node on their bisector "
                   "instead of one closing triangle (in (0, 180]; default 89.5; 180 = off; docs/front2d.md "
