@@ -83,6 +83,11 @@ inline double smallest_angle_sine(const Eigen::Vector3d& a, const Eigen::Vector3
   return product > 0.0 ? (b - a).cross(c - a).norm() / product : 0.0;
 }
 
+//! True when triangle (a, b, c) has an angle above 90 deg.
+inline bool triangle_is_obtuse(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
+  return (b - a).dot(c - a) < 0.0 || (a - b).dot(c - b) < 0.0 || (a - c).dot(b - c) < 0.0;
+}
+
 //! False only when triangle (a, b, c) surely has no angle below the angle whose sine is
 //! sin_bound (an angle below 60 deg): the sine of its smallest angle (twice the area over the
 //! product of the two longest edges, off by a few ulps of 1 at most, slivers included)
@@ -123,6 +128,18 @@ AngleRepairResult repair_small_angles(const SurfaceMesh& surface, const StitchOp
 //! an edge of length reference_edge has (0: none). Returns the number of nodes moved.
 std::size_t compensate_chords(TriMesh& mesh, const std::vector<int>& vertex_node, const std::vector<std::uint8_t>& is_feature,
                               double strength, double reference_edge);
+
+//! StitchOptions::volume_compensation: every triangle's volume between it and its patch's
+//! input faces, measured along the patch axis (patches of fewer than 100 input faces with
+//! PatchSurface::input_heights; others add nothing), is shared by its corners that are no
+//! feature node nor on the boundary (a triangle with none gives it to its patch's such
+//! nodes, by area); each such node moves along its normal to take its share back, times
+//! strength, at most 0.1 of its root-mean-square edge, half that or not at all where the
+//! move would add an obtuse triangle around it or an angle below min(the old smallest,
+//! kAwayFromFeaturesAngleBoundDeg). Returns the number of nodes moved.
+std::size_t compensate_volume(const SurfaceMesh& surface, TriMesh& mesh, const std::vector<int>& face_patch,
+                              const std::vector<int>& vertex_node, const std::vector<std::uint8_t>& is_feature,
+                              double strength);
 
 //! alpha of every face, in face order.
 std::vector<double> face_alphas(const TriMesh& mesh);
