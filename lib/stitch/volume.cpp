@@ -110,8 +110,9 @@ std::size_t compensate_volume(const SurfaceMesh& surface, TriMesh& mesh, const s
   }
   for (std::size_t f = 0; f < corners.size(); ++f) {
     const int patch = face_patch[f];
-    if (patch < 0 || static_cast<std::size_t>(patch) >= n_patches || pool[static_cast<std::size_t>(patch)] == 0.0) continue;
+    if (patch < 0 || static_cast<std::size_t>(patch) >= n_patches) continue;
     const auto p = static_cast<std::size_t>(patch);
+    if (pool[p] == 0.0 || !(pool_area[p] > 0.0)) continue;
     for (const std::size_t v : corners[f]) {
       if (fixed[v] == 0) share[v] += pool[p] * (face_area[f] / 3.0) / pool_area[p];
     }
@@ -138,6 +139,7 @@ std::size_t compensate_volume(const SurfaceMesh& surface, TriMesh& mesh, const s
     if (fixed[i] != 0 || !(area[i] > 0.0) || share[i] == 0.0) continue;
     const double limit = kMaxMoveEdges * std::sqrt(edge_sq[i] / (6.0 * area[i]));
     const double d = std::clamp(-strength * share[i] / area[i], -limit, limit);
+    if (!std::isfinite(d)) continue;
     const auto v = mesh.vertex_handle(static_cast<unsigned>(i));
     ring.clear();
     for (auto f : mesh.vf_range(v)) ring.push_back(static_cast<std::size_t>(f.idx()));
