@@ -553,8 +553,9 @@ StitchResult stitch_impl(const SurfaceMesh& surface, const TriMesh* input, const
     stitch_detail::optimise(surface, options, feature, result, report);
     report.n_chord_compensation_moves = stitch_detail::compensate_chords(mesh, result.vertex_node, feature,
                                                                          options.chord_compensation, surface.input_mean_edge);
-    report.n_volume_compensation_moves = stitch_detail::compensate_volume(surface, mesh, result.face_patch, result.vertex_node,
-                                                                          feature, options.volume_compensation);
+    report.n_volume_compensation_moves = stitch_detail::compensate_volume(surface, input, mesh, result.face_patch,
+                                                                          result.vertex_node, feature,
+                                                                          options.volume_compensation);
   }
   report.seconds_optimise = watch.seconds();
 

@@ -60,8 +60,8 @@ struct StitchOptions {
   //! feature node nor on the input's boundary along their normals (a triangle between border
   //! nodes only: the free nodes of its patch), times this factor, at most 0.1 of their
   //! edges; only in patches of fewer than 100 input faces (larger ones are the chord
-  //! compensation's), and no move adds an obtuse triangle or an angle below min(the old
-  //! smallest, 25 deg). In [0, 2]; 0 switches it off. Default 1.
+  //! compensation's), not on marching-cubes surfaces, and no move adds an obtuse triangle
+  //! or an angle below min(the old smallest, 25 deg). In [0, 2]; 0 switches it off. Default 1.
   double volume_compensation = 1.0;
   //! Sweeps of the obtuse repair after the optimisation passes (>= 0; 0 switches it off):
   //! flips that leave fewer obtuse angles in their two triangles, then each movable node of

@@ -136,10 +136,11 @@ std::size_t compensate_chords(TriMesh& mesh, const std::vector<int>& vertex_node
 //! nodes, by area); each such node moves along its normal to take its share back, times
 //! strength, at most 0.1 of its root-mean-square edge, half that or not at all where the
 //! move would add an obtuse triangle around it or an angle below min(the old smallest,
-//! kAwayFromFeaturesAngleBoundDeg). Returns the number of nodes moved.
-std::size_t compensate_volume(const SurfaceMesh& surface, TriMesh& mesh, const std::vector<int>& face_patch,
-                              const std::vector<int>& vertex_node, const std::vector<std::uint8_t>& is_feature,
-                              double strength);
+//! kAwayFromFeaturesAngleBoundDeg). Nothing when input (may be null) is taken for a
+//! marching-cubes surface (its vertices on lattice edges). Returns the number of nodes moved.
+std::size_t compensate_volume(const SurfaceMesh& surface, const TriMesh* input, TriMesh& mesh,
+                              const std::vector<int>& face_patch, const std::vector<int>& vertex_node,
+                              const std::vector<std::uint8_t>& is_feature, double strength);
 
 //! alpha of every face, in face order.
 std::vector<double> face_alphas(const TriMesh& mesh);
