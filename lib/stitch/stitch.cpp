@@ -30,6 +30,7 @@ void StitchOptions::validate() const {
   if (!(flip_gain >= 0.0) || !std::isfinite(flip_gain)) fail("flip_gain must be finite and >= 0");
   if (!(smoothing_relaxation > 0.0 && smoothing_relaxation <= 1.0)) fail("smoothing_relaxation must be in (0, 1]");
   if (!(chord_compensation >= 0.0 && chord_compensation <= 2.0)) fail("chord_compensation must be in [0, 2]");
+  if (!(volume_compensation >= 0.0 && volume_compensation <= 2.0)) fail("volume_compensation must be in [0, 2]");
   if (!(min_normal_dot >= -1.0 && min_normal_dot < 1.0)) fail("min_normal_dot must be in [-1, 1)");
   if (!(alpha_floor >= 0.0 && alpha_floor <= 1.0)) fail("alpha_floor must be in [0, 1]");
   if (!(angle_floor_deg >= 0.0 && angle_floor_deg < 60.0)) fail("angle_floor_deg must be in [0, 60)");
@@ -548,7 +549,7 @@ StitchResult stitch_impl(const SurfaceMesh& surface, const TriMesh* input, const
   // 2. Cross-border optimisation.
   watch.restart();
   const bool optimise = mesh.n_faces() > 0 && (options.optimisation_passes > 0 || options.obtuse_repair_rounds > 0 ||
-                                                options.chord_compensation > 0.0);
+                                                options.chord_compensation > 0.0 || options.volume_compensation > 0.0);
   TriMesh assembled;
   std::vector<int> assembled_patch;
   if (optimise) {
@@ -557,7 +558,11 @@ StitchResult stitch_impl(const SurfaceMesh& surface, const TriMesh* input, const
     stitch_detail::optimise(surface, options, feature, result, report);
     report.n_chord_compensation_moves = stitch_detail::compensate_chords(mesh, result.vertex_node, feature,
                                                                          options.chord_compensation, surface.input_mean_edge);
-    if (report.n_chord_compensation_moves > 0) stitch_detail::hold_detail_nodes(mesh, surface, result.vertex_node);
+    report.n_volume_compensation_moves = stitch_detail::compensate_volume(surface, input, mesh, result.face_patch,
+                                                                          result.vertex_node, feature,
+                                                                          options.volume_compensation);
+    if (report.n_chord_compensation_moves > 0 || report.n_volume_compensation_moves > 0)
+      stitch_detail::hold_detail_nodes(mesh, surface, result.vertex_node);
   }
   report.seconds_optimise = watch.seconds();
 

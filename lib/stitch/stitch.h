@@ -56,6 +56,15 @@ struct StitchOptions {
   //! patch's node bound of the input (PatchSurface::max_offset, along the patch axis).
   //! In [0, 2]; 0 switches it off. Default 1.
   double chord_compensation = 1.0;
+  //! Volume compensation after the chord compensation (docs/stitch.md, "Volume: measured
+  //! along the patch axis"): the volume between each triangle and its patch's input faces,
+  //! measured along the patch axis, is taken back by moving the triangle's nodes that are no
+  //! feature node nor on the input's boundary along their normals (a triangle between border
+  //! nodes only: the free nodes of its patch), times this factor, at most 0.1 of their
+  //! edges; only in patches of fewer than 100 input faces (larger ones are the chord
+  //! compensation's), not on marching-cubes surfaces, and no move adds an obtuse triangle
+  //! or an angle below min(the old smallest, 25 deg). In [0, 2]; 0 switches it off. Default 1.
+  double volume_compensation = 1.0;
   //! Sweeps of the obtuse repair after the optimisation passes (>= 0; 0 switches it off):
   //! flips that leave fewer obtuse angles in their two triangles, then each movable node of
   //! an obtuse triangle moves towards the ideal apex of one of its obtuse triangles when
@@ -142,6 +151,7 @@ struct StitchReport {
   std::size_t n_smoothing_moves = 0;   //!< node moves accepted
   std::size_t n_smoothing_rejected = 0;  //!< node moves refused by the quality/normal bounds
   std::size_t n_chord_compensation_moves = 0;  //!< nodes moved by the chord compensation
+  std::size_t n_volume_compensation_moves = 0;  //!< nodes moved by the volume compensation
   //! Edges split by the obtuse splits (one new vertex each; StitchOptions::obtuse_split_rounds),
   //! and the splits given up because their triangles crossed others.
   std::size_t n_obtuse_splits = 0;

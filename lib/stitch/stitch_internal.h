@@ -83,6 +83,11 @@ inline double smallest_angle_sine(const Eigen::Vector3d& a, const Eigen::Vector3
   return product > 0.0 ? (b - a).cross(c - a).norm() / product : 0.0;
 }
 
+//! True when triangle (a, b, c) has an angle above 90 deg.
+inline bool triangle_is_obtuse(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
+  return (b - a).dot(c - a) < 0.0 || (a - b).dot(c - b) < 0.0 || (a - c).dot(b - c) < 0.0;
+}
+
 //! False only when triangle (a, b, c) surely has no angle below the angle whose sine is
 //! sin_bound (an angle below 60 deg): the sine of its smallest angle (twice the area over the
 //! product of the two longest edges, off by a few ulps of 1 at most, slivers included)
@@ -131,6 +136,19 @@ std::size_t compensate_chords(TriMesh& mesh, const std::vector<int>& vertex_node
 //! patch axis, keeping its other two coordinates (after the chord compensation, which moves
 //! nodes along their normals). Returns the number of vertices moved.
 std::size_t hold_detail_nodes(TriMesh& mesh, const SurfaceMesh& surface, const std::vector<int>& vertex_node);
+
+//! StitchOptions::volume_compensation: every triangle's volume between it and its patch's
+//! input faces, measured along the patch axis (patches of fewer than 100 input faces with
+//! PatchSurface::input_heights; others add nothing), is shared by its corners that are no
+//! feature node nor on the boundary (a triangle with none gives it to its patch's such
+//! nodes, by area); each such node moves along its normal to take its share back, times
+//! strength, at most 0.1 of its root-mean-square edge, half that or not at all where the
+//! move would add an obtuse triangle around it or an angle below min(the old smallest,
+//! kAwayFromFeaturesAngleBoundDeg). Nothing when input (may be null) is taken for a
+//! marching-cubes surface (its vertices on lattice edges). Returns the number of nodes moved.
+std::size_t compensate_volume(const SurfaceMesh& surface, const TriMesh* input, TriMesh& mesh,
+                              const std::vector<int>& face_patch, const std::vector<int>& vertex_node,
+                              const std::vector<std::uint8_t>& is_feature, double strength);
 
 //! alpha of every face, in face order.
 std::vector<double> face_alphas(const TriMesh& mesh);

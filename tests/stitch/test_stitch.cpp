@@ -491,15 +491,20 @@ TEST(Stitch, ObtuseRepairAndChordCompensationRunWithoutTheSweeps) {
   EXPECT_GT(r.report.n_flips + r.report.n_smoothing_moves, 0U);  // the obtuse repair's
   options.obtuse_repair_rounds = 0;
   options.chord_compensation = 0.0;
+  options.volume_compensation = 0.0;
   options.obtuse_split_rounds = 0;
   const StitchResult still = stitch(surface, input, options);
   EXPECT_TRUE(still.report.ok()) << joined(still.report.errors);
   EXPECT_EQ(still.report.n_chord_compensation_moves, 0U);
+  EXPECT_EQ(still.report.n_volume_compensation_moves, 0U);
   EXPECT_EQ(still.report.n_flips + still.report.n_smoothing_moves, 0U);
   for (const double bad : {-0.5, 2.5, std::numeric_limits<double>::quiet_NaN()}) {
     StitchOptions o;
     o.chord_compensation = bad;
     EXPECT_THROW((void)stitch(surface, input, o), InvalidInput) << bad;
+    StitchOptions v;
+    v.volume_compensation = bad;
+    EXPECT_THROW((void)stitch(surface, input, v), InvalidInput) << bad;
   }
 }
 

@@ -69,6 +69,7 @@ struct RemeshArgs {
   std::optional<double> unsmoothed_crease_angle;
   std::optional<double> tiny_curve_merge;
   std::optional<double> chord_compensation;
+  std::optional<double> volume_compensation;
   bool smoothed_boundary = false;
   std::optional<unsigned> threads;
   std::string report;
@@ -137,6 +138,7 @@ void run_remesh(RemeshArgs& args) {
   if (args.smoothed_boundary) options.surfmesh.unsmoothed_boundary_curves = false;
   if (args.tiny_curve_merge) options.surfmesh.tiny_curve_merge_size = *args.tiny_curve_merge;
   if (args.chord_compensation) options.stitch.chord_compensation = *args.chord_compensation;
+  if (args.volume_compensation) options.stitch.volume_compensation = *args.volume_compensation;
   if (args.threads) options.set_threads(*args.threads);
   if (!args.cell_grid.empty()) {
     if (!args.scene.empty()) throw InvalidInput("remesh: --cell-grid applies to an input file (an occupancy scene sets it itself)");
@@ -305,6 +307,9 @@ void add_remesh_command(CLI::App& app) {
   cmd->add_option("--chord-compensation", args->chord_compensation,
                   "Move the nodes along their normals by this times the chords' mean gap to the surface, so the "
                   "triangles do not lose volume over convex parts (in [0, 2]; default 1; 0 = off; docs/stitch.md)");
+  cmd->add_option("--volume-compensation", args->volume_compensation,
+                  "Then move them by this times the volume between each triangle and its patch's input faces, "
+                  "measured along the patch axis (in [0, 2]; default 1; 0 = off; docs/stitch.md)");
   cmd->add_option("--tiny-curve-merge", args->tiny_curve_merge,
                   "Merge the two corners of a one-edge border curve shorter than this many target edges "
                   "(default 0.3; 0 = never; not with a cell grid; docs/surfmesh.md)");
