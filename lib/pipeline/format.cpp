@@ -47,6 +47,7 @@ std::string to_json(const RemeshReport& r) {
   counts.count("nodes", r.n_nodes).count("triangles", r.n_triangles).count("failed_patches", r.n_failed_patches);
   counts.count("crossing_repairs", r.n_crossing_repairs);
   counts.count("narrow_patches_merged", r.n_narrow_merged);
+  counts.count("tiny_patches_merged", r.n_tiny_merged);
   counts.count("fin_rim_curves", r.n_fin_rim_curves);
   json::Object seconds;
   seconds.num("segment", r.seconds_segment).num("surfmesh", r.seconds_surfmesh).num("stitch", r.seconds_stitch);

@@ -34,6 +34,9 @@ void RemeshOptions::validate() const {
   if (crossing_repair_rounds < 0) throw InvalidInput("remesh: crossing_repair_rounds must be >= 0");
   if (!(std::isfinite(narrow_patch_merge) && narrow_patch_merge >= 0.0))
     throw InvalidInput("remesh: narrow_patch_merge must be finite and >= 0");
+  if (tiny_patch_faces < 0) throw InvalidInput("remesh: tiny_patch_faces must be >= 0");
+  if (!(tiny_patch_max_dihedral_deg >= 0.0 && tiny_patch_max_dihedral_deg <= 180.0))
+    throw InvalidInput("remesh: tiny_patch_max_dihedral_deg must be in [0, 180]");
 }
 
 const char* to_string(PatchStatus status) {
@@ -46,6 +49,19 @@ const char* to_string(PatchStatus status) {
 }
 
 namespace {
+
+// RemeshOptions::tiny_patch_faces: the tiny patches behind marginal creases join a neighbour
+// (segment's merge into neighbours, across creases, slope and projection checks kept).
+// Returns the number of patches merged.
+std::size_t merge_tiny_patches(segment_detail::Splitter& splitter, const TriMesh& input, Segmentation& segmentation,
+                               const RemeshOptions& options) {
+  const std::vector<int> tiny = tiny_patches(input, segmentation, static_cast<std::size_t>(options.tiny_patch_faces),
+                                             options.tiny_patch_max_dihedral_deg);
+  if (tiny.empty()) return 0;
+  const std::size_t n_before = segmentation.patches.size();
+  segmentation = segment_detail::merge_into_neighbours(splitter, segmentation, tiny);
+  return n_before - segmentation.patches.size();
+}
 
 // Input checks before any work: what segment() and mesh_surface() assume.
 void check_input(const TriMesh& input) {
@@ -173,6 +189,10 @@ RemeshResult remesh(const TriMesh& input, const RemeshOptions& options) {
       report.n_narrow_merged = n_before - first_segmentation.patches.size();
     }
   }
+  // Tiny patches behind marginal creases (a coarse CAD-like mesh's bends) join a neighbour.
+  if (options.tiny_patch_faces > 0 && !surfmesh_options.cell_grid.enabled &&
+      !surfmesh_detail::marching_cubes_lattice(input_lattice()))
+    report.n_tiny_merged = merge_tiny_patches(*splitter, input, first_segmentation, options);
   report.seconds_segment = watch.seconds();
 
   watch.restart();

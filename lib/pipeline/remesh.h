@@ -44,6 +44,18 @@ struct RemeshOptions {
   //! patches of a few triangles, most of them obtuse (docs/segment.md "Narrow patches").
   //! 0 = off. Default 0.5.
   double narrow_patch_merge = 0.5;
+  //! On inputs not taken for marching cubes (nor with a cell grid), patches of at most this
+  //! many input faces whose every border edge with another patch bends by at most
+  //! tiny_patch_max_dihedral_deg (segment's tiny_patches) join a neighbour after segmentation,
+  //! across those marginal creases, where the union meets the slope bounds and projects
+  //! simply: a coarse mesh's bends (femur) otherwise cut patches of 1-8 faces, meshed with a
+  //! few triangles, half of them obtuse (docs/segment.md "Tiny patches behind marginal
+  //! creases"). 0 = off. Default 8.
+  int tiny_patch_faces = 8;
+  //! The largest bend (deg, between face normals) of a tiny patch's border for that merge:
+  //! in [0, 180]. Default 120 (the crease angle + 40; femur 5.48% obtuse at 100, 4.90% at
+  //! 120, 4.81% at 140).
+  double tiny_patch_max_dihedral_deg = 120.0;
   //! Measure the two-sided distance of the output to the input (Hausdorff, mean,
   //! relative volume change) into the report. Default true.
   bool compute_distances = true;
@@ -81,6 +93,8 @@ struct RemeshReport {
   std::size_t n_crossing_repairs = 0;
   //! Narrow patches joined to a neighbour after segmentation (RemeshOptions::narrow_patch_merge).
   std::size_t n_narrow_merged = 0;
+  //! Tiny patches joined to a neighbour after segmentation (RemeshOptions::tiny_patch_faces).
+  std::size_t n_tiny_merged = 0;
   //! Crease curves along fins' narrow strips that stitch did not treat as features
   //! (SurfaceMesh::n_fin_rim_curves, SurfMeshOptions::fin_rim_width).
   std::size_t n_fin_rim_curves = 0;

@@ -1720,6 +1720,54 @@ std::vector<int> narrow_patches(const TriMesh& mesh, const Segmentation& segment
   return result;
 }
 
+std::vector<int> tiny_patches(const TriMesh& mesh, const Segmentation& segmentation, std::size_t max_faces,
+                              double max_dihedral_deg) {
+  if (!std::isfinite(max_dihedral_deg)) throw InvalidInput("tiny_patches: max_dihedral_deg must be finite");
+  if (segmentation.face_patch.size() != mesh.n_faces())
+    throw InvalidInput("tiny_patches: the segmentation is not one of this mesh");
+  const std::size_t n_patches = segmentation.patches.size();
+  const auto is_tiny = [&](int p) {
+    const std::size_t n = segmentation.patches[static_cast<std::size_t>(p)].faces.size();
+    return n >= 1 && n <= max_faces;
+  };
+  // Per patch: every shared edge bends by at most the bound; it touches a larger patch.
+  std::vector<std::uint8_t> marginal(n_patches, 1);
+  std::vector<std::uint8_t> large_neighbour(n_patches, 0);
+  std::vector<int> first_neighbour(n_patches, -1);
+  std::vector<std::uint8_t> two_neighbours(n_patches, 0);
+  const double cos_max = std::cos(max_dihedral_deg * std::numbers::pi / 180.0);
+  for (const auto e : mesh.edges()) {
+    if (e.is_boundary()) continue;
+    const auto f0 = e.h0().face(), f1 = e.h1().face();
+    const int a = segmentation.face_patch[static_cast<std::size_t>(f0.idx())];
+    const int b = segmentation.face_patch[static_cast<std::size_t>(f1.idx())];
+    if (a < 0 || b < 0 || static_cast<std::size_t>(a) >= n_patches || static_cast<std::size_t>(b) >= n_patches)
+      throw InvalidInput("tiny_patches: a face has no valid patch");
+    if (a == b || !(is_tiny(a) || is_tiny(b))) continue;
+    const auto n0 = mesh.calc_face_normal(f0), n1 = mesh.calc_face_normal(f1);
+    // A degenerate face (zero normal) bends by nothing we can measure: not marginal.
+    const bool bends_little = n0.sqrnorm() > 0.0 && n1.sqrnorm() > 0.0 && OpenMesh::dot(n0, n1) >= cos_max;
+    for (const auto& [p, q] : {std::pair{a, b}, std::pair{b, a}}) {
+      if (!bends_little) marginal[static_cast<std::size_t>(p)] = 0;
+      if (!is_tiny(q)) large_neighbour[static_cast<std::size_t>(p)] = 1;
+      int& first = first_neighbour[static_cast<std::size_t>(p)];
+      if (first < 0) first = q;
+      else if (first != q) two_neighbours[static_cast<std::size_t>(p)] = 1;
+    }
+  }
+  std::vector<std::pair<std::size_t, int>> tiny;
+  for (std::size_t p = 0; p < n_patches; ++p) {
+    const int id = static_cast<int>(p);
+    if (is_tiny(id) && marginal[p] != 0 && large_neighbour[p] != 0 && two_neighbours[p] != 0)
+      tiny.emplace_back(segmentation.patches[p].faces.size(), id);
+  }
+  std::sort(tiny.begin(), tiny.end());
+  std::vector<int> result;
+  result.reserve(tiny.size());
+  for (const auto& entry : tiny) result.push_back(entry.second);
+  return result;
+}
+
 Segmentation split_patches(const TriMesh& mesh, const Segmentation& segmentation, const std::vector<int>& which,
                            const SegmentOptions& options) {
   return PatchSplitter(mesh, options).split(segmentation, which);

@@ -262,6 +262,19 @@ struct Segmentation {
 //! \throw InvalidInput for a segmentation of another mesh or a max_width that is not finite.
 [[nodiscard]] std::vector<int> narrow_patches(const TriMesh& mesh, const Segmentation& segmentation, double max_width);
 
+//! The patches of at most max_faces faces (and at least one) that the pipeline merges on
+//! CAD-like meshes (RemeshOptions::tiny_patch_faces; docs/segment.md "Tiny patches behind
+//! marginal creases"): every edge they share with another patch bends by at most
+//! max_dihedral_deg (angle between the two faces' normals; their creases are marginal, as a
+//! coarse bone's bends are, not a machined edge's), and they share an edge with a patch of more
+//! than max_faces faces (a small closed shape of tiny patches stays whole) and with at least
+//! two patches (one that a single patch surrounds is an island: segment()'s step 7b decides
+//! those, and on fandisk such a face holds the end of a 90 deg crease). Smallest first (ties:
+//! lower id). Edges on the input's boundary do not count.
+//! \throw InvalidInput for a segmentation of another mesh or a max_dihedral_deg that is not finite.
+[[nodiscard]] std::vector<int> tiny_patches(const TriMesh& mesh, const Segmentation& segmentation,
+                                            std::size_t max_faces, double max_dihedral_deg);
+
 //! split_patches() in rounds on one mesh (surfmesh's split_unfitted_patches): the face
 //! graph, creases and normals are computed once (at the first split), and when a round is
 //! given the previous round's result, only the parts of the patches it splits go through

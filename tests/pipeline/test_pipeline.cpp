@@ -731,6 +731,64 @@ TEST(Pipeline, NarrowFinPatchesJoinANeighbour) {
   EXPECT_THROW((void)remesh(mesh, options), InvalidInput);
 }
 
+// A 12 x 12 grid of side 1 (turned, off any lattice) with its middle vertex raised by 0.05:
+// with a 25 deg crease angle each of the six faces around it is a patch of one face, bounded
+// by creases (a coarse mesh's bends, as on femur.off).
+TriMesh grid_with_bump() {
+  constexpr int n = 12;
+  TriangleSoup soup;
+  for (int j = 0; j <= n; ++j)
+    for (int i = 0; i <= n; ++i) {
+      const double x = i / double(n), y = j / double(n), z = (i == n / 2 && j == n / 2) ? 0.6 / n : 0.0;
+      soup.points.emplace_back(std::cos(0.5) * x - std::sin(0.5) * y + 0.123, std::sin(0.5) * x + std::cos(0.5) * y + 0.0456, z);
+    }
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      const auto a = static_cast<unsigned>(j * (n + 1) + i);
+      soup.triangles.push_back({a, a + 1, a + n + 2});
+      soup.triangles.push_back({a, a + n + 2, a + n + 1});
+    }
+  return to_trimesh(soup);
+}
+
+TEST(Pipeline, TinyPatchesBehindMarginalCreasesJoinANeighbour) {
+  const TriMesh mesh = grid_with_bump();
+  RemeshOptions options = fast_options();
+  options.compute_distances = false;
+  options.segment.crease_angle_deg = 25.0;
+  const Segmentation seg = segment(mesh, options.segment);
+  ASSERT_EQ(seg.patches.size(), 7u);
+  ASSERT_EQ(tiny_patches(mesh, seg, 8, options.tiny_patch_max_dihedral_deg).size(), 6u);
+
+  const RemeshResult with = remesh(mesh, options);
+  options.tiny_patch_faces = 0;
+  const RemeshResult without = remesh(mesh, options);
+  EXPECT_EQ(without.report.n_tiny_merged, 0u);
+  EXPECT_EQ(without.report.n_patches, 7u);
+  const RemeshReport& rep = with.report;
+  EXPECT_TRUE(rep.ok()) << errors_of(rep);
+  EXPECT_EQ(rep.n_tiny_merged, 6u);
+  EXPECT_EQ(rep.n_patches, 1u);
+  const auto& t = rep.output.topology;
+  EXPECT_TRUE(t.is_manifold);
+  EXPECT_EQ(t.n_boundary_loops, 1u);
+  EXPECT_EQ(t.euler_characteristic, 1);
+  // The bump's one-face patches no longer leave obtuse triangles.
+  EXPECT_EQ(rep.output.quality.obtuse_fraction, 0.0);
+  EXPECT_LE(rep.output.quality.obtuse_fraction, without.report.output.quality.obtuse_fraction);
+  EXPECT_GT(rep.output.quality.alpha_mean, without.report.output.quality.alpha_mean);
+
+  // Below the creases' bends (all above the 25 deg crease angle) nothing qualifies.
+  options.tiny_patch_faces = 8;
+  options.tiny_patch_max_dihedral_deg = 20.0;
+  EXPECT_EQ(remesh(mesh, options).report.n_tiny_merged, 0u);
+  options.tiny_patch_faces = -1;
+  EXPECT_THROW((void)remesh(mesh, options), InvalidInput);
+  options.tiny_patch_faces = 8;
+  options.tiny_patch_max_dihedral_deg = 181.0;
+  EXPECT_THROW((void)remesh(mesh, options), InvalidInput);
+}
+
 // Issue 5, fin rims (docs/stitch.md "Fin rims"): a one-voxel fin of a CT-like image has a rim
 // strip narrower than one target edge between two creases; locked, its triangles stay obtuse.
 // With SurfMeshOptions::fin_rim_width those curves are no features for stitch: fewer obtuse

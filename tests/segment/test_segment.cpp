@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <set>
 #include <string>
@@ -679,6 +680,52 @@ TEST(NarrowPatches, StripWidthIsTwiceAreaOverBorder) {
   EXPECT_TRUE(narrow_patches(cube, sides, 10.0).empty());
   EXPECT_THROW((void)narrow_patches(mesh, seg, std::nan("")), InvalidInput);
   EXPECT_THROW((void)narrow_patches(cube, seg, 1.0), InvalidInput);  // another mesh's segmentation
+}
+
+// A 4 x 4 grid of side 1 folded by `fold_deg` along x = 0.75; patches: 1 = the two faces of
+// the cell [0.25, 0.5] x [0.25, 0.5], 2 = those of [0.5, 0.75] x [0.25, 0.5] (its right edge on
+// the fold), 3 = one face of the cell [0.25, 0.5] x [0.75, 1] (only patch 0 around it), 0 = the rest.
+TEST(TinyPatches, SmallPatchesBehindMarginalBendsOnly) {
+  const double fold = 30.0 * std::numbers::pi / 180.0;
+  TriangleSoup soup = test::grid_patch(4, 4);
+  for (auto& p : soup.points) {
+    if (p.x() <= 0.75) continue;
+    const double d = p.x() - 0.75;
+    p.x() = 0.75 + d * std::cos(fold);
+    p.z() = d * std::sin(fold);
+  }
+  const TriMesh mesh = to_trimesh(soup);
+  Segmentation seg;
+  seg.patches.resize(4);
+  bool island_taken = false;
+  for (const auto f : mesh.faces()) {
+    const auto c = mesh.calc_face_centroid(f);
+    int p = 0;
+    if (c[1] > 0.25 && c[1] < 0.5 && c[0] > 0.25 && c[0] < 0.5) p = 1;
+    if (c[1] > 0.25 && c[1] < 0.5 && c[0] > 0.5 && c[0] < 0.75) p = 2;
+    if (c[1] > 0.75 && c[0] > 0.25 && c[0] < 0.5 && !island_taken) {
+      p = 3;
+      island_taken = true;
+    }
+    seg.face_patch.push_back(p);
+    seg.patches[static_cast<std::size_t>(p)].faces.push_back(f.idx());
+  }
+  ASSERT_EQ(seg.patches[1].faces.size(), 2u);
+  ASSERT_EQ(seg.patches[2].faces.size(), 2u);
+  ASSERT_EQ(seg.patches[3].faces.size(), 1u);
+  // Patch 2 borders the 30 deg fold: listed from a 30 deg bound on (1e-6 for rounding).
+  EXPECT_EQ(tiny_patches(mesh, seg, 2, 30.0 + 1e-6), (std::vector<int>{1, 2}));
+  EXPECT_EQ(tiny_patches(mesh, seg, 2, 30.0 - 1e-6), std::vector<int>{1});
+  EXPECT_EQ(tiny_patches(mesh, seg, 2, 0.0), std::vector<int>{1});  // a flat border bends by 0
+  // Patch 3 (one face, surrounded by patch 0) is an island: never listed.
+  EXPECT_TRUE(tiny_patches(mesh, seg, 1, 180.0).empty());
+  // Every patch tiny: none has a larger neighbour, none is listed.
+  EXPECT_TRUE(tiny_patches(mesh, seg, 100, 180.0).empty());
+  EXPECT_TRUE(tiny_patches(mesh, seg, 0, 180.0).empty());
+  EXPECT_THROW((void)tiny_patches(mesh, seg, 2, std::numeric_limits<double>::quiet_NaN()), InvalidInput);
+  Segmentation other = seg;
+  other.face_patch.pop_back();
+  EXPECT_THROW((void)tiny_patches(mesh, other, 2, 90.0), InvalidInput);
 }
 
 // The pipeline's other remedy against crossings: segment_detail::bisect_patches cuts a patch

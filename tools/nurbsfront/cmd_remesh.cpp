@@ -50,6 +50,8 @@ struct RemeshArgs {
   bool feature_size_everywhere = false;
   std::optional<int> crossing_repair_rounds;
   std::optional<double> narrow_merge;
+  std::optional<int> tiny_merge;
+  std::optional<double> tiny_merge_angle;
   std::optional<double> fin_rim_width;
   std::optional<double> fin_rim_angle;
   std::optional<double> fin_rim_gap;
@@ -118,6 +120,8 @@ void run_remesh(RemeshArgs& args) {
   options.surfmesh.sizing.feature_size_everywhere = args.feature_size_everywhere;
   if (args.crossing_repair_rounds) options.crossing_repair_rounds = *args.crossing_repair_rounds;
   if (args.narrow_merge) options.narrow_patch_merge = *args.narrow_merge;
+  if (args.tiny_merge) options.tiny_patch_faces = *args.tiny_merge;
+  if (args.tiny_merge_angle) options.tiny_patch_max_dihedral_deg = *args.tiny_merge_angle;
   if (args.fin_rim_width) options.surfmesh.fin_rim_width = *args.fin_rim_width;
   if (args.fin_rim_angle) options.surfmesh.fin_rim_max_angle_deg = *args.fin_rim_angle;
   if (args.fin_rim_gap) options.surfmesh.fin_rim_max_gap_edges = *args.fin_rim_gap;
@@ -267,6 +271,14 @@ void add_remesh_command(CLI::App& app) {
                   "On marching-cubes inputs, patches narrower than this many target edges join a neighbour "
                   "(default 0.5; 0 = off; docs/segment.md \"Narrow patches\")")
       ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--tiny-merge", args->tiny_merge,
+                  "On inputs not taken for marching cubes, patches of at most this many input faces whose border "
+                  "bends by at most --tiny-merge-angle join a neighbour (default 8; 0 = off; docs/segment.md "
+                  "\"Tiny patches behind marginal creases\")")
+      ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--tiny-merge-angle", args->tiny_merge_angle,
+                  "Largest bend (deg) of such a tiny patch's border (default 120)")
+      ->check(CLI::Range(0.0, 180.0));
   cmd->add_option("--obtuse-repair-rounds", args->obtuse_repair_rounds,
                   "Sweeps of the stitch's obtuse repair after its optimisation (default 2; 0 = off; "
                   "docs/stitch.md \"Obtuse repair\")");
