@@ -9,6 +9,7 @@
 //! the report, never an exception and never hidden.
 
 #include <cstddef>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -104,8 +105,10 @@ struct StitchOptions {
   //! this many input mean edges (SurfaceMesh::input_mean_edge) of where the front put it
   //! (SurfaceMesh::nodes): a move beyond stops at the bound on the way to its target. A fin
   //! rim is a crease the fits of its two narrow patches may round off (docs/stitch.md "Fin
-  //! rims"). >= 0 (0: such nodes stay); infinity: no bound. Default 0.25.
-  double fin_rim_max_move = 0.25;
+  //! rims"). >= 0 (0: such nodes stay); infinity: no bound. Default infinity (opt-in with
+  //! SurfMeshOptions::fin_rim_max_angle_deg 180 and fin_rim_max_gap_edges infinity; docs/stitch.md
+  //! "Fin rims: a bound on the moves", "Lead decision").
+  double fin_rim_max_move = std::numeric_limits<double>::infinity();
   //! Run the exact self-intersection check on the result (the most expensive check).
   //! Default true.
   bool check_self_intersections = true;

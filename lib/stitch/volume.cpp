@@ -23,6 +23,23 @@ namespace {
 // (docs/stitch.md, "Volume: measured along the patch axis").
 constexpr std::size_t kMaxPatchFaces = 100;
 
+// Enclosed volume (sum of a . (b x c) / 6 over the faces), and whether the mesh is closed.
+double enclosed_volume_of(const TriMesh& mesh) {
+  double v = 0.0;
+  for (auto f : mesh.faces()) {
+    auto it = mesh.cfv_iter(f);
+    const Eigen::Vector3d a = to_eigen(mesh.point(*it++));
+    const Eigen::Vector3d b = to_eigen(mesh.point(*it++));
+    const Eigen::Vector3d c = to_eigen(mesh.point(*it));
+    v += a.dot(b.cross(c));
+  }
+  return v / 6.0;
+}
+
+bool is_closed(const TriMesh& mesh) {
+  return std::none_of(mesh.vertices().begin(), mesh.vertices().end(), [&](auto v) { return mesh.is_boundary(v); });
+}
+
 }  // namespace
 
 std::size_t compensate_volume(const SurfaceMesh& surface, const TriMesh* input, TriMesh& mesh,
@@ -137,6 +154,13 @@ std::size_t compensate_volume(const SurfaceMesh& surface, const TriMesh* input, 
       min_sine = std::min(min_sine, smallest_angle_sine(q[0], q[1], q[2]));
     }
   };
+  // The moves are kept only when they bring a closed mesh's enclosed volume nearer the
+  // closed input's: the axis measure is local, and where the guards below refuse the moves
+  // of one sign it can break a cancellation the whole mesh had (CGAL's object.stl: -0.02% ->
+  // -0.84% without this test).
+  const bool check_total = input != nullptr && is_closed(mesh) && is_closed(*input);
+  const std::vector<Eigen::Vector3d> original = point;
+  const double volume_before = check_total ? enclosed_volume_of(mesh) : 0.0;
   std::size_t n_moved = 0;
   for (std::size_t i = 0; i < nv; ++i) {
     if (fixed[i] != 0 || !(area[i] > 0.0) || share[i] == 0.0) continue;
@@ -159,6 +183,13 @@ std::size_t compensate_volume(const SurfaceMesh& surface, const TriMesh* input, 
       mesh.set_point(v, to_openmesh(q));
       ++n_moved;
       break;
+    }
+  }
+  if (check_total && n_moved > 0) {
+    const double volume_input = enclosed_volume_of(*input);
+    if (std::abs(enclosed_volume_of(mesh) - volume_input) >= std::abs(volume_before - volume_input)) {
+      for (auto v : mesh.vertices()) mesh.set_point(v, to_openmesh(original[static_cast<std::size_t>(v.idx())]));
+      return 0;
     }
   }
   return n_moved;
