@@ -586,6 +586,10 @@ TEST(Pipeline, GearPrismKeepsItsVolume) {
   ASSERT_NEAR(enclosed_volume(to_soup(mesh)), exact, 1e-12 * exact);
   RemeshOptions options = fast_options();
   options.compute_distances = false;  // the volume is the point
+  // The obtuse splits come after the compensation and put their nodes on the fits (their
+  // relaxed nodes too): on this prism they give back part of it (0.64% with 4 splits; 1.77%
+  // without the compensation). The test is of the compensation.
+  options.stitch.obtuse_split_rounds = 0;
   const RemeshResult r = remesh(mesh, options);
   EXPECT_TRUE(r.report.ok()) << errors_of(r.report);
   const TopologyReport& t = r.report.output.topology;
