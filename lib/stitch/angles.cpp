@@ -42,10 +42,6 @@ constexpr int kCheckRounds = 4;
 // moved node within as much of its old triangles.
 constexpr double kMaxCollapseOffsetEdges = 0.5;
 
-bool is_obtuse(const Vec& a, const Vec& b, const Vec& c) {
-  return (b - a).dot(c - a) < 0.0 || (a - b).dot(c - b) < 0.0 || (a - c).dot(b - c) < 0.0;
-}
-
 // What a set of triangles has: the sine of its smallest angle, how many are below the bound
 // and how many are obtuse. A change is better when the smallest angle rises, no more
 // triangles are below the bound and no more are obtuse, and (collapse) fewer are below.
@@ -57,7 +53,7 @@ struct Shape {
     const double s = smallest_angle_sine(a, b, c);
     min_sine = std::min(min_sine, s);
     n_small += s < sin_bound ? 1 : 0;
-    n_obtuse += is_obtuse(a, b, c) ? 1 : 0;
+    n_obtuse += triangle_is_obtuse(a, b, c) ? 1 : 0;
   }
 };
 

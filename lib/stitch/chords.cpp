@@ -15,18 +15,28 @@
 
 namespace nurbsfront::stitch_detail {
 
-std::size_t compensate_chords(TriMesh& mesh, const std::vector<int>& vertex_node, const std::vector<std::uint8_t>& is_feature,
-                              double strength, double reference_edge) {
-  if (!(strength > 0.0) || mesh.n_faces() == 0) return 0;
-  const std::size_t nv = mesh.n_vertices();
-  std::vector<Eigen::Vector3d> point(nv);
+std::vector<Eigen::Vector3d> vertex_points(const TriMesh& mesh) {
+  std::vector<Eigen::Vector3d> point(mesh.n_vertices());
   for (auto v : mesh.vertices()) point[static_cast<std::size_t>(v.idx())] = to_eigen(mesh.point(v));
-  // Fixed: feature nodes (creases and their corners) and the input's boundary.
-  std::vector<std::uint8_t> fixed(nv, 0);
+  return point;
+}
+
+std::vector<std::uint8_t> fixed_vertices(const TriMesh& mesh, const std::vector<int>& vertex_node,
+                                         const std::vector<std::uint8_t>& is_feature) {
+  std::vector<std::uint8_t> fixed(mesh.n_vertices(), 0);
   for (auto v : mesh.vertices()) {
     const auto i = static_cast<std::size_t>(v.idx());
     fixed[i] = mesh.is_boundary(v) || is_feature[static_cast<std::size_t>(vertex_node[i])] != 0;
   }
+  return fixed;
+}
+
+std::size_t compensate_chords(TriMesh& mesh, const std::vector<int>& vertex_node, const std::vector<std::uint8_t>& is_feature,
+                              double strength, double reference_edge) {
+  if (!(strength > 0.0) || mesh.n_faces() == 0) return 0;
+  const std::size_t nv = mesh.n_vertices();
+  std::vector<Eigen::Vector3d> point = vertex_points(mesh);
+  const std::vector<std::uint8_t> fixed = fixed_vertices(mesh, vertex_node, is_feature);
   // Area-weighted vertex normals (the sum of the incident triangles' area vectors).
   std::vector<Eigen::Vector3d> normal(nv, Eigen::Vector3d::Zero());
   std::vector<std::array<int, 3>> corners(mesh.n_faces());

@@ -176,7 +176,7 @@ class Optimiser {
         const Vec c = point(mesh_, mesh_.to_vertex_handle(mesh_.next_halfedge_handle(h)));
         const Vec n = area_vector(p, b, c);
         ring_.push_back({b, c, n, n.norm()});
-        if (!is_obtuse(p, b, c)) continue;
+        if (!triangle_is_obtuse(p, b, c)) continue;
         ++old_obtuse;
         // The cosine of the largest angle (the worst triangle's apex is tried first).
         const double worst = std::min({cosine(b - p, c - p), cosine(p - b, c - b), cosine(p - c, b - c)});
@@ -198,7 +198,7 @@ class Optimiser {
           const Vec q = project(info, p + t * (apex.second - p));
           if (!q.allFinite()) continue;
           std::size_t new_obtuse = 0;
-          for (const RingTriangle& r : ring_) new_obtuse += is_obtuse(q, r.b, r.c) ? 1 : 0;
+          for (const RingTriangle& r : ring_) new_obtuse += triangle_is_obtuse(q, r.b, r.c) ? 1 : 0;
           if (new_obtuse >= old_obtuse || !passes_ring_tests(p, q, sin_obtuse_floor_, obtuse_sine_skip_)) continue;
           mesh_.set_point(v, to_openmesh(q));
           ++n_moves;
@@ -227,8 +227,8 @@ class Optimiser {
       }
       if (!flip_quad(e, q)) continue;
       const Vec &a = q.a, &b = q.b, &c = q.c, &d = q.d;
-      const int old_obtuse = int(is_obtuse(a, b, c)) + int(is_obtuse(b, a, d));
-      if (old_obtuse == 0 || int(is_obtuse(a, d, c)) + int(is_obtuse(d, b, c)) >= old_obtuse) continue;
+      const int old_obtuse = int(triangle_is_obtuse(a, b, c)) + int(triangle_is_obtuse(b, a, d));
+      if (old_obtuse == 0 || int(triangle_is_obtuse(a, d, c)) + int(triangle_is_obtuse(d, b, c)) >= old_obtuse) continue;
       if (!flip_keeps_shape(q)) continue;
       const double bound = std::min(options_.alpha_floor, std::min(alpha_with_area(a, b, c, q.l0), alpha_with_area(b, a, d, q.l1)));
       if (std::min(alpha_with_area(a, d, c, q.l2), alpha_with_area(d, b, c, q.l3)) < bound) continue;
@@ -331,10 +331,6 @@ class Optimiser {
       }
     }
     return n_splits;
-  }
-
-  static bool is_obtuse(const Vec& a, const Vec& b, const Vec& c) {
-    return (b - a).dot(c - a) < 0.0 || (c - b).dot(a - b) < 0.0 || (a - c).dot(b - c) < 0.0;
   }
 
   // Relaxed split nodes (issue 5; docs/stitch.md "Relaxed split nodes"). The largest class
@@ -461,14 +457,14 @@ class Optimiser {
                  (!movable(h2) && (p0 - p2).dot(p1 - p2) < 0.0));
     };
     int old_fixed = fixed_obtuse(va, a, vb, b, vc, c);
-    int old_obtuse = int(is_obtuse(a, b, c));
+    int old_obtuse = int(triangle_is_obtuse(a, b, c));
     if (!one_sided) {
       old_fixed += fixed_obtuse(vb, b, va, a, vd, d);
       old_alpha = std::min(old_alpha, alpha_with_area(b, a, d, n_d.norm()));
       const double sine_d = alpha_and_min_angle_sine(b, a, d, n_d.norm())[1];
       old_sine = std::min(old_sine, sine_d);
       if (away({va, vb, vd})) old_sine_away = std::min(old_sine_away, sine_d);
-      old_obtuse += int(is_obtuse(b, a, d));
+      old_obtuse += int(triangle_is_obtuse(b, a, d));
     }
     struct New {
       TriMesh::VertexHandle u, w;
@@ -506,7 +502,7 @@ class Optimiser {
             const double sine_x = alpha_and_min_angle_sine(w, u, x, q.l1)[1];
             old_sine = std::min(old_sine, sine_x);
             if (away({t.w, t.u, vx})) old_sine_away = std::min(old_sine_away, sine_x);
-            old_obtuse += int(is_obtuse(w, u, x));
+            old_obtuse += int(triangle_is_obtuse(w, u, x));
             old_fixed += fixed_obtuse(t.w, w, t.u, u, vx, x);
             tris[n_tris++] = {{m, u, x}, nullptr, !m_is_feature && away({t.u, vx}), t.u, vx};
             tris[n_tris++] = {{m, x, w}, nullptr, !m_is_feature && away({vx, t.w}), vx, t.w};
@@ -528,7 +524,7 @@ class Optimiser {
       if (alpha < std::min(old_alpha, options_.alpha_floor)) return -1;
       if (sine < std::min(old_sine, sin_floor) * (1.0 - kSplitSineTolerance)) return -1;
       if (is_away && sine < std::min(old_sine_away, sin_floor) * (1.0 - kSplitSineTolerance)) return -1;
-      new_obtuse += int(is_obtuse(p[0], p[1], p[2]));
+      new_obtuse += int(triangle_is_obtuse(p[0], p[1], p[2]));
       new_fixed += int((!movable(h1) && (p[2] - p[1]).dot(p[0] - p[1]) < 0.0) || (!movable(h2) && (p[0] - p[2]).dot(p[1] - p[2]) < 0.0));
     }
     if (relaxed && new_obtuse == old_obtuse && new_fixed < old_fixed) return new_obtuse;

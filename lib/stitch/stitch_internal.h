@@ -131,6 +131,14 @@ AngleRepairResult repair_small_angles(const SurfaceMesh& surface, const StitchOp
 std::size_t compensate_chords(TriMesh& mesh, const std::vector<int>& vertex_node, const std::vector<std::uint8_t>& is_feature,
                               double strength, double reference_edge);
 
+//! Every vertex's position, in vertex order.
+std::vector<Eigen::Vector3d> vertex_points(const TriMesh& mesh);
+
+//! 1 for each vertex on the boundary or at a feature node (creases and their corners), in
+//! vertex order: what the chord and volume compensations do not move.
+std::vector<std::uint8_t> fixed_vertices(const TriMesh& mesh, const std::vector<int>& vertex_node,
+                                         const std::vector<std::uint8_t>& is_feature);
+
 //! Moves each vertex that is an inner node of a detail-fitted patch (SurfaceMesh::patches[p].
 //! detail_fit) back within the patch's PatchSurface::max_offset of its input faces along the
 //! patch axis, keeping its other two coordinates (after the chord compensation, which moves

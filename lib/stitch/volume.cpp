@@ -51,13 +51,8 @@ std::size_t compensate_volume(const SurfaceMesh& surface, const TriMesh* input, 
   if (input != nullptr && surfmesh_detail::vertices_on_lattice_edges(*input)) return 0;
   const std::size_t nv = mesh.n_vertices();
   const std::size_t n_patches = surface.surfaces.size();
-  std::vector<Eigen::Vector3d> point(nv);
-  for (auto v : mesh.vertices()) point[static_cast<std::size_t>(v.idx())] = to_eigen(mesh.point(v));
-  std::vector<std::uint8_t> fixed(nv, 0);
-  for (auto v : mesh.vertices()) {
-    const auto i = static_cast<std::size_t>(v.idx());
-    fixed[i] = mesh.is_boundary(v) || is_feature[static_cast<std::size_t>(vertex_node[i])] != 0;
-  }
+  std::vector<Eigen::Vector3d> point = vertex_points(mesh);
+  const std::vector<std::uint8_t> fixed = fixed_vertices(mesh, vertex_node, is_feature);
   // Per triangle of a patch of fewer than kMaxPatchFaces input faces: the volume between it
   // and its patch's input faces along the patch axis (the height difference at the 10
   // points of the barycentric lattice of step 1/3, whose mean is exact for a linear
