@@ -270,13 +270,11 @@ void add_remesh_command(CLI::App& app) {
                   "put them (default inf = no bound; docs/stitch.md \"Fin rims: a bound on the moves\")");
   cmd->add_option("--narrow-merge", args->narrow_merge,
                   "On marching-cubes inputs, patches narrower than this many target edges join a neighbour "
-                  "(default 0.5; 0 = off; docs/segment.md \"Narrow patches\")")
-      ->check(CLI::NonNegativeNumber);
+                  "(default 0.5; 0 = off; docs/segment.md \"Narrow patches\")");
   cmd->add_option("--tiny-merge", args->tiny_merge,
                   "On inputs not taken for marching cubes, patches of at most this many input faces whose border "
                   "bends by at most --tiny-merge-angle join a neighbour (default 8; 0 = off; docs/segment.md "
-                  "\"Tiny patches behind marginal creases\")")
-      ->check(CLI::NonNegativeNumber);
+                  "\"Tiny patches behind marginal creases\")");
   cmd->add_option("--tiny-merge-angle", args->tiny_merge_angle,
                   "Largest bend (deg) of such a tiny patch's border (default 120)")
       ->check(CLI::Range(0.0, 180.0));
