@@ -19,6 +19,17 @@
 namespace nurbsfront {
 namespace {
 
+// The patch of output vertex v when its node is an inner node of a detail-fitted patch,
+// else -1.
+int detail_fitted_patch(const SurfaceMesh& surface, const StitchResult& result, TriMesh::VertexHandle v) {
+  const int node = result.vertex_node[static_cast<std::size_t>(v.idx())];
+  if (node < 0 || static_cast<std::size_t>(node) >= surface.nodes.size() ||
+      surface.node_kind[static_cast<std::size_t>(node)] != NodeKind::Inner)
+    return -1;
+  const int p = surface.node_owner[static_cast<std::size_t>(node)];
+  return surface.patches[static_cast<std::size_t>(p)].detail_fit ? p : -1;
+}
+
 // Largest distance, in input mean edges, along its patch's axis between an output vertex that
 // is an inner node of a detail-fitted patch and that patch's input faces (the projection onto
 // the patch surface with no offset allowed lands on them). n_checked counts those vertices.
@@ -26,12 +37,9 @@ double worst_detail_offset(const SurfaceMesh& surface, const StitchResult& resul
   double worst = 0.0;
   n_checked = 0;
   for (const auto v : result.mesh.vertices()) {
-    const int node = result.vertex_node[static_cast<std::size_t>(v.idx())];
-    if (node < 0 || static_cast<std::size_t>(node) >= surface.nodes.size() ||
-        surface.node_kind[static_cast<std::size_t>(node)] != NodeKind::Inner)
-      continue;
-    const auto p = static_cast<std::size_t>(surface.node_owner[static_cast<std::size_t>(node)]);
-    if (!surface.patches[p].detail_fit) continue;
+    const int patch = detail_fitted_patch(surface, result, v);
+    if (patch < 0) continue;
+    const auto p = static_cast<std::size_t>(patch);
     PatchSurface on_input = surface.surfaces[p];
     on_input.max_offset = 0.0;
     const Eigen::Vector3d q = to_eigen(result.mesh.point(v));
@@ -97,13 +105,12 @@ TEST(StitchDetailNodes, NoInnerNodeOfADetailFittedPatchIsMovedWhereItsPatchHasNo
   EXPECT_TRUE(result.report.ok());
   std::size_t n_moved = 0, n_without_face = 0;
   for (const auto v : result.mesh.vertices()) {
-    const int node = result.vertex_node[static_cast<std::size_t>(v.idx())];
-    if (node < 0 || static_cast<std::size_t>(node) >= surface.nodes.size() ||
-        surface.node_kind[static_cast<std::size_t>(node)] != NodeKind::Inner)
-      continue;
-    const auto p = static_cast<std::size_t>(surface.node_owner[static_cast<std::size_t>(node)]);
+    const int patch = detail_fitted_patch(surface, result, v);
+    if (patch < 0) continue;
+    const auto p = static_cast<std::size_t>(patch);
     const Eigen::Vector3d q = to_eigen(result.mesh.point(v));
-    if (!surface.patches[p].detail_fit || q == surface.nodes[static_cast<std::size_t>(node)]) continue;
+    const auto node = static_cast<std::size_t>(result.vertex_node[static_cast<std::size_t>(v.idx())]);
+    if (q == surface.nodes[node]) continue;
     ++n_moved;
     const PatchSurface& s = surface.surfaces[p];
     ASSERT_TRUE(s.input_heights);
