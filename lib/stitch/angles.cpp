@@ -290,11 +290,16 @@ class AngleRepair {
     local.candidates(local_f, firsts);
     double best = -1.0;
     std::array<Step, 2> best_pair;
+    // A StitchResult with r's mesh, face patches and vertex nodes (what a change alters).
+    auto mesh_copy = [](const StitchResult& r) {
+      StitchResult c;
+      c.mesh = r.mesh;
+      c.face_patch = r.face_patch;
+      c.vertex_node = r.vertex_node;
+      return c;
+    };
     for (const Step& first : firsts) {
-      StitchResult trial;
-      trial.mesh = copy.mesh;
-      trial.face_patch = copy.face_patch;
-      trial.vertex_node = copy.vertex_node;
+      StitchResult trial = mesh_copy(copy);
       AngleRepair after_first(surface_, options_, is_feature_, is_frozen_, trial, *this);
       if (!after_first.apply(first)) continue;
       // The second: a change at a triangle below the bound that the first made.
@@ -311,10 +316,7 @@ class AngleRepair {
         }
       }
       for (const Step& second : seconds) {
-        StitchResult trial2;
-        trial2.mesh = trial.mesh;
-        trial2.face_patch = trial.face_patch;
-        trial2.vertex_node = trial.vertex_node;
+        StitchResult trial2 = mesh_copy(trial);
         AngleRepair after_second(surface_, options_, is_feature_, is_frozen_, trial2, *this);
         if (!after_second.apply(second)) continue;
         Shape removed, added;
