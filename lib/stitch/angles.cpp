@@ -62,7 +62,7 @@ class AngleRepair {
   AngleRepair(const SurfaceMesh& surface, const StitchOptions& options, const std::vector<std::uint8_t>& is_feature,
               const std::vector<std::uint8_t>& is_frozen, StitchResult& result)
       : surface_(surface), options_(options), is_feature_(is_feature), is_frozen_(is_frozen), result_(result),
-        mesh_(result.mesh) {
+        mesh_(result.mesh), own_rim_(fin_rim_bound(surface, options)), rim_(own_rim_) {
     const double diagonal = bounding_box(mesh_).diagonal();
     min_double_area_ = 2.0 * tolerance::kDegenerateAreaRelative * diagonal * diagonal;
     sin_bound_ = std::sin(kAwayFromFeaturesAngleBoundDeg * std::numbers::pi / 180.0);
@@ -75,7 +75,7 @@ class AngleRepair {
   AngleRepair(const SurfaceMesh& surface, const StitchOptions& options, const std::vector<std::uint8_t>& is_feature,
               const std::vector<std::uint8_t>& is_frozen, StitchResult& part, const AngleRepair& whole)
       : surface_(surface), options_(options), is_feature_(is_feature), is_frozen_(is_frozen), result_(part),
-        mesh_(part.mesh), min_double_area_(whole.min_double_area_), sin_bound_(whole.sin_bound_),
+        mesh_(part.mesh), rim_(whole.rim_), min_double_area_(whole.min_double_area_), sin_bound_(whole.sin_bound_),
         cos_dihedral_(whole.cos_dihedral_), max_offset_(whole.max_offset_) {}
 
   // Whether some triangle has no feature node and an angle below the bound.
@@ -410,6 +410,7 @@ class AngleRepair {
     const auto vb = mesh_.from_vertex_handle(h), va = mesh_.to_vertex_handle(h);
     if (is_feature(vb) || is_frozen(vb) || is_frozen(va) || mesh_.is_boundary(vb) || mesh_.is_boundary(va)) return -1.0;
     if (rank_of(vb) > rank_of(va)) return -1.0;
+    if (!rim_.allows(node(vb), point(mesh_, va))) return -1.0;  // the removed node goes to the survivor
     if (!mesh_.is_collapse_ok(h) || leaves_duplicate_face(mesh_, h)) return -1.0;
     const TriMesh::FaceHandle f0 = mesh_.face_handle(h), f1 = mesh_.opposite_face_handle(h);
     const Vec pb = point(mesh_, vb), pa = point(mesh_, va);
@@ -484,7 +485,8 @@ class AngleRepair {
       Vec q = Vec::Zero();
       for (std::size_t i = 0; i < n_patches; ++i) q += surface_.surfaces[static_cast<std::size_t>(patches[i])].project(target);
       q /= static_cast<double>(n_patches);
-      if (!q.allFinite()) continue;
+      q = rim_.clamp(node(v), q);
+      if (!q.allFinite() || q == p) continue;
       Shape after;
       bool ok = true;
       double offset = std::numeric_limits<double>::infinity();
@@ -516,6 +518,9 @@ class AngleRepair {
   const std::vector<std::uint8_t>& is_frozen_;
   StitchResult& result_;
   TriMesh& mesh_;
+  // StitchOptions::fin_rim_max_move: the whole mesh's repair owns it, a copy's refers to it.
+  FinRimBound own_rim_;
+  const FinRimBound& rim_;
   double min_double_area_ = 0.0;
   double sin_bound_ = 0.0;
   double cos_dihedral_ = 1.0;

@@ -36,7 +36,7 @@ class Collapser {
             const std::vector<int>& vertex_node, const std::vector<int>& face_patch,
             const std::vector<std::uint8_t>& is_feature, const std::vector<std::uint8_t>& is_frozen)
       : surface_(surface), options_(options), mesh_(assembled), vertex_node_(vertex_node), face_patch_(face_patch),
-        is_feature_(is_feature), is_frozen_(is_frozen) {
+        is_feature_(is_feature), is_frozen_(is_frozen), rim_(fin_rim_bound(surface, options)) {
     const double diagonal = bounding_box(mesh_).diagonal();
     min_double_area_ = 2.0 * tolerance::kDegenerateAreaRelative * diagonal * diagonal;
     // Position of every border node along its curve (curve, index), for the adjacency test.
@@ -204,6 +204,9 @@ class Collapser {
     int best = -1;
     double best_min = old_min;
     for (int i = 0; i < n; ++i) {
+      // The survivor within the fin rim bound. A removed rim node goes into its neighbour along
+      // its own curve (candidates()): the rim keeps its course.
+      if (!rim_.allows(node(va), q[static_cast<std::size_t>(i)])) continue;
       const double m = min_angle_after(h, q[static_cast<std::size_t>(i)]);
       if (m > best_min) {
         best_min = m;
@@ -225,6 +228,7 @@ class Collapser {
   const std::vector<int>& face_patch_;
   const std::vector<std::uint8_t>& is_feature_;
   const std::vector<std::uint8_t>& is_frozen_;
+  FinRimBound rim_;
   std::vector<int> curve_of_;
   std::vector<int> index_on_curve_;
   double min_double_area_ = 0.0;

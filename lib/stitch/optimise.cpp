@@ -623,22 +623,14 @@ class Optimiser {
   // StitchOptions::fin_rim_max_move: the vertices of the nodes of fin rim curves (corners
   // included) get their bound and origin.
   void bound_fin_rim_nodes(const std::vector<int>& vertex_node) {
-    const std::vector<std::uint8_t>& rim = surface_.curve_is_fin_rim;
-    if (rim.empty() || !std::isfinite(options_.fin_rim_max_move) || surface_.curve_nodes.size() != rim.size()) return;
-    std::vector<std::uint8_t> on_rim(surface_.nodes.size(), 0);
-    for (std::size_t c = 0; c < rim.size(); ++c) {
-      if (rim[c] == 0) continue;
-      for (const int g : surface_.curve_nodes[c]) {
-        if (g >= 0 && static_cast<std::size_t>(g) < on_rim.size()) on_rim[static_cast<std::size_t>(g)] = 1;
-      }
-    }
-    const double bound = options_.fin_rim_max_move * surface_.input_mean_edge;
+    const FinRimBound bound = fin_rim_bound(surface_, options_);
+    if (bound.on_rim.empty()) return;
     for (auto v : mesh_.vertices()) {
-      const auto node = static_cast<std::size_t>(vertex_node[static_cast<std::size_t>(v.idx())]);
-      if (on_rim[node] == 0) continue;
+      const int node = vertex_node[static_cast<std::size_t>(v.idx())];
+      if (!bound.is_bounded(node)) continue;
       NodeInfo& info = nodes_[static_cast<std::size_t>(v.idx())];
-      info.max_move = bound;
-      info.origin = surface_.nodes[node];
+      info.max_move = bound.radius;
+      info.origin = surface_.nodes[static_cast<std::size_t>(node)];
     }
   }
 

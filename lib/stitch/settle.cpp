@@ -147,6 +147,7 @@ GarbageMaps settle_intersections(const SurfaceMesh& surface, const StitchOptions
   };
   // The mean of the projections of p onto the input faces of the patches around node v.
   std::vector<std::size_t> patches;
+  const FinRimBound rim = fin_rim_bound(surface, options);
   auto target_of = [&](TriMesh::VertexHandle v, const Vec& p, Vec& target) {
     const auto g = static_cast<std::size_t>(result.vertex_node[static_cast<std::size_t>(v.idx())]);
     if (is_feature[g] != 0 || mesh.is_boundary(v)) return false;
@@ -160,6 +161,7 @@ GarbageMaps settle_intersections(const SurfaceMesh& surface, const StitchOptions
       target += surface_on_input(patch).project(p);
     }
     target /= static_cast<double>(patches.size());
+    target = rim.clamp(static_cast<int>(g), target);
     return target.allFinite() && target != to_eigen(mesh.point(v));
   };
 

@@ -561,8 +561,10 @@ StitchResult stitch_impl(const SurfaceMesh& surface, const TriMesh* input, const
     report.n_volume_compensation_moves = stitch_detail::compensate_volume(surface, input, mesh, result.face_patch,
                                                                           result.vertex_node, feature,
                                                                           options.volume_compensation);
-    if (report.n_chord_compensation_moves > 0 || report.n_volume_compensation_moves > 0)
+    if (report.n_chord_compensation_moves > 0 || report.n_volume_compensation_moves > 0) {
       stitch_detail::hold_detail_nodes(mesh, surface, result.vertex_node);
+      stitch_detail::hold_fin_rim_nodes(mesh, result.vertex_node, stitch_detail::fin_rim_bound(surface, options));
+    }
   }
   report.seconds_optimise = watch.seconds();
 

@@ -5,6 +5,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <utility>
 #include <vector>
 
@@ -138,6 +139,31 @@ std::vector<Eigen::Vector3d> vertex_points(const TriMesh& mesh);
 //! vertex order: what the chord and volume compensations do not move.
 std::vector<std::uint8_t> fixed_vertices(const TriMesh& mesh, const std::vector<int>& vertex_node,
                                          const std::vector<std::uint8_t>& is_feature);
+
+//! StitchOptions::fin_rim_max_move for every stage: the nodes of the fin rim curves
+//! (SurfaceMesh::curve_is_fin_rim, corners included) stay within `radius` (the option times
+//! SurfaceMesh::input_mean_edge) of where the front put them (SurfaceMesh::nodes). A merge
+//! moves its removed node onto the survivor. Nothing is bounded when the option is infinite,
+//! nor the nodes made by obtuse splits (no SurfaceMesh node).
+struct FinRimBound {
+  std::vector<std::uint8_t> on_rim;  //!< per SurfaceMesh node; empty: no bound
+  double radius = std::numeric_limits<double>::infinity();
+  const std::vector<Eigen::Vector3d>* origins = nullptr;  //!< SurfaceMesh::nodes
+  //! A clamped position is at the radius up to rounding: allowed with this relative slack.
+  static constexpr double kSlack = 1e-12;
+  bool is_bounded(int node) const {
+    return node >= 0 && static_cast<std::size_t>(node) < on_rim.size() && on_rim[static_cast<std::size_t>(node)] != 0;
+  }
+  //! True when node may be at q.
+  bool allows(int node, const Eigen::Vector3d& q) const;
+  //! q, or the point of the segment from node's origin to q at the radius when q lies beyond.
+  Eigen::Vector3d clamp(int node, const Eigen::Vector3d& q) const;
+};
+FinRimBound fin_rim_bound(const SurfaceMesh& surface, const StitchOptions& options);
+
+//! Moves every vertex of a bounded node (vertex_node) that lies beyond the bound back onto it,
+//! towards its origin (after the chord and volume compensations). Returns the number moved.
+std::size_t hold_fin_rim_nodes(TriMesh& mesh, const std::vector<int>& vertex_node, const FinRimBound& bound);
 
 //! Moves each vertex that is an inner node of a detail-fitted patch (SurfaceMesh::patches[p].
 //! detail_fit) back within the patch's PatchSurface::max_offset of its input faces along the
