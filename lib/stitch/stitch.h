@@ -100,10 +100,12 @@ struct StitchOptions {
   //! docs/stitch.md), in [0, 60); 0
   //! switches it off. Default 25 (issue 5's bound away from features).
   double collapse_below_angle_deg = 25.0;
-  //! The smoothing, the obtuse repair and the obtuse splits' flips and moves keep every
-  //! node of a fin rim curve (SurfaceMesh::curve_is_fin_rim; its corners included) within
-  //! this many input mean edges (SurfaceMesh::input_mean_edge) of where the front put it
-  //! (SurfaceMesh::nodes): a move beyond stops at the bound on the way to its target. A fin
+  //! Every stage of the stitch (the short-edge collapse's survivors, the smoothing, the obtuse
+  //! repair and splits, the chord and volume compensations, the crossing settling and the
+  //! small-angle repair) keeps every node of a fin rim curve (SurfaceMesh::curve_is_fin_rim;
+  //! its corners included) within this many input mean edges (SurfaceMesh::input_mean_edge)
+  //! of where the front put it (SurfaceMesh::nodes): a move beyond stops at the bound on the
+  //! way to its target (a merge: not made when the survivor lies beyond). A fin
   //! rim is a crease the fits of its two narrow patches may round off (docs/stitch.md "Fin
   //! rims"). >= 0 (0: such nodes stay); infinity: no bound. Default infinity (opt-in with
   //! SurfMeshOptions::fin_rim_max_angle_deg 180 and fin_rim_max_gap_edges infinity; docs/stitch.md
