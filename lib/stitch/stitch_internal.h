@@ -120,7 +120,7 @@ struct AngleRepairResult {
 //! is better, the best pair of changes there that is (docs/stitch.md "two-step changes"). When
 //! check_self_intersections, the faces around the changes are checked exactly; if some
 //! cross, the mesh goes back and the repair is made again with the nodes of the crossing
-//! faces left alone (4 rounds). Collapses are garbage-collected (face_patch and vertex_node
+//! faces that a change made left alone (4 rounds). Collapses are garbage-collected (face_patch and vertex_node
 //! follow).
 AngleRepairResult repair_small_angles(const SurfaceMesh& surface, const StitchOptions& options,
                                       const std::vector<std::uint8_t>& is_feature, StitchResult& result);
