@@ -12,12 +12,12 @@
 // (repair_in_two_steps).
 #include <algorithm>
 #include <array>
-#include <cassert>
 #include <cmath>
 #include <cstdint>
 #include <limits>
 #include <numbers>
 #include <optional>
+#include <span>
 
 #include <Eigen/Geometry>
 
@@ -112,7 +112,7 @@ class AngleRepair {
     stitch_detail::collect_garbage(result_);
   }
 
-  std::size_t n_flips_ = 0, n_collapses_ = 0, n_moves_ = 0, n_two_steps_ = 0;
+  std::size_t n_flips_ = 0, n_collapses_ = 0, n_moves_ = 0, n_two_steps_ = 0, n_searches_ = 0;
   //! Nodes whose triangles a change made (for the crossing check).
   std::vector<int> changed_nodes_;
 
@@ -138,13 +138,7 @@ class AngleRepair {
     return s < sin_bound_;
   }
 
-  // One change of the repair: a flip of the edge between from and to, a collapse of from
-  // into to (which stays), or a move of from to q.
-  struct Step {
-    enum class Kind { Flip, Collapse, Move } kind = Kind::Flip;
-    TriMesh::VertexHandle from, to;
-    Vec q = Vec::Zero();
-  };
+  using Step = AngleChange;
 
   // The best change around f (a flip or a collapse of one of its edges, or a move of one of
   // its nodes), made; else the best pair of changes there (repair_in_two_steps); false when
@@ -155,7 +149,20 @@ class AngleRepair {
       apply(step);
       return true;
     }
-    return repair_in_two_steps(f);
+    if (repair_in_two_steps(f)) return true;
+    // Last, a finer search for a place of one of f's nodes (search_move).
+    double best = -1.0;
+    for (auto v : mesh_.fv_range(f)) {
+      Vec q = Vec::Zero();
+      const double s = search_move(v, q);
+      if (s > best) {
+        best = s;
+        step = {Step::Kind::Move, v, TriMesh::VertexHandle(), q};
+      }
+    }
+    if (!(best >= 0.0) || !apply(step)) return false;
+    ++n_searches_;
+    return true;
   }
 
   // The best change around f (see repair) and the sine of the smallest angle of the
@@ -202,30 +209,20 @@ class AngleRepair {
     }
   }
 
-  // Makes a change; false (and nothing made) when its edge is gone or OpenMesh refuses it.
-  bool apply(const Step& step) {
-    if (step.kind == Step::Kind::Move) {
-      mesh_.set_point(step.from, to_openmesh(step.q));
-      ++n_moves_;
-      changed_nodes_.push_back(node(step.from));
-      return true;
+  // Makes the changes, all or none (make_angle_changes), and counts them; false (and
+  // nothing made) when an edge is gone or OpenMesh refuses one.
+  bool apply(std::span<const Step> steps) {
+    touched_.clear();
+    if (!make_angle_changes(result_, steps, &touched_)) return false;
+    for (const Step& step : steps) {
+      n_flips_ += step.kind == Step::Kind::Flip ? 1 : 0;
+      n_collapses_ += step.kind == Step::Kind::Collapse ? 1 : 0;
+      n_moves_ += step.kind == Step::Kind::Move ? 1 : 0;
     }
-    const auto h = mesh_.find_halfedge(step.from, step.to);
-    if (!h.is_valid()) return false;
-    if (step.kind == Step::Kind::Flip) {
-      const auto e = mesh_.edge_handle(h);
-      if (!mesh_.is_flip_ok(e)) return false;
-      mesh_.flip(e);
-      ++n_flips_;
-      for (const auto g : {mesh_.halfedge_handle(e, 0), mesh_.halfedge_handle(e, 1)}) changed_nodes_.push_back(node(mesh_.to_vertex_handle(g)));
-      return true;
-    }
-    if (!mesh_.is_collapse_ok(h)) return false;
-    mesh_.collapse(h);
-    ++n_collapses_;
-    changed_nodes_.push_back(node(step.to));
+    for (const auto v : touched_) changed_nodes_.push_back(node(v));
     return true;
   }
+  bool apply(const Step& step) { return apply(std::span<const Step>(&step, 1)); }
 
   // Two changes where no single one is better (two border nodes of tiny curves next to two
   // corners, each merge alone lowering the smallest angle a little because of the other):
@@ -327,14 +324,13 @@ class AngleRepair {
       }
     }
     if (best < 0.0) return false;
-    // Made on the whole mesh (the copy's vertices mapped back).
-    for (Step step : best_pair) {
+    // Made on the whole mesh (the copy's vertices mapped back), both or neither: OpenMesh
+    // answers there as on the copy, but should it refuse the second, the first is undone.
+    for (Step& step : best_pair) {
       step.from = global_of[static_cast<std::size_t>(step.from.idx())];
       if (step.to.is_valid()) step.to = global_of[static_cast<std::size_t>(step.to.idx())];
-      const bool made = apply(step);
-      assert(made);
-      if (!made) break;
     }
+    if (!apply(best_pair)) return false;
     ++n_two_steps_;
     return true;
   }
@@ -482,10 +478,7 @@ class AngleRepair {
     targets.push_back(0.5 * (p + centroid));
     double best = -1.0;
     for (const Vec& target : targets) {
-      Vec q = Vec::Zero();
-      for (std::size_t i = 0; i < n_patches; ++i) q += surface_.surfaces[static_cast<std::size_t>(patches[i])].project(target);
-      q /= static_cast<double>(n_patches);
-      q = rim_.clamp(node(v), q);
+      const Vec q = project(v, std::span<const int>(patches.data(), n_patches), target);
       if (!q.allFinite() || q == p) continue;
       Shape after;
       bool ok = true;
@@ -505,6 +498,92 @@ class AngleRepair {
       best_q = q;
     }
     return best;
+  }
+
+  // A finer search than move_gain's few places, where no change nor pair helps (liver: a
+  // triangle at 23.9 deg whose node's best place lifts it to 26.3 deg but makes two obtuse
+  // triangles, one more than the rule allows; one at 24.0 deg whose obtuse angle needs its
+  // apex 0.01 h farther from the long edge): from v's place, steps in 8 directions of the
+  // plane normal to its ring's area vector, each projected onto the fitted surfaces as
+  // move_gain's places, the best step that raises the smallest angle of v's triangles taken
+  // while it passes move_gain's tests (no more below the bound, at most one more obtuse per
+  // triangle lifted, no triangle degenerate or turned too far, within kMaxCollapseOffsetEdges
+  // input mean edges of the old triangles), the step halved when none does, from a quarter of
+  // v's shortest edge down to 1/64 of that. Returns the sine of the smallest angle at the
+  // place reached (q) when that is better than before (is_better); else -1.
+  double search_move(TriMesh::VertexHandle v, Vec& best_q) const {
+    constexpr int kDirections = 8;
+    constexpr double kFirstStep = 0.25, kLastStep = kFirstStep / 64.0;
+    constexpr int kMaxSteps = 64;
+    if (is_feature(v) || is_frozen(v) || mesh_.is_boundary(v)) return -1.0;
+    const Vec p = point(mesh_, v);
+    std::vector<int> patches;
+    ring_.clear();
+    Shape before;
+    Vec normal = Vec::Zero();
+    double shortest = std::numeric_limits<double>::infinity();
+    for (auto h : mesh_.voh_range(v)) {
+      const Vec b = point(mesh_, mesh_.to_vertex_handle(h));
+      const Vec c = point(mesh_, mesh_.to_vertex_handle(mesh_.next_halfedge_handle(h)));
+      const Vec n = (b - p).cross(c - p);
+      ring_.push_back({b, c, n});
+      before.add(p, b, c, sin_bound_);
+      normal += n;
+      shortest = std::min(shortest, (b - p).norm());
+      const int patch = result_.face_patch[static_cast<std::size_t>(mesh_.face_handle(h).idx())];
+      if (std::find(patches.begin(), patches.end(), patch) == patches.end()) patches.push_back(patch);
+    }
+    if (ring_.empty() || !(normal.norm() > 0.0) || !(shortest > 0.0)) return -1.0;
+    normal.normalize();
+    const Vec t1 = normal.unitOrthogonal(), t2 = normal.cross(t1);
+    // The shape of v's triangles with v at q, when q passes the tests; nullopt otherwise.
+    auto shape_at = [&](const Vec& q) -> std::optional<Shape> {
+      Shape after;
+      double offset = std::numeric_limits<double>::infinity();
+      for (const RingTriangle& t : ring_) {
+        const Vec n = (t.b - q).cross(t.c - q);
+        const double l = n.norm(), l_old = t.n.norm();
+        if (l <= min_double_area_ || (l_old > 0.0 && n.dot(t.n) <= options_.min_normal_dot * l * l_old)) return std::nullopt;
+        after.add(q, t.b, t.c, sin_bound_);
+        offset = std::min(offset, (quality_detail::closest_point_on_triangle(q, p, t.b, t.c) - q).norm());
+      }
+      if (!(offset <= max_offset_) || after.n_small > before.n_small ||
+          after.n_obtuse > before.n_obtuse + (before.n_small - after.n_small))
+        return std::nullopt;
+      return after;
+    };
+    Vec at = p;
+    Shape here = before;
+    double step = kFirstStep * shortest;
+    for (int i = 0; i < kMaxSteps && step >= kLastStep * shortest; ++i) {
+      std::optional<Shape> best;
+      Vec best_at = at;
+      for (int k = 0; k < kDirections; ++k) {
+        const double angle = 2.0 * std::numbers::pi * k / kDirections;
+        const Vec q = project(v, patches, at + step * (std::cos(angle) * t1 + std::sin(angle) * t2));
+        if (!q.allFinite()) continue;
+        const std::optional<Shape> shape = shape_at(q);
+        if (!shape || !(shape->min_sine > (best ? best->min_sine : here.min_sine))) continue;
+        best = shape;
+        best_at = q;
+      }
+      if (best) {
+        at = best_at;
+        here = *best;
+      } else {
+        step *= 0.5;
+      }
+    }
+    if (!is_better(before, here)) return -1.0;
+    best_q = at;
+    return here.min_sine;
+  }
+
+  // target onto the fitted surfaces of `patches` as every stitch move (project_onto_patches;
+  // NaN where a detail-fitted patch has no input face below), for a node of a fin rim curve
+  // no farther than StitchOptions::fin_rim_max_move from where the front put it.
+  Vec project(TriMesh::VertexHandle v, std::span<const int> patches, const Vec& target) const {
+    return rim_.clamp(node(v), project_onto_patches(surface_, patches, target));
   }
 
   static bool is_better(const Shape& before, const Shape& after) {
@@ -530,11 +609,57 @@ class AngleRepair {
     Vec b, c, n;
   };
   mutable std::vector<RingTriangle> ring_;
+  // The vertices whose triangles the last apply() changed.
+  std::vector<TriMesh::VertexHandle> touched_;
   // Per vertex of mesh_, its index in repair_in_two_steps's copy (-1 between calls).
   std::vector<int> local_of_;
 };
 
 }  // namespace
+
+bool make_angle_changes(StitchResult& result, std::span<const AngleChange> changes,
+                        std::vector<TriMesh::VertexHandle>* touched) {
+  TriMesh& mesh = result.mesh;
+  if (touched != nullptr) touched->clear();
+  // What to go back to when a change after the first is refused.
+  std::optional<StitchResult> before;
+  if (changes.size() > 1) {
+    before.emplace();
+    before->mesh = mesh;
+    before->face_patch = result.face_patch;
+    before->vertex_node = result.vertex_node;
+  }
+  auto undo = [&] {
+    if (!before) return false;
+    result.mesh = before->mesh;
+    result.face_patch = std::move(before->face_patch);
+    result.vertex_node = std::move(before->vertex_node);
+    if (touched != nullptr) touched->clear();
+    return false;
+  };
+  for (const AngleChange& change : changes) {
+    if (change.kind == AngleChange::Kind::Move) {
+      mesh.set_point(change.from, to_openmesh(change.q));
+      if (touched != nullptr) touched->push_back(change.from);
+      continue;
+    }
+    const auto h = mesh.find_halfedge(change.from, change.to);
+    if (!h.is_valid()) return undo();
+    if (change.kind == AngleChange::Kind::Flip) {
+      const auto e = mesh.edge_handle(h);
+      if (!mesh.is_flip_ok(e)) return undo();
+      mesh.flip(e);
+      if (touched != nullptr) {
+        for (const auto g : {mesh.halfedge_handle(e, 0), mesh.halfedge_handle(e, 1)}) touched->push_back(mesh.to_vertex_handle(g));
+      }
+      continue;
+    }
+    if (!mesh.is_collapse_ok(h)) return undo();
+    mesh.collapse(h);
+    if (touched != nullptr) touched->push_back(change.to);
+  }
+  return true;
+}
 
 AngleRepairResult repair_small_angles(const SurfaceMesh& surface, const StitchOptions& options,
                                       const std::vector<std::uint8_t>& is_feature, StitchResult& result) {
@@ -577,6 +702,7 @@ AngleRepairResult repair_small_angles(const SurfaceMesh& surface, const StitchOp
       out.n_collapses = repair.n_collapses_;
       out.n_moves = repair.n_moves_;
       out.n_two_steps = repair.n_two_steps_;
+      out.n_searches = repair.n_searches_;
       return out;
     }
     // The nodes of the crossing faces that a change made (changed_nodes_) are frozen and the

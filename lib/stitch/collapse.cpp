@@ -124,7 +124,8 @@ class Collapser {
     if (kb == NodeKind::Inner) {
       if (ka != NodeKind::Inner) return 1;  // into the border (or corner) node, which stays
       if (surface_.node_owner[a] != surface_.node_owner[b]) return 0;
-      q[1] = surface_.surfaces[static_cast<std::size_t>(surface_.node_owner[a])].project(middle);
+      const std::array<int, 1> own{surface_.node_owner[a]};
+      q[1] = project_onto_patches(surface_, own, middle);
       return q[1].allFinite() ? 2 : 1;
     }
     // b on a border: only along its own curve, so the curve keeps its course.
@@ -137,8 +138,8 @@ class Collapser {
       if (c < 0 || c != surface_.node_owner[b]) return 0;
       if (!is_next_on_curve(surface_, c, index_on_curve_[b], static_cast<int>(a))) return 0;
       if (ka == NodeKind::Corner) return 1;
-      q[1] = 0.5 * (surface_.surfaces[static_cast<std::size_t>(p0)].project(middle) +
-                    surface_.surfaces[static_cast<std::size_t>(p1)].project(middle));
+      const std::array<int, 2> both{p0, p1};
+      q[1] = project_onto_patches(surface_, both, middle);
       return q[1].allFinite() ? 2 : 1;
     }
     // Two corners: only when the edge is a whole curve (one piece).

@@ -32,10 +32,7 @@ bool FinRimBound::allows(int node, const Eigen::Vector3d& q) const {
 
 Eigen::Vector3d FinRimBound::clamp(int node, const Eigen::Vector3d& q) const {
   if (!is_bounded(node)) return q;
-  const Eigen::Vector3d& origin = (*origins)[static_cast<std::size_t>(node)];
-  const Eigen::Vector3d d = q - origin;
-  const double l = d.norm();
-  return l > radius ? Eigen::Vector3d(origin + (radius / l) * d) : q;
+  return clamp_to_ball(q, (*origins)[static_cast<std::size_t>(node)], radius);
 }
 
 std::size_t hold_fin_rim_nodes(TriMesh& mesh, const std::vector<int>& vertex_node, const FinRimBound& bound) {

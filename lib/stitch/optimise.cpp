@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <limits>
 #include <numbers>
+#include <span>
 #include <vector>
 
 #include <Eigen/Geometry>
@@ -537,57 +538,19 @@ class Optimiser {
     return l > 0.0 ? x.dot(y) / l : 1.0;
   }
 
-  // target moved onto the fitted surface(s) of a movable node (see smoothing_sweep); for a
-  // node of a fin rim curve, no farther than info.max_move from info.origin.
+  // target moved onto the fitted surface(s) of a movable node (see smoothing_sweep) by
+  // project_onto_patches (NaN where a detail-fitted patch has none of its input faces below:
+  // its projection there is the fit's, unheld, off the input by up to the fit's miss;
+  // headsq@500 with the detail fit: a movable corner 1.8 voxels off, the run's Hausdorff
+  // 2.47 -> 1.74 without); for a node of a fin rim curve, no farther than info.max_move from
+  // info.origin.
   Vec project(const NodeInfo& info, const Vec& target) const {
-    // Not where a detail-fitted patch has none of its input faces below: its projection
-    // there is the fit's, unheld, off the input by up to the fit's miss (headsq@500 with the
-    // detail fit: a movable corner 1.8 voxels off, the run's Hausdorff 2.47 -> 1.74 without).
-    if (!detail_faces_below(info, target)) return Vec::Constant(std::numeric_limits<double>::quiet_NaN());
-    const Vec q = project_unbounded(info, target);
+    std::array<int, 2> pair{info.patch0, info.patch1};
+    const std::span<const int> patches =
+        info.corner_slot >= 0 ? std::span<const int>(corner_patches_[static_cast<std::size_t>(info.corner_slot)])
+                              : std::span<const int>(pair.data(), info.curve < 0 ? 1 : 2);
+    const Vec q = project_onto_patches(surface_, patches, target);
     return std::isfinite(info.max_move) ? clamp_to_ball(q, info.origin, info.max_move) : q;
-  }
-
-  // q, or the point of segment (origin, q) at distance r from origin when q lies farther.
-  static Vec clamp_to_ball(const Vec& q, const Vec& origin, double r) {
-    const Vec d = q - origin;
-    const double l = d.norm();
-    return l > r ? Vec(origin + (r / l) * d) : q;
-  }
-
-  Vec project_unbounded(const NodeInfo& info, const Vec& target) const {
-    if (info.corner_slot >= 0) {
-      const auto& patches = corner_patches_[static_cast<std::size_t>(info.corner_slot)];
-      Vec q = Vec::Zero();
-      for (const int patch : patches) q += surface_.surfaces[static_cast<std::size_t>(patch)].project(target);
-      return q / static_cast<double>(patches.size());
-    }
-    if (info.curve < 0) return surface_.surfaces[static_cast<std::size_t>(info.patch0)].project(target);
-    return 0.5 * (surface_.surfaces[static_cast<std::size_t>(info.patch0)].project(target) +
-                  surface_.surfaces[static_cast<std::size_t>(info.patch1)].project(target));
-  }
-
-  // False when one of the patches a movable node is projected onto (see project()) is
-  // detail-fitted (PatchFitOptions::detail_spacing_edges) and has none of its input faces
-  // straight above or below target along its axis, so PatchSurface::project cannot hold the
-  // node within the patch's node bound there.
-  bool detail_faces_below(const NodeInfo& info, const Vec& target) const {
-    auto below = [&](int patch) {
-      // (A hand-made SurfaceMesh may have no patch reports: no detail fit then.)
-      if (patch < 0 || static_cast<std::size_t>(patch) >= surface_.patches.size() ||
-          !surface_.patches[static_cast<std::size_t>(patch)].detail_fit)
-        return true;
-      const PatchSurface& s = surface_.surfaces[static_cast<std::size_t>(patch)];
-      if (!s.input_heights) return true;
-      const Vec l = s.frame.to_local(target);
-      double z = 0.0;
-      return s.input_heights->height(l.x(), l.y(), z);
-    };
-    if (info.corner_slot >= 0) {
-      const auto& patches = corner_patches_[static_cast<std::size_t>(info.corner_slot)];
-      return std::all_of(patches.begin(), patches.end(), below);
-    }
-    return below(info.patch0) && (info.curve < 0 || below(info.patch1));
   }
 
   // The tests of a move of a node from p to q, its triangles in ring_: no triangle
@@ -857,6 +820,23 @@ SplitResult split_obtuse(const SurfaceMesh& surface, const StitchOptions& option
   out.n_flips = optimiser.n_split_flips_ + optimiser.obtuse_flip_sweep(near);
   out.n_moves = optimiser.obtuse_sweep(near);
   return out;
+}
+
+Vec project_onto_patches(const SurfaceMesh& surface, std::span<const int> patches, const Vec& target) {
+  for (const int patch : patches) {
+    // (A hand-made SurfaceMesh may have no patch reports: no detail fit then.)
+    if (patch < 0 || static_cast<std::size_t>(patch) >= surface.patches.size() ||
+        !surface.patches[static_cast<std::size_t>(patch)].detail_fit)
+      continue;
+    const PatchSurface& s = surface.surfaces[static_cast<std::size_t>(patch)];
+    if (!s.input_heights) continue;
+    const Vec l = s.frame.to_local(target);
+    double z = 0.0;
+    if (!s.input_heights->height(l.x(), l.y(), z)) return Vec::Constant(std::numeric_limits<double>::quiet_NaN());
+  }
+  Vec q = Vec::Zero();
+  for (const int patch : patches) q += surface.surfaces[static_cast<std::size_t>(patch)].project(target);
+  return q / static_cast<double>(patches.size());
 }
 
 }  // namespace nurbsfront::stitch_detail

@@ -621,6 +621,7 @@ StitchResult stitch_impl(const SurfaceMesh& surface, const TriMesh* input, const
     report.n_angle_collapses = angles.n_collapses;
     report.n_angle_moves = angles.n_moves;
     report.n_angle_two_steps = angles.n_two_steps;
+    report.n_angle_searches = angles.n_searches;
     report.n_angle_repairs_undone = angles.n_undone;
     if (angles.n_flips + angles.n_collapses + angles.n_moves > 0) soup.reset();
   }

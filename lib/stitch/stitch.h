@@ -188,6 +188,10 @@ struct StitchReport {
   //! Pairs of changes of the small-angle repair where no single change was better (each
   //! change also counted above; docs/stitch.md "Two-step changes").
   std::size_t n_angle_two_steps = 0;
+  //! Moves of the small-angle repair's finer search, where neither a single change nor a
+  //! pair was better (each also counted in n_angle_moves; docs/stitch.md "The liver's last
+  //! two").
+  std::size_t n_angle_searches = 0;
   std::size_t n_angle_repairs_undone = 0;
   double alpha_mean_before = 0.0;      //!< mean alpha after assembly, before optimisation
   double alpha_min_before = 0.0;       //!< min alpha after assembly, before optimisation

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <span>
 #include <utility>
 #include <vector>
 
@@ -101,10 +102,44 @@ inline bool may_have_angle_below(const Eigen::Vector3d& a, const Eigen::Vector3d
   return !(smallest_angle_sine(a, b, c) > sin_bound + kSineMargin);
 }
 
+//! The one projection of a stitch move (smoothing, obtuse repair, obtuse splits, short-edge
+//! collapse, small-angle repair): target moved onto the mean of its projections onto the
+//! fitted surfaces of `patches` (PatchSurface::project, in that order); NaN when one of them
+//! is detail-fitted (SurfaceMesh::patches[p].detail_fit) and has none of its input faces
+//! straight above or below target along its axis (PatchSurface::project cannot hold the node
+//! within the patch's node bound there). A caller leaves a node with a NaN target where it is.
+Eigen::Vector3d project_onto_patches(const SurfaceMesh& surface, std::span<const int> patches,
+                                     const Eigen::Vector3d& target);
+
+//! q, or the point of segment (origin, q) at distance r from origin when q lies farther (the
+//! fin rim bound, StitchOptions::fin_rim_max_move).
+inline Eigen::Vector3d clamp_to_ball(const Eigen::Vector3d& q, const Eigen::Vector3d& origin, double r) {
+  const Eigen::Vector3d d = q - origin;
+  const double l = d.norm();
+  return l > r ? Eigen::Vector3d(origin + (r / l) * d) : q;
+}
+
+//! One change of the small-angle repair: a flip of the edge between from and to, a
+//! collapse of from into to (which stays where it is), or a move of from to q.
+struct AngleChange {
+  enum class Kind { Flip, Collapse, Move } kind = Kind::Flip;
+  TriMesh::VertexHandle from, to;
+  Eigen::Vector3d q = Eigen::Vector3d::Zero();
+};
+
+//! Makes `changes` on result.mesh in order, all or none: when an edge of one is gone or
+//! OpenMesh refuses it (is_flip_ok, is_collapse_ok), the changes made before it are undone
+//! (result's mesh, face_patch and vertex_node as they were) and false is returned. touched
+//! (if given) is set to the vertices whose triangles the changes made (a flip's new edge's
+//! ends, a collapse's survivor, a moved vertex); empty when false is returned.
+bool make_angle_changes(StitchResult& result, std::span<const AngleChange> changes,
+                        std::vector<TriMesh::VertexHandle>* touched = nullptr);
+
 //! What repair_small_angles() did.
 struct AngleRepairResult {
   std::size_t n_flips = 0, n_collapses = 0, n_moves = 0;
   std::size_t n_two_steps = 0;  //!< pairs of changes (each also counted above)
+  std::size_t n_searches = 0;   //!< moves of the finer search (each also counted in n_moves)
   std::size_t n_undone = 0;  //!< changes given up because their triangles crossed others
 };
 

@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // stitch_detail::collect_garbage against OpenMesh's garbage_collection(): the same mesh
 // (element order, every handle, points, statuses, properties) after collapses and deletions;
-// stitch_detail::recount_pairs against a whole-mesh count after moves, flips and collapses.
+// stitch_detail::recount_pairs against a whole-mesh count after moves, flips and collapses;
+// stitch_detail::make_angle_changes all or none.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -9,6 +10,7 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <span>
 #include <vector>
 
 #include "fixtures/shapes.h"
@@ -225,6 +227,83 @@ TEST(RecountPairs, RefusesMapsOfAnotherMesh) {
   EXPECT_THROW((void)stitch_detail::recount_pairs(soup, {}, soup, wrong, 1), InternalError);
   EXPECT_THROW((void)stitch_detail::recount_pairs(soup, {{0, static_cast<std::uint32_t>(soup.triangles.size())}}, soup, {}, 1),
                InternalError);
+}
+
+// stitch_detail::make_angle_changes makes a pair of changes on the whole mesh only when
+// OpenMesh takes both: a second change it refuses undoes the first (liver's two-step
+// repair; before, only an assert caught it and the first change stayed).
+StitchResult result_of(const TriangleSoup& soup) {
+  StitchResult r;
+  to_trimesh(soup, r.mesh);
+  r.face_patch.assign(r.mesh.n_faces(), 0);
+  for (std::size_t i = 0; i < r.mesh.n_faces(); ++i) r.face_patch[i] = static_cast<int>(i % 3);
+  for (auto v : r.mesh.vertices()) r.vertex_node.push_back(v.idx());
+  return r;
+}
+
+// Every face's corners in order and every point, deleted elements included.
+std::vector<double> fingerprint(const TriMesh& mesh) {
+  std::vector<double> x;
+  for (auto v : mesh.all_vertices()) {
+    const auto p = mesh.point(v);
+    x.insert(x.end(), {p[0], p[1], p[2], mesh.status(v).deleted() ? 1.0 : 0.0});
+  }
+  for (auto f : mesh.all_faces()) {
+    x.push_back(mesh.status(f).deleted() ? -1.0 : -2.0);
+    for (auto v : mesh.fv_range(f)) x.push_back(v.idx());
+  }
+  return x;
+}
+
+TEST(AngleChanges, ARefusedSecondFlipUndoesTheFirstMove) {
+  // A tetrahedron: every flip would make an edge that exists, so OpenMesh refuses it.
+  StitchResult r = result_of(test::tetrahedron());
+  const auto before = fingerprint(r.mesh);
+  const std::vector<stitch_detail::AngleChange> changes{
+      {stitch_detail::AngleChange::Kind::Move, VH(0), VH(), Eigen::Vector3d(0.1, 0.2, 0.3)},
+      {stitch_detail::AngleChange::Kind::Flip, VH(1), VH(2), Eigen::Vector3d::Zero()}};
+  ASSERT_FALSE(r.mesh.is_flip_ok(r.mesh.edge_handle(r.mesh.find_halfedge(VH(1), VH(2)))));
+  std::vector<VH> touched{VH(7)};
+  EXPECT_FALSE(stitch_detail::make_angle_changes(r, changes, &touched));
+  EXPECT_EQ(fingerprint(r.mesh), before);
+  EXPECT_TRUE(touched.empty());
+  // The move alone is made.
+  EXPECT_TRUE(stitch_detail::make_angle_changes(r, std::span(changes).first(1), &touched));
+  EXPECT_EQ(to_eigen(r.mesh.point(VH(0))), Eigen::Vector3d(0.1, 0.2, 0.3));
+  EXPECT_EQ(touched, std::vector<VH>{VH(0)});
+}
+
+TEST(AngleChanges, ARefusedSecondChangeUndoesTheFirstCollapse) {
+  // An open grid: an inner edge collapses; a boundary edge never flips (refused), and the
+  // collapsed edge is gone for a second collapse.
+  const TriangleSoup soup = test::grid_patch(4, 4);
+  StitchResult r = result_of(soup);
+  HH inner, boundary;
+  for (auto h : r.mesh.halfedges()) {
+    if (!inner.is_valid() && !r.mesh.is_boundary(r.mesh.from_vertex_handle(h)) &&
+        !r.mesh.is_boundary(r.mesh.to_vertex_handle(h)) && r.mesh.is_collapse_ok(h))
+      inner = h;
+    if (!boundary.is_valid() && r.mesh.is_boundary(r.mesh.edge_handle(h))) boundary = h;
+  }
+  ASSERT_TRUE(inner.is_valid() && boundary.is_valid());
+  const VH a = r.mesh.from_vertex_handle(inner), b = r.mesh.to_vertex_handle(inner);
+  const stitch_detail::AngleChange collapse{stitch_detail::AngleChange::Kind::Collapse, a, b, Eigen::Vector3d::Zero()};
+  const auto before = fingerprint(r.mesh);
+  const std::vector<int> patches_before = r.face_patch, nodes_before = r.vertex_node;
+  for (const auto& second :
+       {stitch_detail::AngleChange{stitch_detail::AngleChange::Kind::Flip, r.mesh.from_vertex_handle(boundary),
+                                   r.mesh.to_vertex_handle(boundary), Eigen::Vector3d::Zero()},
+        collapse}) {
+    const std::vector<stitch_detail::AngleChange> changes{collapse, second};
+    EXPECT_FALSE(stitch_detail::make_angle_changes(r, changes));
+    EXPECT_EQ(fingerprint(r.mesh), before);
+    EXPECT_EQ(r.face_patch, patches_before);
+    EXPECT_EQ(r.vertex_node, nodes_before);
+  }
+  // The collapse alone is made: a deleted, b survives.
+  EXPECT_TRUE(stitch_detail::make_angle_changes(r, std::span(&collapse, 1)));
+  EXPECT_TRUE(r.mesh.status(a).deleted());
+  EXPECT_FALSE(r.mesh.status(b).deleted());
 }
 
 }  // namespace
