@@ -860,22 +860,27 @@ std::vector<std::vector<int>> carve_components(const FaceGraph& graph, const std
   const int patch = face_patch[faces[0]];
   const int epoch = ++scratch.face_epoch;
   std::vector<std::vector<int>> components;
+  // Each component is searched in scratch.face_queue (as long as the patch), then copied.
+  std::vector<int>& queue = scratch.face_queue;
+  if (queue.size() < faces.size()) queue.resize(faces.size());
   for (int seed : faces) {
     if (scratch.face_stamp[seed] == epoch) continue;
-    std::vector<int> component{seed};
+    std::size_t tail = 0;
+    queue[tail++] = seed;
     scratch.face_stamp[seed] = epoch;
-    for (std::size_t head = 0; head < component.size(); ++head) {
-      const int f = component[head];
+    for (std::size_t head = 0; head < tail; ++head) {
+      const int f = queue[head];
       for (int i = 0; i < 3; ++i) {
         const int g = graph.neighbours[f][i];
         if (g < 0 || face_patch[g] != patch || scratch.face_stamp[g] == epoch ||
             scratch.face_owner[g] != scratch.face_owner[f])
           continue;
+        NURBSFRONT_ASSERT(tail < faces.size());
         scratch.face_stamp[g] = epoch;
-        component.push_back(g);
+        queue[tail++] = g;
       }
     }
-    components.push_back(std::move(component));
+    components.emplace_back(queue.begin(), queue.begin() + static_cast<std::ptrdiff_t>(tail));
   }
   return components;
 }

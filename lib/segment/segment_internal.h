@@ -64,6 +64,8 @@ struct Scratch {
   //! Per vertex: its index in the cycle being cut out of a loop, -1 outside that (all -1
   //! between calls; check_projection's split of loops passing a vertex twice).
   std::vector<int> cycle_position;
+  //! A face queue for breadth-first searches inside a patch (grown to the largest patch).
+  std::vector<int> face_queue;
   int vertex_epoch = 0;
   int loop_epoch = 0;
   int face_epoch = 0;
