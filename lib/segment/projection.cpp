@@ -205,29 +205,34 @@ void split_loop(const std::vector<int>& loop, std::vector<int>& position, std::v
   if (!stack.empty()) out.push_back(std::move(stack));
 }
 
-// Breadth-first search inside the patch from `sources`; every reached face gets the index
-// of the source it was reached from in scratch.face_owner. Returns the last face reached.
-int breadth_first(const FaceGraph& graph, const std::vector<int>& sources, const std::vector<int>& face_patch,
-                  Scratch& scratch) {
+// Breadth-first search inside the patch (of n_faces faces) from `sources`; every reached
+// face gets the index of the source it was reached from in scratch.face_owner. Returns the
+// last face reached. The queue is scratch.face_queue, at least n_faces long (no growth).
+template <std::size_t N>
+int breadth_first(const FaceGraph& graph, const std::array<int, N>& sources, std::size_t n_faces,
+                  const std::vector<int>& face_patch, Scratch& scratch) {
   const int patch = face_patch[sources[0]];
   const int epoch = ++scratch.face_epoch;
-  std::vector<int> queue;
-  for (std::size_t k = 0; k < sources.size(); ++k) {
+  std::vector<int>& queue = scratch.face_queue;
+  if (queue.size() < n_faces) queue.resize(n_faces);
+  std::size_t tail = 0;
+  for (std::size_t k = 0; k < N; ++k) {
     scratch.face_stamp[sources[k]] = epoch;
     scratch.face_owner[sources[k]] = static_cast<int>(k);
-    queue.push_back(sources[k]);
+    queue[tail++] = sources[k];
   }
-  for (std::size_t head = 0; head < queue.size(); ++head) {
+  for (std::size_t head = 0; head < tail; ++head) {
     const int f = queue[head];
     for (int i = 0; i < 3; ++i) {
       const int g = graph.neighbours[f][i];
       if (g < 0 || face_patch[g] != patch || scratch.face_stamp[g] == epoch) continue;
+      NURBSFRONT_ASSERT(tail < n_faces);
       scratch.face_stamp[g] = epoch;
       scratch.face_owner[g] = scratch.face_owner[f];
-      queue.push_back(g);
+      queue[tail++] = g;
     }
   }
-  return queue.back();
+  return queue[tail - 1];
 }
 
 }  // namespace
@@ -360,10 +365,10 @@ ProjectionCheck check_projection(const FaceGraph& graph, const std::vector<OpenM
 std::pair<std::vector<int>, std::vector<int>> bisect_patch(const FaceGraph& graph, const std::vector<int>& faces,
                                                            const std::vector<int>& face_patch, Scratch& scratch) {
   NURBSFRONT_ASSERT(faces.size() >= 2);
-  const int far = breadth_first(graph, {faces[0]}, face_patch, scratch);
-  const int farther = breadth_first(graph, {far}, face_patch, scratch);
+  const int far = breadth_first(graph, std::array{faces[0]}, faces.size(), face_patch, scratch);
+  const int farther = breadth_first(graph, std::array{far}, faces.size(), face_patch, scratch);
   NURBSFRONT_ASSERT(far != farther);
-  (void)breadth_first(graph, {far, farther}, face_patch, scratch);
+  (void)breadth_first(graph, std::array{far, farther}, faces.size(), face_patch, scratch);
   std::pair<std::vector<int>, std::vector<int>> parts;
   for (int f : faces) {
     NURBSFRONT_ASSERT(scratch.face_stamp[f] == scratch.face_epoch);  // the patch is connected

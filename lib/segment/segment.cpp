@@ -860,33 +860,44 @@ std::vector<std::vector<int>> carve_components(const FaceGraph& graph, const std
   const int patch = face_patch[faces[0]];
   const int epoch = ++scratch.face_epoch;
   std::vector<std::vector<int>> components;
+  // Each component is searched in scratch.face_queue (as long as the patch), then copied.
+  std::vector<int>& queue = scratch.face_queue;
+  if (queue.size() < faces.size()) queue.resize(faces.size());
   for (int seed : faces) {
     if (scratch.face_stamp[seed] == epoch) continue;
-    std::vector<int> component{seed};
+    std::size_t tail = 0;
+    queue[tail++] = seed;
     scratch.face_stamp[seed] = epoch;
-    for (std::size_t head = 0; head < component.size(); ++head) {
-      const int f = component[head];
+    for (std::size_t head = 0; head < tail; ++head) {
+      const int f = queue[head];
       for (int i = 0; i < 3; ++i) {
         const int g = graph.neighbours[f][i];
         if (g < 0 || face_patch[g] != patch || scratch.face_stamp[g] == epoch ||
             scratch.face_owner[g] != scratch.face_owner[f])
           continue;
+        NURBSFRONT_ASSERT(tail < faces.size());
         scratch.face_stamp[g] = epoch;
-        component.push_back(g);
+        queue[tail++] = g;
       }
     }
-    components.push_back(std::move(component));
+    components.emplace_back(queue.begin(), queue.begin() + static_cast<std::ptrdiff_t>(tail));
   }
   return components;
 }
 
-// True when two vertices of the patch form a cliff (see kCliffRunEdges): bucketed in the
-// patch plane on a grid of the run, sorted by height within a bucket; only pairs of
-// neighbouring buckets whose height ranges together span more than the rise are compared,
-// and of those only the vertices more than the rise above (or below) each other: a suffix
-// (prefix) of the other bucket, found by two pointers since the heights are sorted.
-bool has_cliff(const FaceGraph& graph, const std::vector<int>& faces, const Eigen::Vector3d& axis, double mean_edge,
-               Scratch& scratch) {
+}  // namespace
+
+// Vertices bucketed in the patch plane on a grid of the run, sorted by height within a
+// bucket; only pairs of neighbouring buckets whose height ranges together span more than
+// the rise are compared, and of those only the vertices more than the rise above (or below)
+// each other: a suffix (prefix) of the other bucket, found by two pointers since the heights
+// are sorted.
+bool segment_detail::has_cliff(const FaceGraph& graph, const std::vector<int>& faces, const Eigen::Vector3d& axis,
+                               double mean_edge, Scratch& scratch, CliffPairs* pairs) {
+  if (pairs != nullptr) {
+    pairs->pairs.clear();
+    pairs->is_complete = true;
+  }
   if (faces.size() < kCliffMinFaces || !(mean_edge > 0.0)) return false;
   const auto [e1, e2] = segment_detail::plane_frame(axis);
   const double run = kCliffRunEdges * mean_edge;
@@ -894,6 +905,7 @@ bool has_cliff(const FaceGraph& graph, const std::vector<int>& faces, const Eige
   struct Entry {
     std::int64_t i, j;
     Eigen::Vector3d local;
+    int vertex;
   };
   std::vector<Entry> entries;
   entries.reserve(faces.size());
@@ -908,7 +920,7 @@ bool has_cliff(const FaceGraph& graph, const std::vector<int>& faces, const Eige
       const Eigen::Vector3d& x = graph.points[v];
       const Eigen::Vector3d local(x.dot(e1), x.dot(e2), x.dot(axis));
       entries.push_back({static_cast<std::int64_t>(std::floor(local.x() / run)),
-                         static_cast<std::int64_t>(std::floor(local.y() / run)), local});
+                         static_cast<std::int64_t>(std::floor(local.y() / run)), local, v});
       z_min = std::min(z_min, local.z());
       z_max = std::max(z_max, local.z());
       i_min = std::min(i_min, entries.back().i);
@@ -964,9 +976,21 @@ bool has_cliff(const FaceGraph& graph, const std::vector<int>& faces, const Eige
     return it != buckets.end() && it->i == i && it->j == j ? &*it : nullptr;
   };
   auto z = [&](std::size_t k) { return entries[k].local.z(); };
-  auto is_cliff = [&](std::size_t p, std::size_t q, double dz) {
-    const double dxy = (entries[q].local.head<2>() - entries[p].local.head<2>()).norm();
-    return dxy < run && dz > kCliffMinRiseOverRun * dxy;
+  // Whether vertex `high` rises by dz over `low` as a cliff; with `pairs`, every cliff is
+  // listed (as long as the list is not full) and the search goes on.
+  bool found = false;
+  auto is_cliff = [&](std::size_t low, std::size_t high, double dz) {
+    const double dxy = (entries[high].local.head<2>() - entries[low].local.head<2>()).norm();
+    if (!(dxy < run && dz > kCliffMinRiseOverRun * dxy)) return false;
+    found = true;
+    if (pairs == nullptr || !pairs->is_complete) return true;
+    if (pairs->pairs.size() == kMaxCliffPairs) {
+      pairs->pairs.clear();
+      pairs->is_complete = false;
+      return true;
+    }
+    pairs->pairs.push_back({entries[low].vertex, entries[high].vertex});
+    return false;
   };
   for (const Bucket& a : buckets) {
     // Each unordered pair of buckets once: itself and the neighbours after it in (i, j) order.
@@ -984,12 +1008,14 @@ bool has_cliff(const FaceGraph& graph, const std::vector<int>& faces, const Eige
         if (b == &a) continue;  // pairs within a: the higher one is above
         while (below < b->end && z(p) - z(below) > rise) ++below;
         for (std::size_t q = b->begin; q < below; ++q)
-          if (is_cliff(p, q, z(p) - z(q))) return true;
+          if (is_cliff(q, p, z(p) - z(q))) return true;
       }
     }
   }
-  return false;
+  return found;
 }
+
+namespace {
 
 // Splits every patch whose projection is not a set of simple loops, or that holds a cliff
 // (has_cliff); returns the count.
@@ -1009,49 +1035,80 @@ std::size_t split_folds(const Grouping& grouping, double mean_edge, Scratch& scr
   workers = std::min(workers, kMaxFoldCheckWorkers);
   const FaceGraph& graph = grouping.graph;
   const TriMesh& mesh = *graph.mesh;
-  // A patch fails when its projection is not simple or it holds a cliff.
-  auto check_patch = [&](int p, Scratch& own, bool& fails) {
+  // Per patch: the cliffs of an ancestor that was bisected for them, those with both
+  // vertices in the patch (where listed[p] != 0). Every part keeps its ancestor's axis, so
+  // these are all of the patch's cliffs (segment_detail::has_cliff).
+  std::vector<segment_detail::CliffPairs> cliffs(patches.faces.size());
+  std::vector<std::uint8_t> listed(patches.faces.size(), 0);
+  // A patch fails when its projection is not simple or it holds a cliff: decided by its
+  // listed cliffs, else by a search that lists them all in `found` (a patch that fails for a
+  // cliff is bisected, and its parts then need no search).
+  auto check_patch = [&](int p, Scratch& own, bool& fails, segment_detail::CliffPairs& found) {
+    const std::vector<int>& faces = patches.faces[p];
     segment_detail::ProjectionCheck check =
-        segment_detail::check_projection(graph, patches.faces[p], patches.face_patch, patches.axes[p], own);
-    fails = !check.is_simple || has_cliff(graph, patches.faces[p], patches.axes[p], mean_edge, own);
+        segment_detail::check_projection(graph, faces, patches.face_patch, patches.axes[p], own);
+    if (!check.is_simple)
+      fails = true;
+    else if (listed[p] != 0)
+      fails = faces.size() >= kCliffMinFaces && mean_edge > 0.0 && !cliffs[p].pairs.empty();
+    else
+      fails = segment_detail::has_cliff(graph, faces, patches.axes[p], mean_edge, own, &found);
     return check;
   };
   // The parallel checks: a patch's check depends only on its faces and axis and on which
   // faces around it are not its own, which splitting other patches does not change, so a
   // patch not split since it was checked here takes this result (the same as checking it
-  // in the loop: results do not depend on the thread count).
-  const std::size_t n_prechecked = workers > 1 && work.size() > 1 ? patches.faces.size() : 0;
-  std::vector<std::uint8_t> prechecked(n_prechecked, 0), prefails(n_prechecked, 0);
-  std::vector<segment_detail::ProjectionCheck> prechecks(n_prechecked);
-  if (n_prechecked > 0) {
+  // in the loop: results do not depend on the thread count). First every patch of `work`,
+  // then the parts of each split (each is checked before anything changes its faces).
+  std::vector<std::uint8_t> prechecked, prefails;
+  std::vector<segment_detail::ProjectionCheck> prechecks;
+  std::vector<segment_detail::CliffPairs> precliffs;
+  auto precheck = [&](const std::vector<int>& which) {
+    const std::size_t n = patches.faces.size();
+    prechecked.resize(n, 0);
+    prefails.resize(n, 0);
+    prechecks.resize(n);
+    precliffs.resize(n);
     if (worker_scratch.size() < workers) worker_scratch.resize(workers);
-    segment_detail::parallel_chunks(work.size(), workers, 1, [&](std::size_t begin, std::size_t end, unsigned worker) {
+    segment_detail::parallel_chunks(which.size(), workers, 1, [&](std::size_t begin, std::size_t end, unsigned worker) {
       if (worker > 0 && !worker_scratch[worker]) worker_scratch[worker] = std::make_unique<Scratch>(mesh);
       Scratch& own = worker == 0 ? scratch : *worker_scratch[worker];
       for (std::size_t i = begin; i < end; ++i) {
-        const int p = work[i];
+        const int p = which[i];
         bool fails = false;
-        prechecks[p] = check_patch(p, own, fails);
+        prechecks[p] = check_patch(p, own, fails, precliffs[p]);
         prefails[p] = fails ? 1 : 0;
         prechecked[p] = 1;
       }
     });
-  }
+  };
+  if (workers > 1 && work.size() > 1) precheck(work);
+  std::vector<int> split_parts;
   std::size_t n_splits = 0;
   while (!work.empty()) {
     const int p = work.back();
     work.pop_back();
     segment_detail::ProjectionCheck check;
+    segment_detail::CliffPairs found;
     bool fails = false;
-    if (static_cast<std::size_t>(p) < n_prechecked && prechecked[p] != 0) {
+    if (static_cast<std::size_t>(p) < prechecked.size() && prechecked[p] != 0) {
       prechecked[p] = 0;  // p's faces change if it is split
       check = std::move(prechecks[p]);
       fails = prefails[p] != 0;
+      found = std::move(precliffs[p]);
     } else {
-      check = check_patch(p, scratch, fails);
+      check = check_patch(p, scratch, fails, found);
     }
-    if (!fails) continue;
+    if (!fails) {
+      cliffs[p] = {};
+      continue;
+    }
     ++n_splits;
+    // Failed for a cliff, found by a search: every cliff of p is in `found`.
+    if (listed[p] == 0 && check.is_simple && found.is_complete) {
+      cliffs[p] = std::move(found);
+      listed[p] = 1;
+    }
     std::vector<std::vector<int>> parts;
     if (!check.trouble.empty()) {
       for (int f : patches.faces[p]) scratch.face_owner[f] = 0;
@@ -1082,16 +1139,33 @@ std::size_t split_folds(const Grouping& grouping, double mean_edge, Scratch& scr
       parts.push_back(std::move(first));
       parts.push_back(std::move(second));
     }
+    // Each part's cliffs: those of p with both vertices in the part.
+    std::vector<segment_detail::CliffPairs> part_cliffs(listed[p] != 0 ? parts.size() : 0);
+    for (std::size_t k = 0; k < part_cliffs.size(); ++k) {
+      const int epoch = ++scratch.vertex_epoch;
+      for (const int f : parts[k])
+        for (const int v : graph.vertices[f]) scratch.vertex_stamp[v] = epoch;
+      for (const auto& pair : cliffs[p].pairs)
+        if (scratch.vertex_stamp[pair[0]] == epoch && scratch.vertex_stamp[pair[1]] == epoch)
+          part_cliffs[k].pairs.push_back(pair);
+    }
+    const bool parts_listed = listed[p] != 0;
     const Eigen::Vector3d axis = patches.axes[p];
     patches.faces[p] = std::move(parts[0]);
+    cliffs[p] = parts_listed ? std::move(part_cliffs[0]) : segment_detail::CliffPairs{};
     work.push_back(p);
+    split_parts.assign(1, p);
     for (std::size_t k = 1; k < parts.size(); ++k) {
       const int q = static_cast<int>(patches.faces.size());
       for (int f : parts[k]) patches.face_patch[f] = q;
       patches.faces.push_back(std::move(parts[k]));
       patches.axes.push_back(axis);
+      cliffs.push_back(parts_listed ? std::move(part_cliffs[k]) : segment_detail::CliffPairs{});
+      listed.push_back(parts_listed ? 1 : 0);
       work.push_back(q);
+      split_parts.push_back(q);
     }
+    if (workers > 1) precheck(split_parts);
   }
   return n_splits;
 }
@@ -1619,7 +1693,7 @@ Segmentation segment_detail::merge_into_neighbours(Splitter& s, const Segmentati
       for (const Eigen::Vector3d& axis : axes) {
         if (!std::all_of(target.begin(), target.end(), [&](int f) { return grouping.fits(f, axis); })) continue;
         if (!segment_detail::check_projection(s.graph, target, patches.face_patch, axis, scratch).is_simple) continue;
-        if (has_cliff(s.graph, target, axis, s.mean_edge, scratch)) continue;  // segment()'s step 7, both halves
+        if (segment_detail::has_cliff(s.graph, target, axis, s.mean_edge, scratch)) continue;  // segment()'s step 7, both halves
         patches.axes[static_cast<std::size_t>(q)] = axis;
         island_faces.insert(island_faces.end(), faces.begin(), faces.end());
         faces.clear();

@@ -64,6 +64,8 @@ struct Scratch {
   //! Per vertex: its index in the cycle being cut out of a loop, -1 outside that (all -1
   //! between calls; check_projection's split of loops passing a vertex twice).
   std::vector<int> cycle_position;
+  //! A face queue for breadth-first searches inside a patch (grown to the largest patch).
+  std::vector<int> face_queue;
   int vertex_epoch = 0;
   int loop_epoch = 0;
   int face_epoch = 0;
@@ -110,6 +112,26 @@ struct ProjectionCheck {
                                                const std::vector<int>& face_patch,
                                                const Eigen::Vector3d& axis, Scratch& scratch,
                                                std::size_t n_known = 0);
+
+//! Every cliff of a patch (has_cliff()) as vertex ids (lower, higher), each pair once.
+struct CliffPairs {
+  std::vector<std::array<int, 2>> pairs;
+  //! False when the patch has more than kMaxCliffPairs cliffs: `pairs` is then empty.
+  bool is_complete = true;
+};
+//! The longest list has_cliff() makes (a steep wall of n vertices has O(n) pairs).
+inline constexpr std::size_t kMaxCliffPairs = std::size_t{1} << 20;
+
+//! Whether two vertices of a patch (of at least kCliffMinFaces faces, mean_edge > 0) form a
+//! cliff: closer than kCliffRunEdges mean input edges in the plane orthogonal to `axis`,
+//! more than kCliffRiseEdges apart along it, at a rise over run above kCliffMinRiseOverRun
+//! (segment.cpp; segment()'s step 7). With `pairs`, every cliff is listed (the search does
+//! not stop at the first). A cliff is a property of its two vertices alone, so a part of
+//! the patch with the same axis has one exactly when it has kCliffMinFaces faces or more
+//! and both vertices of a listed pair (split_folds decides the parts of a bisected patch
+//! that way instead of by a new search).
+[[nodiscard]] bool has_cliff(const FaceGraph& graph, const std::vector<int>& faces, const Eigen::Vector3d& axis,
+                             double mean_edge, Scratch& scratch, CliffPairs* pairs = nullptr);
 
 //! Splits a connected patch of at least two faces in two connected parts: breadth-first
 //! regions around two faces far apart (the farthest face from the farthest face of

@@ -402,6 +402,58 @@ TEST(Segment, RampShortOfOneTurnIsSplitAtItsCliff) {
   EXPECT_NE(seg.face_patch.front(), seg.face_patch.back());
 }
 
+// has_cliff's list of every cliff equals the exhaustive test over all vertex pairs (the
+// definition: closer than 2.5 mean edges in the plane, more than 3 apart along the axis,
+// rise over run above 4), and a part of the patch has a cliff exactly when it has 40 faces
+// or more and both vertices of a listed pair (what split_folds uses for bisected parts).
+TEST(Segment, CliffPairsAreEveryCliffAndDecideTheParts) {
+  const TriMesh mesh = to_trimesh(ramp(345.0 / 360.0, 48, 4, 0.3));
+  const segment_detail::FaceGraph graph = segment_detail::build_graph(mesh);
+  segment_detail::Scratch scratch(mesh);
+  const Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();
+  const double mean_edge = mean_edge_length(mesh);
+  const int n_faces = static_cast<int>(mesh.n_faces());
+  std::vector<int> all(n_faces);
+  for (int f = 0; f < n_faces; ++f) all[f] = f;
+  segment_detail::CliffPairs listed;
+  ASSERT_TRUE(segment_detail::has_cliff(graph, all, axis, mean_edge, scratch, &listed));
+  EXPECT_TRUE(segment_detail::has_cliff(graph, all, axis, mean_edge, scratch));
+  ASSERT_TRUE(listed.is_complete);
+  // Exhaustive: every pair of vertices, lower first.
+  const auto [e1, e2] = segment_detail::plane_frame(axis);
+  std::set<std::array<int, 2>> expected;
+  const auto& points = graph.points;
+  for (int a = 0; a < static_cast<int>(points.size()); ++a) {
+    for (int b = 0; b < static_cast<int>(points.size()); ++b) {
+      const double dz = points[b].dot(axis) - points[a].dot(axis);
+      const Eigen::Vector2d d(points[b].dot(e1) - points[a].dot(e1), points[b].dot(e2) - points[a].dot(e2));
+      if (dz > 3.0 * mean_edge && d.norm() < 2.5 * mean_edge && dz > 4.0 * d.norm()) expected.insert({a, b});
+    }
+  }
+  ASSERT_FALSE(expected.empty());
+  const std::set<std::array<int, 2>> found(listed.pairs.begin(), listed.pairs.end());
+  EXPECT_EQ(found.size(), listed.pairs.size());  // each pair once
+  EXPECT_EQ(found, expected);
+  // Parts: runs of faces along the ramp (the ends hold the cliff's two sides).
+  int n_with = 0, n_without = 0;
+  for (const int begin : {0, n_faces / 8, n_faces / 2}) {
+    for (const int end : {begin + 30, begin + 60, n_faces * 3 / 4, n_faces}) {
+      if (end <= begin || end > n_faces) continue;
+      const std::vector<int> part(all.begin() + begin, all.begin() + end);
+      std::set<int> vertices;
+      for (const int f : part) vertices.insert(graph.vertices[f].begin(), graph.vertices[f].end());
+      const bool holds_pair = std::any_of(listed.pairs.begin(), listed.pairs.end(), [&](const auto& pair) {
+        return vertices.count(pair[0]) > 0 && vertices.count(pair[1]) > 0;
+      });
+      const bool has = segment_detail::has_cliff(graph, part, axis, mean_edge, scratch);
+      EXPECT_EQ(has, part.size() >= 40 && holds_pair) << begin << " " << end;
+      (has ? n_with : n_without) += 1;
+    }
+  }
+  EXPECT_GT(n_with, 0);
+  EXPECT_GT(n_without, 0);
+}
+
 TEST(Segment, SmoothedNormalsKeepATerracedRampInOnePiece) {
   const TriMesh mesh = to_trimesh(terraced_ramp(40));
   SegmentOptions options;
