@@ -68,7 +68,7 @@ void bucket_sort(std::vector<T>& items, std::size_t n_buckets, Bucket bucket, Le
 //! A uniform grid of cells over a set of closed boxes (items 0, 1, ...), each cell listing
 //! the items whose box meets it: box-overlap candidates without a tree, for a few boxes
 //! scattered over a large soup (intersecting_pairs_of). The cells are about the items'
-//! mean largest side, at most max(4096, 16 x items) of them. A point's cell is taken by
+//! mean largest side, at most 64 x items of them (at least 4096, at most 2^21). A point's cell is taken by
 //! the same rounded, clamped arithmetic for every box (monotone in each coordinate), so
 //! two boxes that meet always share a cell.
 class BoxGrid {

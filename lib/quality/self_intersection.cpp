@@ -379,9 +379,12 @@ class SelfIntersectionCounter {
 
 namespace quality_detail {
 
-// Cells per item at most (and at least kMinCells in all): the grid's memory stays linear.
-constexpr std::size_t kCellsPerItem = 16;
+// Cells per item at most (at least kMinCells, at most kMaxCells in all): the grid's memory
+// stays linear and bounded. With 16 per item the liver's collapse check (5 k faces spread
+// over the mesh) had cells of 4 mean edges, and most faces of the soup went through them.
+constexpr std::size_t kCellsPerItem = 64;
 constexpr std::size_t kMinCells = 4096;
+constexpr std::size_t kMaxCells = std::size_t{1} << 21;
 
 BoxGrid::BoxGrid(std::vector<Eigen::Vector3d> lo, std::vector<Eigen::Vector3d> hi) : lo_(std::move(lo)), hi_(std::move(hi)) {
   if (lo_.size() != hi_.size()) throw InternalError("nurbsfront: BoxGrid: " + std::to_string(lo_.size()) + " lows, " +
@@ -395,7 +398,7 @@ BoxGrid::BoxGrid(std::vector<Eigen::Vector3d> lo, std::vector<Eigen::Vector3d> h
     side_sum += (hi_[i] - lo_[i]).maxCoeff();
   }
   const Eigen::Vector3d extent = max - min;
-  const std::size_t max_cells = std::max(kMinCells, kCellsPerItem * lo_.size());
+  const std::size_t max_cells = std::clamp(kCellsPerItem * lo_.size(), kMinCells, kMaxCells);
   // About the items' mean largest side, larger while the grid would have too many cells.
   double cell = side_sum / static_cast<double>(lo_.size());
   if (!(cell > 0.0)) cell = extent.maxCoeff() > 0.0 ? extent.maxCoeff() / 16.0 : 1.0;
