@@ -164,7 +164,12 @@ class Optimiser {
   std::size_t obtuse_sweep(const std::vector<std::uint8_t>& only = {}) {
     std::size_t n_moves = 0;
     std::vector<std::pair<double, Vec>> apexes;
+    // Only a vertex of an obtuse triangle is tried: those at the start of the sweep, and the
+    // ring of every vertex moved in it (their triangles changed). The others are skipped
+    // before their ring is taken (the same moves: most vertices have no obtuse triangle).
+    std::vector<std::uint8_t> candidate = obtuse_face_vertices();
     for (auto v : mesh_.vertices()) {
+      if (candidate[static_cast<std::size_t>(v.idx())] == 0) continue;
       if (!only.empty() && only[static_cast<std::size_t>(v.idx())] == 0) continue;
       const NodeInfo& info = nodes_[static_cast<std::size_t>(v.idx())];
       if (!info.is_movable || mesh_.is_boundary(v)) continue;
@@ -204,6 +209,7 @@ class Optimiser {
           mesh_.set_point(v, to_openmesh(q));
           ++n_moves;
           moved = true;
+          for (auto w : mesh_.vv_range(v)) candidate[static_cast<std::size_t>(w.idx())] = 1;
           break;
         }
         if (moved) break;
@@ -221,7 +227,15 @@ class Optimiser {
   std::size_t obtuse_flip_sweep(const std::vector<std::uint8_t>& only = {}) {
     std::size_t n_flips = 0;
     FlipQuad q;
+    // Per face, whether it is obtuse now (a flip changes its two faces only): an edge with
+    // neither face obtuse is skipped before its quad is taken (the same flips).
+    std::vector<std::uint8_t> obtuse = obtuse_faces();
+    auto is_obtuse_face = [&](TriMesh::HalfedgeHandle h) {
+      const auto f = mesh_.face_handle(h);
+      return f.is_valid() && obtuse[static_cast<std::size_t>(f.idx())] != 0;
+    };
     for (auto e : mesh_.edges()) {
+      if (!is_obtuse_face(mesh_.halfedge_handle(e, 0)) && !is_obtuse_face(mesh_.halfedge_handle(e, 1))) continue;
       if (!only.empty() && (only[static_cast<std::size_t>(mesh_.to_vertex_handle(mesh_.halfedge_handle(e, 0)).idx())] == 0 ||
                             only[static_cast<std::size_t>(mesh_.from_vertex_handle(mesh_.halfedge_handle(e, 0)).idx())] == 0)) {
         continue;
@@ -238,8 +252,37 @@ class Optimiser {
       if (!mesh_.is_flip_ok(e)) continue;
       mesh_.flip(e);
       ++n_flips;
+      for (const auto h : {mesh_.halfedge_handle(e, 0), mesh_.halfedge_handle(e, 1)}) {
+        const auto f = mesh_.face_handle(h);
+        obtuse[static_cast<std::size_t>(f.idx())] = is_obtuse(f) ? 1 : 0;
+      }
     }
     return n_flips;
+  }
+
+  // Whether face f has an angle above 90 deg (triangle_is_obtuse of its corners, which
+  // gives the same answer for every rotation of them: each dot product has the same terms).
+  bool is_obtuse(TriMesh::FaceHandle f) const {
+    const auto h = mesh_.halfedge_handle(f);
+    return triangle_is_obtuse(point(mesh_, mesh_.from_vertex_handle(h)), point(mesh_, mesh_.to_vertex_handle(h)),
+                              point(mesh_, mesh_.to_vertex_handle(mesh_.next_halfedge_handle(h))));
+  }
+
+  // is_obtuse() of every face, in face order.
+  std::vector<std::uint8_t> obtuse_faces() const {
+    std::vector<std::uint8_t> obtuse(mesh_.n_faces(), 0);
+    for (auto f : mesh_.faces()) obtuse[static_cast<std::size_t>(f.idx())] = is_obtuse(f) ? 1 : 0;
+    return obtuse;
+  }
+
+  // 1 for every vertex of an obtuse face, in vertex order.
+  std::vector<std::uint8_t> obtuse_face_vertices() const {
+    std::vector<std::uint8_t> marked(mesh_.n_vertices(), 0);
+    for (auto f : mesh_.faces()) {
+      if (!is_obtuse(f)) continue;
+      for (auto v : mesh_.fv_range(f)) marked[static_cast<std::size_t>(v.idx())] = 1;
+    }
+    return marked;
   }
 
   // Obtuse splits (StitchOptions::obtuse_split_rounds): every face that is still obtuse, in

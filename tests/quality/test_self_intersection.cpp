@@ -1,10 +1,13 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <random>
 
 #include "fixtures/shapes.h"
 #include "nurbsfront/core/error.h"
+#include "nurbsfront/quality/internal.h"
 #include "nurbsfront/quality/predicates.h"
 #include "nurbsfront/quality/report.h"
 #include "nurbsfront/quality/self_intersection.h"
@@ -264,6 +267,114 @@ TEST(QualitySelfIntersection, PairsOfDoNotDependOnTheThreadCount) {
     EXPECT_EQ(intersecting_pairs_of(s, everything, threads), all) << threads;
   }
   EXPECT_THROW((void)intersecting_pairs_of(s, subset, 0), InvalidInput);
+}
+
+TEST(QualityBoxGrid, VisitsExactlyTheOverlappingBoxesOnce) {
+  // 400 small boxes in 4 clusters far apart (a grid over the whole span, mostly empty
+  // cells), some of them points or flat, queried by 300 boxes of every size, touching ones
+  // included: every box that meets the query (closed, exact comparison) is visited, once,
+  // and no other (brute force).
+  std::mt19937 random(7);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  const std::array<V, 4> centre{V(0, 0, 0), V(50, 0, 0), V(0, 40, 10), V(30, 30, 30)};
+  std::vector<V> lo, hi;
+  for (int i = 0; i < 400; ++i) {
+    const V c = centre[static_cast<std::size_t>(i % 4)] + V(unit(random), unit(random), unit(random)) * 4.0;
+    V size = V(unit(random), unit(random), unit(random)) * 0.5;
+    if (i % 10 == 0) size = V::Zero();   // a point
+    if (i % 10 == 1) size.z() = 0.0;     // flat
+    lo.push_back(c);
+    hi.push_back(c + size);
+  }
+  const quality_detail::BoxGrid grid(lo, hi);
+  const auto& n = grid.dimensions();
+  ASSERT_GT(n[0] * n[1] * n[2], 100);  // a real grid, not one cell
+  std::vector<std::pair<V, V>> queries;
+  for (int q = 0; q < 300; ++q) {
+    const V c = centre[static_cast<std::size_t>(q % 4)] + V(unit(random), unit(random), unit(random)) * 5.0 - V::Constant(0.5);
+    const double scale = q % 3 == 0 ? 0.05 : (q % 3 == 1 ? 1.0 : 20.0);
+    queries.emplace_back(c, c + V(unit(random), unit(random), unit(random)) * scale);
+  }
+  // Boxes touching an item's box at its corner and along a face, and one outside the grid.
+  queries.emplace_back(hi[5], hi[5] + V(1, 1, 1));
+  queries.emplace_back(V(lo[6].x() - 1.0, lo[6].y(), lo[6].z()), V(lo[6].x(), hi[6].y(), hi[6].z()));
+  queries.emplace_back(V(-100, -100, -100), V(-90, -90, -90));
+  std::size_t n_found = 0;
+  for (const auto& [qlo, qhi] : queries) {
+    std::vector<int> visits(lo.size(), 0);
+    grid.for_each_overlapping(qlo, qhi, [&](std::uint32_t i) { ++visits[i]; });
+    for (std::size_t i = 0; i < lo.size(); ++i) {
+      const bool meets = (lo[i].array() <= qhi.array()).all() && (qlo.array() <= hi[i].array()).all();
+      EXPECT_EQ(visits[i], meets ? 1 : 0) << i;
+      n_found += meets ? 1 : 0;
+    }
+  }
+  EXPECT_GT(n_found, 300u);
+  // Every point of an item's box is in an occupied cell; far from every box, none is.
+  for (std::size_t i = 0; i < lo.size(); ++i) {
+    EXPECT_TRUE(grid.is_occupied(lo[i]));
+    EXPECT_TRUE(grid.is_occupied(0.5 * (lo[i] + hi[i])));
+    EXPECT_TRUE(grid.is_occupied(hi[i]));
+  }
+  EXPECT_FALSE(grid.is_occupied(V(25, 20, 15)));
+}
+
+TEST(QualityBoxGrid, FlatAndSingleBoxes) {
+  // All boxes in the plane z = 1 (the grid has one cell along z), one box, no box.
+  std::vector<V> lo, hi;
+  for (int i = 0; i < 20; ++i) {
+    lo.emplace_back(i, 0.5 * i, 1.0);
+    hi.emplace_back(i + 0.5, 0.5 * i + 0.5, 1.0);
+  }
+  const quality_detail::BoxGrid flat(lo, hi);
+  EXPECT_EQ(flat.dimensions()[2], 1);
+  std::vector<std::uint32_t> seen;
+  flat.for_each_overlapping(V(2.5, 0, 0), V(4.0, 10, 2), [&](std::uint32_t i) { seen.push_back(i); });
+  std::sort(seen.begin(), seen.end());
+  EXPECT_EQ(seen, (std::vector<std::uint32_t>{2, 3, 4}));  // box 2 touches x = 2.5
+  seen.clear();
+  flat.for_each_overlapping(V(0, 0, 1.5), V(30, 30, 2), [&](std::uint32_t i) { seen.push_back(i); });
+  EXPECT_TRUE(seen.empty());  // above the plane
+  const quality_detail::BoxGrid one({V(1, 2, 3)}, {V(1, 2, 3)});
+  int n_one = 0;
+  one.for_each_overlapping(V(0, 0, 0), V(1, 2, 3), [&](std::uint32_t) { ++n_one; });
+  EXPECT_EQ(n_one, 1);
+  EXPECT_TRUE(one.is_occupied(V(1, 2, 3)));
+  const quality_detail::BoxGrid none({}, {});
+  int n_none = 0;
+  none.for_each_overlapping(V(0, 0, 0), V(1, 1, 1), [&](std::uint32_t) { ++n_none; });
+  EXPECT_EQ(n_none, 0);
+  EXPECT_FALSE(none.is_occupied(V(0, 0, 0)));
+  EXPECT_THROW(quality_detail::BoxGrid({V(0, 0, 0)}, {}), InternalError);
+}
+
+TEST(QualitySelfIntersection, PairsOfAScatteredSubsetMatchTheGlobalPairs) {
+  // Two interpenetrating spheres of 5120 faces each and a subset of 1 face in 40 spread
+  // over both (its box is the whole soup's; the grid leaves most faces in empty cells): the
+  // pairs are the global pairs with a face in the subset.
+  TriangleSoup s = test::icosphere(4);
+  const TriangleSoup other = test::icosphere(4);
+  const auto offset = static_cast<std::uint32_t>(s.points.size());
+  for (const auto& p : other.points) s.points.push_back(p + V(0.93, 0.11, 0.07));
+  for (const auto& t : other.triangles) s.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
+  const auto all = self_intersecting_pairs(s, 1);
+  std::vector<std::uint32_t> subset;
+  std::vector<char> chosen(s.triangles.size(), 0);
+  for (std::uint32_t f = 0; f < s.triangles.size(); f += 40) {
+    subset.push_back(f);
+    chosen[f] = 1;
+  }
+  // And every face of the first crossing pair's first face's ring of crossings.
+  ASSERT_FALSE(all.empty());
+  subset.push_back(all.front()[0]);
+  chosen[all.front()[0]] = 1;
+  std::vector<std::array<std::uint32_t, 2>> expected;
+  for (const auto& p : all) {
+    if (chosen[p[0]] != 0 || chosen[p[1]] != 0) expected.push_back(p);
+  }
+  ASSERT_GE(expected.size(), 5u);
+  EXPECT_EQ(intersecting_pairs_of(s, subset, 1), expected);
+  EXPECT_EQ(intersecting_pairs_of(s, subset, 2), expected);
 }
 
 }  // namespace
