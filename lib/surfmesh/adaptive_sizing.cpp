@@ -305,4 +305,27 @@ FeatureSizing feature_sizing(const TriMesh& mesh, const Segmentation& segmentati
   return out;
 }
 
+SizeAt looked_ahead_sizing(SizeAt size_at, double fraction) {
+  return [size_at = std::move(size_at), fraction](const Eigen::Vector3d& x) {
+    // The axes and the cube's diagonals: one of the 14 within 35 deg of any direction into
+    // a patch, so r cos(35 deg) >= 0.8 r of the look-ahead is taken whichever way the patch lies.
+    static constexpr double kD = 0.57735026918962576;  // 1 / sqrt(3)
+    static constexpr std::array<std::array<double, 3>, 7> kDirections{{{1.0, 0.0, 0.0},
+                                                                      {0.0, 1.0, 0.0},
+                                                                      {0.0, 0.0, 1.0},
+                                                                      {kD, kD, kD},
+                                                                      {kD, kD, -kD},
+                                                                      {kD, -kD, kD},
+                                                                      {-kD, kD, kD}}};
+    const double s = size_at(x);
+    const double r = fraction * s;
+    double smallest = s;
+    for (const auto& d : kDirections) {
+      const Eigen::Vector3d step(r * d[0], r * d[1], r * d[2]);
+      smallest = std::min({smallest, size_at(x + step), size_at(x - step)});
+    }
+    return smallest;
+  };
+}
+
 }  // namespace nurbsfront::surfmesh_detail

@@ -143,6 +143,8 @@ void SizingOptions::validate() const {
   if (!(std::isfinite(feature_size) && feature_size >= 0.0))
     bad_option("sizing.feature_size must be finite and >= 0, got " + std::to_string(feature_size));
   if (!(std::isfinite(gradation) && gradation > 1.0)) bad_option("sizing.gradation must be > 1, got " + std::to_string(gradation));
+  if (!(border_lookahead >= 0.0 && border_lookahead <= 2.0))
+    bad_option("sizing.border_lookahead must be in [0, 2], got " + std::to_string(border_lookahead));
 }
 
 void PatchFitOptions::validate() const {
@@ -373,7 +375,12 @@ SurfaceMesh surfmesh_detail::mesh_surface(const TriMesh& input, const Segmentati
     }
     return undone;
   };
-  BorderNodes borders = discretise_borders(input, segmentation, size_at, source, corner_target);
+  // The borders' sizes look ahead into the patches where the sizes vary (SizingOptions::border_lookahead).
+  const bool varying = options.sizing.callback || options.sizing.adaptive || out.feature_sizing_applied;
+  const SizeAt border_size = varying && options.sizing.border_lookahead > 0.0
+                                 ? looked_ahead_sizing(size_at, options.sizing.border_lookahead)
+                                 : size_at;
+  BorderNodes borders = discretise_borders(input, segmentation, border_size, source, corner_target);
   for (bool changed = true; changed;) {
     changed = false;
     std::vector<int> bad = crossing_curves(segmentation, borders, threads);
@@ -397,7 +404,7 @@ SurfaceMesh surfmesh_detail::mesh_surface(const TriMesh& input, const Segmentati
       s = s == CurveSource::Smoothed ? CurveSource::Input : CurveSource::InputVertices;
       changed = true;
     }
-    if (changed) borders = discretise_borders(input, segmentation, size_at, source, corner_target);
+    if (changed) borders = discretise_borders(input, segmentation, border_size, source, corner_target);
   }
   report_progress(options.progress, "surfmesh: borders", 1.0);
 

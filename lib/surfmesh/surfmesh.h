@@ -70,6 +70,14 @@ struct SizingOptions {
   std::function<double(const Eigen::Vector3d&)> callback;
   //! Gradation: |grad h| <= gradation - 1. Must be > 1. Default 1.5.
   double gradation = 1.5;
+  //! Border look-ahead: where the sizes are not uniform (feature or adaptive sizing, a
+  //! callback), a border curve is discretised with the smallest size within this fraction of
+  //! its own size around each point (14 samples: the axes and the cube's diagonals), not the
+  //! size on the curve alone. Where the sizes fall steeply into a patch (graded down from a
+  //! narrow face nearby), border pieces as long as the size on the curve met a first row
+  //! of triangles half as large: flat, obtuse triangles along the border (docs/surfmesh.md
+  //! "Border look-ahead"). In [0, 2]; 0 = the size on the curve. Default 0.35.
+  double border_lookahead = 0.35;
   //! \throw InvalidInput on nonsense.
   void validate() const;
 };

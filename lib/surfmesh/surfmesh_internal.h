@@ -316,6 +316,12 @@ struct FeatureSizing {
                                            double factor, double min_size, double gradation,
                                            double min_area_share = 0.0);
 
+//! The border curves' sizing (SizingOptions::border_lookahead): at x, the smallest of
+//! size_at at x and at the 14 points x + r d, r = fraction x size_at(x), d the unit axes and
+//! the cube's unit diagonals, both ways. So a border piece is no longer than the sizes just
+//! inside the patches it bounds (their first row of triangles). Thread-safe when size_at is.
+[[nodiscard]] SizeAt looked_ahead_sizing(SizeAt size_at, double fraction);
+
 //! Independently meshed patches can join the same two border nodes by an edge that is not
 //! their border segment (a chord): two patches on either side of a thin fin or of a tiny
 //! closed component cut the same ear off their common border (the 3D edge then has four

@@ -1302,5 +1302,61 @@ TEST(SurfmeshSlow, OccupancyDramCell128) {
   print_figures("occupancy dram 128", mesh, seg, sm, seconds);
 }
 
+TEST(Surfmesh, LookedAheadSizingIsTheSmallestSizeAroundThePoint) {
+  // h = 1 + x: the smallest of the 15 samples at x = 0 is the one at -r e_x, r = 0.5.
+  const surfmesh_detail::SizeAt linear = [](const Eigen::Vector3d& x) { return 1.0 + x.x(); };
+  const surfmesh_detail::SizeAt ahead = surfmesh_detail::looked_ahead_sizing(linear, 0.5);
+  EXPECT_DOUBLE_EQ(ahead(Eigen::Vector3d::Zero()), 0.5);
+  // At (1, 2, 3) (size 2, r = 1): 2 - 1.
+  EXPECT_DOUBLE_EQ(ahead(Eigen::Vector3d(1.0, 2.0, 3.0)), 1.0);
+  // A uniform size stays itself.
+  const surfmesh_detail::SizeAt uniform = [](const Eigen::Vector3d&) { return 0.3; };
+  EXPECT_DOUBLE_EQ(surfmesh_detail::looked_ahead_sizing(uniform, 0.35)(Eigen::Vector3d(0.2, 0.1, 0.0)), 0.3);
+  SurfMeshOptions options;
+  options.sizing.border_lookahead = -0.1;
+  EXPECT_THROW(options.validate(), InvalidInput);
+  options.sizing.border_lookahead = 2.5;
+  EXPECT_THROW(options.validate(), InvalidInput);
+}
+
+// Issue 5, flat triangles along a border: a flat square whose sizes fall into it from its
+// border y = 0 as steeply as the gradation allows. With the border pieces sized by the size on
+// the border alone, they are longer than the first row of triangles inside: those rows
+// hold triangles obtuse at an inner node over a border segment. With the border look-ahead
+// (default) none.
+TEST(Surfmesh, BorderLookAheadLeavesNoFlatTriangleAlongTheBorder) {
+  const TriMesh mesh = to_trimesh(test::grid_patch(24, 24));
+  const Segmentation seg = segment(mesh);
+  ASSERT_EQ(seg.patches.size(), 1u);
+  SurfMeshOptions options;
+  // 0.15 on the border y = 0, falling at the gradation's limit (|grad h| = 0.5) to 0.04.
+  options.sizing.callback = [](const Eigen::Vector3d& x) { return std::max(0.04, 0.15 - 0.5 * x.y()); };
+  // Triangles with their obtuse angle at an inner node opposite a border segment.
+  auto flat_along_border = [](const SurfaceMesh& sm) {
+    std::size_t n = 0;
+    for (const auto& t : sm.triangles) {
+      for (int k = 0; k < 3; ++k) {
+        const auto v = static_cast<std::size_t>(t[static_cast<std::size_t>(k)]);
+        const auto a = static_cast<std::size_t>(t[static_cast<std::size_t>((k + 1) % 3)]);
+        const auto b = static_cast<std::size_t>(t[static_cast<std::size_t>((k + 2) % 3)]);
+        if (sm.node_kind[v] != NodeKind::Inner || sm.node_kind[a] == NodeKind::Inner || sm.node_kind[b] == NodeKind::Inner) continue;
+        if ((sm.nodes[a] - sm.nodes[v]).dot(sm.nodes[b] - sm.nodes[v]) < 0.0) ++n;
+      }
+    }
+    return n;
+  };
+  options.sizing.border_lookahead = 0.0;
+  const SurfaceMesh before = mesh_surface(mesh, seg, options);
+  options.sizing.border_lookahead = SurfMeshOptions{}.sizing.border_lookahead;
+  const SurfaceMesh after = mesh_surface(mesh, seg, options);
+  expect_consistent(seg, after);
+  EXPECT_GT(flat_along_border(before), 0u);
+  EXPECT_EQ(flat_along_border(after), 0u);
+  const SoupFigures f = figures(after);
+  EXPECT_EQ(f.euler, 1);
+  EXPECT_GE(f.mean_alpha, 0.85);
+  for (const auto& x : after.nodes) EXPECT_NEAR(x.z(), 0.0, 1e-9);  // on the plane
+}
+
 }  // namespace
 }  // namespace nurbsfront

@@ -48,6 +48,7 @@ struct RemeshArgs {
   std::optional<double> detail_fit;
   double feature_size = SizingOptions{}.feature_size;
   bool feature_size_everywhere = false;
+  double border_lookahead = SizingOptions{}.border_lookahead;
   std::optional<int> crossing_repair_rounds;
   std::optional<double> narrow_merge;
   std::optional<int> tiny_merge;
@@ -118,6 +119,7 @@ void run_remesh(RemeshArgs& args) {
   if (args.detail_fit) options.surfmesh.fit.detail_spacing_edges = *args.detail_fit;
   options.surfmesh.sizing.feature_size = args.feature_size;
   options.surfmesh.sizing.feature_size_everywhere = args.feature_size_everywhere;
+  options.surfmesh.sizing.border_lookahead = args.border_lookahead;
   if (args.crossing_repair_rounds) options.crossing_repair_rounds = *args.crossing_repair_rounds;
   if (args.narrow_merge) options.narrow_patch_merge = *args.narrow_merge;
   if (args.tiny_merge) options.tiny_patch_faces = *args.tiny_merge;
@@ -253,6 +255,10 @@ void add_remesh_command(CLI::App& app) {
                   "docs/surfmesh.md \"Feature sizing\")");
   cmd->add_flag("--feature-size-everywhere", args->feature_size_everywhere,
                 "Feature sizing also on marching-cubes surfaces and where it limits under 1% of the area");
+  cmd->add_option("--border-lookahead", args->border_lookahead,
+                  "Where the sizes vary (feature or adaptive sizing), discretise the borders with the smallest size "
+                  "within this fraction of the size around each point (default 0.35; 0 = the size on the border; "
+                  "docs/surfmesh.md \"Border look-ahead\")");
   cmd->add_option("--crossing-repair-rounds", args->crossing_repair_rounds,
                   "Rounds of re-segmenting the patches of crossings the stitch left (default 4; 0 = off; "
                   "docs/segment.md \"Re-segmenting crossing patches\")");
