@@ -75,7 +75,7 @@ class FidelityMover {
     sin_floor_ = std::sin(options.angle_floor_deg * std::numbers::pi / 180.0);
   }
 
-  // One sweep: returns the number of moves.
+  // One sweep: returns the number of moves and splits.
   std::size_t sweep() {
     const TriangleSoup out = to_soup(mesh_);
     std::vector<std::uint32_t> all(out.triangles.size());
@@ -98,8 +98,9 @@ class FidelityMover {
       const double d = (p - c).norm();
       if (d > bound_) candidates.push_back({d, v.idx(), c, p, false, UINT32_MAX});
     }
-    // Input vertices far from the output: the nearest corner of their nearest output face
-    // onto them. Each input vertex is listed under its nearest output face (local checks).
+    // Input samples far from the output: the nearest free corner of their nearest output face
+    // onto them (else a split there). Each sample is listed under its nearest output face
+    // (the local checks).
     const std::size_t n_in = probes_.size();
     near_face_.assign(n_in, 0);
     near_distance_.assign(n_in, 0.0);
@@ -120,7 +121,7 @@ class FidelityMover {
         const double d = (out.points[k] - q).squaredNorm();
         if (best < 0 || d < best_d) best = static_cast<int>(k), best_d = d;
       }
-      if (best >= 0 || splits_) candidates.push_back({near_distance_[i], best, u, u, true, c.face});
+      candidates.push_back({near_distance_[i], best, u, u, true, c.face});
     }
     // Input vertices by nearest output face.
     face_start_.assign(out.triangles.size() + 1, 0);
@@ -150,9 +151,9 @@ class FidelityMover {
         mark(TriMesh::VertexHandle(c.vertex));
         continue;
       }
-      // An input vertex the moves cannot reach: a new node on it, splitting an edge of its
+      // An input sample the moves cannot reach: a new node on it, splitting an edge of its
       // nearest output face (the faces untouched in this sweep).
-      if (!c.input_side || !splits_ || c.face >= out.triangles.size()) continue;
+      if (!c.input_side || c.face >= out.triangles.size()) continue;
       const TriMesh::FaceHandle f(static_cast<int>(c.face));
       bool free = true;
       for (auto u : mesh_.fv_range(f)) free = free && touched[static_cast<std::size_t>(u.idx())] == 0;
@@ -160,6 +161,7 @@ class FidelityMover {
       const TriMesh::VertexHandle made = try_split(f, c.target, c.distance);
       if (!made.is_valid()) continue;
       ++n_splits_;
+      ++n_moves;
       mark(made);
     }
     return n_moves;
@@ -458,7 +460,6 @@ class FidelityMover {
   }
 
  public:
-  bool splits_ = true;
   std::size_t n_splits_ = 0;
 
  private:
