@@ -36,6 +36,8 @@ void StitchOptions::validate() const {
   if (!(alpha_floor >= 0.0 && alpha_floor <= 1.0)) fail("alpha_floor must be in [0, 1]");
   if (!(angle_floor_deg >= 0.0 && angle_floor_deg < 60.0)) fail("angle_floor_deg must be in [0, 60)");
   if (!(collapse_below_angle_deg >= 0.0 && collapse_below_angle_deg < 60.0)) fail("collapse_below_angle_deg must be in [0, 60)");
+  if (!(fidelity_distance_edges >= 0.0 && std::isfinite(fidelity_distance_edges)))
+    fail("fidelity_distance_edges must be finite and >= 0");
   if (!(fin_rim_max_move >= 0.0)) fail("fin_rim_max_move must be >= 0 (infinity: no bound)");
   if (n_threads == 0) fail("n_threads must be >= 1");
 }
@@ -645,6 +647,14 @@ StitchResult stitch_impl(const SurfaceMesh& surface, const TriMesh* input, const
     report.n_angle_searches = angles.n_searches;
     report.n_angle_repairs_undone = angles.n_undone;
     if (angles.n_flips + angles.n_collapses + angles.n_moves > 0) soup.reset();
+  }
+  if (options.fidelity_distance_edges > 0.0 && input != nullptr && pairs.empty() && mesh.n_faces() > 0) {
+    const stitch_detail::FidelityResult fidelity =
+        stitch_detail::move_toward_input(*input, options, feature, surface.input_mean_edge, result);
+    report.n_fidelity_moves = fidelity.n_moved;
+    report.n_fidelity_moves_undone = fidelity.n_undone;
+    report.n_fidelity_splits = fidelity.n_split;
+    if (fidelity.n_moved + fidelity.n_undone + fidelity.n_split > 0) soup.reset();
   }
   ReportOptions check;
   check.self_intersections = false;  // counted above

@@ -111,6 +111,14 @@ struct StitchOptions {
   //! SurfMeshOptions::fin_rim_max_angle_deg 180 and fin_rim_max_gap_edges infinity; docs/stitch.md
   //! "Fin rims: a bound on the moves", "Lead decision").
   double fin_rim_max_move = std::numeric_limits<double>::infinity();
+  //! Fidelity moves, last (docs/stitch.md "Fidelity moves"; issue 6): where a vertex is
+  //! farther from the input than this many input mean edges (SurfaceMesh::input_mean_edge),
+  //! or an input vertex that far from the output, a vertex moves onto the input when its
+  //! triangles keep their shape (the smoothing's normal, alpha and angle floors, no more
+  //! obtuse ones) and the distance there does not grow
+  //! (stitch_detail::move_toward_input). Only with an input mesh (stitch(surface, input)).
+  //! Finite, >= 0; 0 switches it off. Default 0 (remesh() sets its own, RemeshOptions).
+  double fidelity_distance_edges = 0.0;
   //! Run the exact self-intersection check on the result (the most expensive check).
   //! Default true.
   bool check_self_intersections = true;
@@ -141,7 +149,8 @@ struct StitchReport {
   std::size_t n_input_nodes = 0;       //!< SurfaceMesh::nodes
   //! Nodes no triangle uses (dropped). Nodes merged away by collapses are counted in
   //! n_collapses and n_settled_collapses instead: the output has n_input_nodes -
-  //! n_unused_nodes - n_collapses - n_settled_collapses - n_angle_collapses + n_obtuse_splits
+  //! n_unused_nodes - n_collapses - n_settled_collapses - n_angle_collapses + n_obtuse_splits +
+  //! n_fidelity_splits
   //! vertices.
   std::size_t n_unused_nodes = 0;
   std::size_t n_input_triangles = 0;   //!< SurfaceMesh::triangles
@@ -193,6 +202,12 @@ struct StitchReport {
   //! two").
   std::size_t n_angle_searches = 0;
   std::size_t n_angle_repairs_undone = 0;
+  //! Vertices the fidelity moves left elsewhere (StitchOptions::fidelity_distance_edges), and
+  //! moves put back because their triangles crossed others.
+  std::size_t n_fidelity_moves = 0;
+  std::size_t n_fidelity_moves_undone = 0;
+  //! New vertices the fidelity moves put on input vertices (edge splits).
+  std::size_t n_fidelity_splits = 0;
   double alpha_mean_before = 0.0;      //!< mean alpha after assembly, before optimisation
   double alpha_min_before = 0.0;       //!< min alpha after assembly, before optimisation
   //! Triangles of the result away from features: none of their vertices is a feature node,
@@ -270,6 +285,9 @@ struct StitchResult {
 //!    feature node and a smallest angle below kAwayFromFeaturesAngleBoundDeg gets the best
 //!    flip, collapse (the survivor stays) or move onto the fitted surfaces around it that
 //!    raises the smallest angle there; changes whose triangles cross others are given up.
+//! 2c. Fidelity moves (fidelity_distance_edges > 0, with an input mesh), when nothing crosses:
+//!    vertices onto the input, and new vertices on it by edge splits, where the output is
+//!    farther from the input than the bound (stitch_detail::move_toward_input).
 //! 3. Verification (quality module): 2-manifold, consistently oriented, no degenerate or
 //!    self-intersecting triangles; with an input mesh also: closed iff the input is, and
 //!    per component (matched to the input's by nearest bounding box) the same Euler

@@ -245,6 +245,31 @@ struct SplitResult {
 SplitResult split_obtuse(const SurfaceMesh& surface, const StitchOptions& options, std::vector<std::uint8_t>& is_feature,
                          StitchResult& result, const std::vector<std::array<int, 2>>& refused);
 
+//! What move_toward_input() did.
+struct FidelityResult {
+  std::size_t n_moved = 0;   //!< vertices left at another place
+  std::size_t n_split = 0;   //!< new vertices on input vertices (edge splits)
+  std::size_t n_undone = 0;  //!< moves put back because their triangles crossed others
+};
+
+//! StitchOptions::fidelity_distance_edges (times reference_edge, the input's mean edge): up
+//! to four sweeps; each measures, for every vertex that is no feature node nor on the
+//! boundary (is_feature per node), its distance to the input, and for every input vertex
+//! its distance to the output. Candidates farther than the bound, farthest first: a vertex
+//! goes onto its closest input point; an input vertex pulls the nearest corner of its
+//! nearest output face onto itself. A move (all the way, else half way) is made when no
+//! triangle around the vertex degenerates or turns its normal by more than
+//! acos(min_normal_dot), their smallest alpha stays at least min(old, alpha_floor), their
+//! smallest angle at least min(old, angle_floor_deg), no more of them are obtuse, the
+//! candidate's distance falls by 5% at least and the largest distance to the input of the
+//! triangles (samples on a 1/3 lattice) and of the input vertices nearest to them does not
+//! grow. A moved vertex and its neighbours wait for the next sweep. When
+//! check_self_intersections, moves on triangles that cross others are put back (four
+//! rounds, then all of them). Nothing for a bound of 0 or an empty input.
+FidelityResult move_toward_input(const TriMesh& input, const StitchOptions& options,
+                                 std::vector<std::uint8_t>& is_feature, double reference_edge,
+                                 StitchResult& result);
+
 //! The old index of every kept element after collect_garbage() (vertices, faces).
 struct GarbageMaps {
   std::vector<int> vertex, face;

@@ -1,0 +1,555 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Fidelity moves (StitchOptions::fidelity_distance_edges; docs/stitch.md "Fidelity moves"):
+// after the repairs, nodes move onto the input where the output is farther from it than the
+// bound, when the triangles around them keep their shape and the local distance to the input
+// does not grow (issue 6: the fits smooth folds narrower than their lattice).
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <numbers>
+#include <numeric>
+#include <optional>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "nurbsfront/core/soup.h"
+#include "nurbsfront/core/tolerances.h"
+#include "nurbsfront/quality/aabb_tree.h"
+#include "nurbsfront/quality/report.h"
+#include "nurbsfront/stitch/stitch_internal.h"
+
+namespace nurbsfront::stitch_detail {
+
+namespace {
+
+using Vec = Eigen::Vector3d;
+
+// Sweeps of candidates (each from distances measured afresh).
+constexpr int kFidelityRounds = 4;
+// Rounds of the crossing check that put back the moves on crossing triangles.
+constexpr int kFidelityCheckRounds = 4;
+// Barycentric samples of a triangle for its distance to the input: the corners, two points
+// on each edge and the centroid (a lattice of step 1/3).
+constexpr int kSampleSteps = 3;
+// The new triangles of a split may turn from their old ones by up to 90 deg (a node on a fold's
+// crest makes steep triangles: the smoothing's 60 deg refused most of the brain's).
+constexpr double kSplitNormalDot = 0.0;
+// A move is taken only if the candidate's own distance falls by this share at least.
+constexpr double kMinGain = 0.05;
+
+double alpha_of(const Vec& a, const Vec& b, const Vec& c) {
+  const double l2 = (b - a).squaredNorm() + (c - b).squaredNorm() + (a - c).squaredNorm();
+  return l2 > 0.0 ? 2.0 * std::numbers::sqrt3 * (b - a).cross(c - a).norm() / l2 : 0.0;
+}
+
+// The triangles around one vertex, their corners with the vertex at a given place.
+struct Ring {
+  std::vector<TriMesh::FaceHandle> faces;
+  std::vector<std::array<Vec, 3>> corners;   // as in the mesh
+  std::vector<std::array<int, 3>> is_centre; // 1 where the corner is the vertex
+};
+
+class FidelityMover {
+ public:
+  FidelityMover(const TriMesh& input, const StitchOptions& options, double bound, StitchResult& result,
+                std::vector<std::uint8_t>& is_feature, std::vector<std::uint8_t> fixed)
+      : options_(options), bound_(bound), mesh_(result.mesh), result_(result), is_feature_(is_feature),
+        fixed_(std::move(fixed)), input_soup_(to_soup(input)) {
+    std::vector<std::uint32_t> all(input_soup_.triangles.size());
+    std::iota(all.begin(), all.end(), 0U);
+    input_tree_.emplace(input_soup_, std::move(all));
+    // The input's samples: its vertices, then per face its centroid and edge midpoints.
+    probes_ = input_soup_.points;
+    for (const auto& t : input_soup_.triangles) {
+      const Vec &a = input_soup_.points[t[0]], &b = input_soup_.points[t[1]], &c = input_soup_.points[t[2]];
+      probes_.push_back((a + b + c) / 3.0);
+      probes_.push_back(0.5 * (a + b));
+      probes_.push_back(0.5 * (b + c));
+      probes_.push_back(0.5 * (c + a));
+    }
+    const double diagonal = bounding_box(mesh_).diagonal();
+    min_double_area_ = 2.0 * tolerance::kDegenerateAreaRelative * diagonal * diagonal;
+    sin_floor_ = std::sin(options.angle_floor_deg * std::numbers::pi / 180.0);
+  }
+
+  // One sweep: returns the number of moves and splits.
+  std::size_t sweep() {
+    const TriangleSoup out = to_soup(mesh_);
+    std::vector<std::uint32_t> all(out.triangles.size());
+    std::iota(all.begin(), all.end(), 0U);
+    const quality_detail::AabbTree out_tree(out, std::move(all));
+    struct Candidate {
+      double distance;
+      int vertex;
+      Vec target;
+      Vec probe;  // the point whose distance the move must shrink (input or output side)
+      bool input_side;
+      std::uint32_t face = UINT32_MAX;  // input side: the nearest output face
+    };
+    std::vector<Candidate> candidates;
+    // Output nodes off the input: onto their closest input point.
+    for (auto v : mesh_.vertices()) {
+      if (fixed_[static_cast<std::size_t>(v.idx())] != 0) continue;
+      const Vec p = point(mesh_, v);
+      const Vec c = closest_input(p);
+      const double d = (p - c).norm();
+      if (d > bound_) candidates.push_back({d, v.idx(), c, p, false, UINT32_MAX});
+    }
+    // Input samples far from the output: the nearest free corner of their nearest output face
+    // onto them (else a split there). Each sample is listed under its nearest output face
+    // (the local checks).
+    const std::size_t n_in = probes_.size();
+    near_face_.assign(n_in, 0);
+    near_distance_.assign(n_in, 0.0);
+    std::uint32_t hint = UINT32_MAX;
+    for (const std::uint32_t i : quality_detail::morton_order(probes_)) {
+      const Vec& u = probes_[i];
+      const auto c = out_tree.closest(u, hint);
+      hint = c.face;
+      near_face_[i] = c.face;
+      near_distance_[i] = std::sqrt(c.squared_distance);
+      if (near_distance_[i] <= bound_) continue;
+      const auto& t = out.triangles[c.face];
+      const Vec q = quality_detail::closest_point_on_triangle(u, out.points[t[0]], out.points[t[1]], out.points[t[2]]);
+      int best = -1;  // none: only a split
+      double best_d = 0.0;
+      for (const auto k : t) {
+        if (fixed_[k] != 0) continue;
+        const double d = (out.points[k] - q).squaredNorm();
+        if (best < 0 || d < best_d) best = static_cast<int>(k), best_d = d;
+      }
+      candidates.push_back({near_distance_[i], best, u, u, true, c.face});
+    }
+    // Input vertices by nearest output face.
+    face_start_.assign(out.triangles.size() + 1, 0);
+    for (const std::uint32_t f : near_face_) ++face_start_[f + 1];
+    std::partial_sum(face_start_.begin(), face_start_.end(), face_start_.begin());
+    face_inputs_.assign(n_in, 0);
+    {
+      std::vector<std::uint32_t> at(face_start_.begin(), face_start_.end() - 1);
+      for (std::uint32_t i = 0; i < n_in; ++i) face_inputs_[at[near_face_[i]]++] = i;
+    }
+    std::sort(candidates.begin(), candidates.end(), [](const Candidate& a, const Candidate& b) {
+      if (a.distance != b.distance) return a.distance > b.distance;
+      if (a.vertex != b.vertex) return a.vertex < b.vertex;
+      return a.input_side < b.input_side;
+    });
+    std::vector<std::uint8_t> touched(mesh_.n_vertices(), 0);
+    std::size_t n_moves = 0;
+    auto mark = [&](TriMesh::VertexHandle v) {
+      touched.resize(mesh_.n_vertices(), 0);
+      touched[static_cast<std::size_t>(v.idx())] = 1;
+      for (auto u : mesh_.vv_range(v)) touched[static_cast<std::size_t>(u.idx())] = 1;
+    };
+    for (const Candidate& c : candidates) {
+      if (c.vertex >= 0 && touched[static_cast<std::size_t>(c.vertex)] != 0) continue;
+      if (c.vertex >= 0 && try_move(TriMesh::VertexHandle(c.vertex), c.target, c.probe, c.input_side, c.distance)) {
+        ++n_moves;
+        mark(TriMesh::VertexHandle(c.vertex));
+        continue;
+      }
+      // An input sample the moves cannot reach: a new node on it, splitting an edge of its
+      // nearest output face (the faces untouched in this sweep).
+      if (!c.input_side || c.face >= out.triangles.size()) continue;
+      const TriMesh::FaceHandle f(static_cast<int>(c.face));
+      bool free = true;
+      for (auto u : mesh_.fv_range(f)) free = free && touched[static_cast<std::size_t>(u.idx())] == 0;
+      if (!free) continue;
+      const TriMesh::VertexHandle made = try_split(f, c.target, c.distance);
+      if (!made.is_valid()) continue;
+      ++n_splits_;
+      ++n_moves;
+      mark(made);
+    }
+    return n_moves;
+  }
+
+ private:
+  Vec closest_input(const Vec& p) const {
+    const auto c = input_tree_->closest(p, UINT32_MAX);
+    const auto& t = input_soup_.triangles[c.face];
+    return quality_detail::closest_point_on_triangle(p, input_soup_.points[t[0]], input_soup_.points[t[1]],
+                                                     input_soup_.points[t[2]]);
+  }
+
+  double input_distance(const Vec& p) const { return std::sqrt(input_tree_->closest(p, UINT32_MAX).squared_distance); }
+
+  // Largest distance to the input of the ring's samples with the vertex at q.
+  double ring_to_input(const Ring& ring, const Vec& q) const {
+    double worst = 0.0;
+    for (std::size_t k = 0; k < ring.faces.size(); ++k) {
+      const auto p = corners_at(ring, k, q);
+      for (int i = 0; i <= kSampleSteps; ++i) {
+        for (int j = 0; i + j <= kSampleSteps; ++j) {
+          const double s = double(i) / kSampleSteps, t = double(j) / kSampleSteps;
+          worst = std::max(worst, input_distance((1.0 - s - t) * p[0] + s * p[1] + t * p[2]));
+        }
+      }
+    }
+    return worst;
+  }
+
+  // Distance of u to the ring's triangles with the vertex at q.
+  static double to_ring(const Ring& ring, const Vec& q, const Vec& u) {
+    double best = std::numeric_limits<double>::infinity();
+    for (std::size_t k = 0; k < ring.faces.size(); ++k) {
+      const auto p = corners_at(ring, k, q);
+      best = std::min(best, (u - quality_detail::closest_point_on_triangle(u, p[0], p[1], p[2])).norm());
+    }
+    return best;
+  }
+
+  static std::array<Vec, 3> corners_at(const Ring& ring, std::size_t k, const Vec& q) {
+    std::array<Vec, 3> p = ring.corners[k];
+    for (int i = 0; i < 3; ++i) {
+      if (ring.is_centre[k][static_cast<std::size_t>(i)] != 0) p[static_cast<std::size_t>(i)] = q;
+    }
+    return p;
+  }
+
+  // The shape tests of a move of the ring's vertex from p to q: no triangle degenerates or
+  // turns its normal by more than acos(min_normal_dot); the smallest alpha stays at least
+  // min(old, alpha_floor), each triangle's smallest angle at least min(its old one,
+  // angle_floor_deg), and no more triangles are obtuse.
+  bool keeps_shape(const Ring& ring, const Vec& p, const Vec& q) const {
+    double old_alpha = 1.0, new_alpha = 1.0, old_sine = 1.0, new_sine = 1.0;
+    int old_obtuse = 0, new_obtuse = 0;
+    for (std::size_t k = 0; k < ring.faces.size(); ++k) {
+      const auto a = corners_at(ring, k, p), b = corners_at(ring, k, q);
+      const Vec na = (a[1] - a[0]).cross(a[2] - a[0]), nb = (b[1] - b[0]).cross(b[2] - b[0]);
+      const double lb = nb.norm();
+      if (lb <= min_double_area_) return false;
+      if (nb.dot(na) <= options_.min_normal_dot * lb * na.norm()) return false;
+      old_alpha = std::min(old_alpha, alpha_of(a[0], a[1], a[2]));
+      new_alpha = std::min(new_alpha, alpha_of(b[0], b[1], b[2]));
+      const double sine_a = smallest_angle_sine(a[0], a[1], a[2]), sine_b = smallest_angle_sine(b[0], b[1], b[2]);
+      // Each triangle keeps min(its own smallest angle, the floor): none falls below issue
+      // 5's bound that was not there.
+      if (sine_b < std::min(sine_a, sin_floor_)) return false;
+      old_sine = std::min(old_sine, sine_a);
+      new_sine = std::min(new_sine, sine_b);
+      old_obtuse += int(triangle_is_obtuse(a[0], a[1], a[2]));
+      new_obtuse += int(triangle_is_obtuse(b[0], b[1], b[2]));
+    }
+    return new_alpha >= std::min(old_alpha, options_.alpha_floor) && new_sine >= std::min(old_sine, sin_floor_) &&
+           new_obtuse <= old_obtuse;
+  }
+
+  // Moves v towards target (all the way, else half way) when the move keeps the shape,
+  // shrinks the distance of the probe (the vertex itself, or an input vertex to the ring)
+  // by kMinGain at least and the ring's largest distance to the input (its samples, and the
+  // input vertices whose nearest output face is in the ring) does not grow.
+  bool try_move(TriMesh::VertexHandle v, const Vec& target, const Vec& probe, bool input_side, double distance) {
+    Ring ring;
+    for (auto f : mesh_.vf_range(v)) {
+      ring.faces.push_back(f);
+      std::array<Vec, 3> p;
+      std::array<int, 3> centre{0, 0, 0};
+      int i = 0;
+      for (auto u : mesh_.fv_range(f)) {
+        p[static_cast<std::size_t>(i)] = point(mesh_, u);
+        centre[static_cast<std::size_t>(i)] = u == v ? 1 : 0;
+        ++i;
+      }
+      ring.corners.push_back(p);
+      ring.is_centre.push_back(centre);
+    }
+    if (ring.faces.empty()) return false;
+    const Vec p = point(mesh_, v);
+    // The input vertices listed under the ring's faces.
+    std::vector<std::uint32_t> near;
+    double old_in = 0.0;
+    for (const auto f : ring.faces) {
+      const auto fi = static_cast<std::size_t>(f.idx());
+      if (fi + 1 >= face_start_.size()) continue;
+      for (std::uint32_t k = face_start_[fi]; k < face_start_[fi + 1]; ++k) {
+        near.push_back(face_inputs_[k]);
+        old_in = std::max(old_in, near_distance_[face_inputs_[k]]);
+      }
+    }
+    const double old_worst = std::max(old_in, ring_to_input(ring, p));
+    for (const double t : {1.0, 0.5}) {
+      const Vec q = p + t * (target - p);
+      if (!keeps_shape(ring, p, q)) continue;
+      const double gain_distance = input_side ? to_ring(ring, q, probe) : input_distance(q);
+      if (gain_distance > (1.0 - kMinGain) * distance) continue;
+      double new_worst = ring_to_input(ring, q);
+      for (const std::uint32_t i : near) new_worst = std::max(new_worst, to_ring(ring, q, probes_[i]));
+      if (new_worst > old_worst) continue;
+      mesh_.set_point(v, to_openmesh(q));
+      return true;
+    }
+    return false;
+  }
+
+  // A split of f's edge h = (a, b) with the new node at u: the new triangles (u, c, a),
+  // (u, b, c), (u, d, b), (u, a, d) ((b, a, d) the face across); with `with_flips`, a new
+  // triangle obtuse at u whose far edge (s0, s1) may flip (not on the boundary nor a crease
+  // segment, its far corner x across it not one of a, b, c, d nor taken twice) is replaced
+  // by (u, s0, x) and (u, x, s1). Passes when no new triangle degenerates or turns its
+  // normal from its old one's by 90 deg or more, their smallest alpha stays at least
+  // min(old, alpha_floor), their smallest angle at least min(old, angle_floor_deg), no more
+  // of them are obtuse, and their largest distance to the input (samples, and the input's
+  // samples listed under the old faces) is below the old one and below the candidate's
+  // distance by kMinGain. Returns the sine of the smallest new angle (-1: fails) and the
+  // edges to flip after the split.
+  double evaluate_split(TriMesh::HalfedgeHandle h, const Vec& u, double distance, bool with_flips,
+                        std::vector<std::array<TriMesh::VertexHandle, 2>>& flips) const {
+    flips.clear();
+    const auto o = mesh_.opposite_halfedge_handle(h);
+    const auto va = mesh_.from_vertex_handle(h), vb = mesh_.to_vertex_handle(h);
+    const auto vc = mesh_.to_vertex_handle(mesh_.next_halfedge_handle(h));
+    const auto vd = mesh_.to_vertex_handle(mesh_.next_halfedge_handle(o));
+    struct Tri {
+      std::array<Vec, 3> p;
+      Vec parent;  // the old triangle's area vector
+      TriMesh::VertexHandle v1, v2;  // the corners besides the new node
+    };
+    std::vector<Tri> made;
+    std::vector<std::array<Vec, 3>> old;
+    std::vector<TriMesh::FaceHandle> old_faces{mesh_.face_handle(h), mesh_.face_handle(o)};
+    auto corners = [&](TriMesh::VertexHandle x, TriMesh::VertexHandle y, TriMesh::VertexHandle z) {
+      return std::array<Vec, 3>{point(mesh_, x), point(mesh_, y), point(mesh_, z)};
+    };
+    auto area = [](const std::array<Vec, 3>& t) { return Vec((t[1] - t[0]).cross(t[2] - t[0])); };
+    old.push_back(corners(va, vb, vc));
+    old.push_back(corners(vb, va, vd));
+    const std::array<std::array<TriMesh::VertexHandle, 2>, 4> sides{{{vc, va}, {vb, vc}, {vd, vb}, {va, vd}}};
+    std::vector<TriMesh::VertexHandle> far{va, vb, vc, vd};
+    for (std::size_t k = 0; k < sides.size(); ++k) {
+      const auto [s0, s1] = sides[k];
+      const Vec p0 = point(mesh_, s0), p1 = point(mesh_, s1);
+      const Vec parent = area(old[k / 2]);
+      if (with_flips && (p0 - u).dot(p1 - u) < 0.0) {
+        const auto g = mesh_.find_halfedge(s1, s0);
+        const auto e = mesh_.edge_handle(g);
+        const auto vx = mesh_.is_boundary(g) ? TriMesh::VertexHandle() : mesh_.to_vertex_handle(mesh_.next_halfedge_handle(g));
+        if (vx.is_valid() && !mesh_.is_boundary(e) && !is_crease(g) && std::find(far.begin(), far.end(), vx) == far.end()) {
+          far.push_back(vx);
+          const auto across = corners(s1, s0, vx);
+          old.push_back(across);
+          old_faces.push_back(mesh_.face_handle(g));
+          const Vec n_across = area(across);
+          made.push_back({{u, p0, across[2]}, n_across, s0, vx});
+          made.push_back({{u, across[2], p1}, n_across, vx, s1});
+          flips.push_back({s0, s1});
+          continue;
+        }
+      }
+      made.push_back({{u, p0, p1}, parent, s0, s1});
+    }
+    double old_alpha = 1.0, old_sine = 1.0, old_sine_free = 1.0, new_alpha = 1.0, new_sine = 1.0;
+    int old_obtuse = 0, new_obtuse = 0;
+    for (std::size_t k = 0; k < old.size(); ++k) {
+      const auto& t = old[k];
+      old_alpha = std::min(old_alpha, alpha_of(t[0], t[1], t[2]));
+      const double sine = smallest_angle_sine(t[0], t[1], t[2]);
+      old_sine = std::min(old_sine, sine);
+      if (free_face(old_faces[k])) old_sine_free = std::min(old_sine_free, sine);
+      old_obtuse += int(triangle_is_obtuse(t[0], t[1], t[2]));
+    }
+    for (const auto& t : made) {
+      const Vec n = area(t.p);
+      const double l = n.norm();
+      if (!(l > min_double_area_ && n.dot(t.parent) > kSplitNormalDot * l * t.parent.norm())) return -1.0;
+      new_alpha = std::min(new_alpha, alpha_of(t.p[0], t.p[1], t.p[2]));
+      const double sine = smallest_angle_sine(t.p[0], t.p[1], t.p[2]);
+      new_sine = std::min(new_sine, sine);
+      // A new triangle of free vertices only (the new node is free) keeps min(the old free
+      // triangles' smallest angle, the floor): issue 5's bound away from features.
+      if (free_vertex(t.v1) && free_vertex(t.v2) && sine < std::min(old_sine_free, sin_floor_)) return -1.0;
+      new_obtuse += int(triangle_is_obtuse(t.p[0], t.p[1], t.p[2]));
+    }
+    if (new_alpha < std::min(old_alpha, options_.alpha_floor) || new_sine < std::min(old_sine, sin_floor_) ||
+        new_obtuse > old_obtuse)
+      return -1.0;
+    double old_worst = 0.0, new_worst = 0.0;
+    for (const auto& t : old) old_worst = std::max(old_worst, triangle_to_input(t));
+    for (const auto& t : made) new_worst = std::max(new_worst, triangle_to_input(t.p));
+    for (const auto g : old_faces) {
+      const auto fi = static_cast<std::size_t>(g.idx());
+      if (fi + 1 >= face_start_.size()) continue;
+      for (std::uint32_t k = face_start_[fi]; k < face_start_[fi + 1]; ++k) {
+        const std::uint32_t i = face_inputs_[k];
+        old_worst = std::max(old_worst, near_distance_[i]);
+        double to_new = std::numeric_limits<double>::infinity();
+        for (const auto& t : made) {
+          to_new = std::min(to_new, (probes_[i] - quality_detail::closest_point_on_triangle(probes_[i], t.p[0], t.p[1], t.p[2])).norm());
+        }
+        new_worst = std::max(new_worst, to_new);
+      }
+    }
+    if (new_worst >= old_worst || new_worst > (1.0 - kMinGain) * distance) return -1.0;
+    return new_sine;
+  }
+
+  bool free_vertex(TriMesh::VertexHandle v) const { return fixed_[static_cast<std::size_t>(v.idx())] == 0; }
+  bool free_face(TriMesh::FaceHandle f) const {
+    for (auto v : mesh_.fv_range(f)) {
+      if (!free_vertex(v)) return false;
+    }
+    return true;
+  }
+
+  // An edge between two patches whose ends are both fixed: a crease segment (or a chord
+  // of one), never split nor flipped.
+  bool is_crease(TriMesh::HalfedgeHandle g) const {
+    const auto o = mesh_.opposite_halfedge_handle(g);
+    if (mesh_.is_boundary(g) || mesh_.is_boundary(o)) return true;
+    return fixed_[static_cast<std::size_t>(mesh_.from_vertex_handle(g).idx())] != 0 &&
+           fixed_[static_cast<std::size_t>(mesh_.to_vertex_handle(g).idx())] != 0 &&
+           result_.face_patch[static_cast<std::size_t>(mesh_.face_handle(g).idx())] !=
+               result_.face_patch[static_cast<std::size_t>(mesh_.face_handle(o).idx())];
+  }
+
+  // A new node at u on an edge of f: the split (evaluate_split, without and with flips)
+  // whose smallest new angle is largest. Not an edge on the boundary nor a crease segment.
+  // Returns the new vertex (invalid: none).
+  TriMesh::VertexHandle try_split(TriMesh::FaceHandle f, const Vec& u, double distance) {
+    TriMesh::HalfedgeHandle best;
+    double best_sine = -1.0;
+    std::vector<std::array<TriMesh::VertexHandle, 2>> flips, best_flips;
+    for (auto h : mesh_.fh_range(f)) {
+      if (is_crease(h)) continue;
+      for (const bool with_flips : {false, true}) {
+        const double sine = evaluate_split(h, u, distance, with_flips, flips);
+        if (sine > best_sine) {
+          best = h;
+          best_sine = sine;
+          best_flips = flips;
+        }
+      }
+    }
+    if (!best.is_valid()) return TriMesh::VertexHandle();
+    const auto o = mesh_.opposite_halfedge_handle(best);
+    const int patch_c = result_.face_patch[static_cast<std::size_t>(f.idx())];
+    const int patch_d = result_.face_patch[static_cast<std::size_t>(mesh_.face_handle(o).idx())];
+    const auto vc = mesh_.to_vertex_handle(mesh_.next_halfedge_handle(best));
+    const auto v = mesh_.add_vertex(to_openmesh(u));
+    mesh_.split_edge(mesh_.edge_handle(best), v);
+    result_.face_patch.resize(mesh_.n_faces(), -1);
+    for (auto g : mesh_.vf_range(v)) {
+      int& patch = result_.face_patch[static_cast<std::size_t>(g.idx())];
+      if (patch >= 0) continue;
+      bool has_c = false;
+      for (auto w : mesh_.fv_range(g)) has_c = has_c || w == vc;
+      patch = has_c ? patch_c : patch_d;
+    }
+    result_.vertex_node.push_back(static_cast<int>(is_feature_.size()));
+    is_feature_.push_back(0);
+    fixed_.push_back(0);
+    for (const auto& [s0, s1] : best_flips) {
+      const auto e = mesh_.edge_handle(mesh_.find_halfedge(s0, s1));
+      if (mesh_.is_flip_ok(e)) mesh_.flip(e);
+    }
+    return v;
+  }
+
+  double triangle_to_input(const std::array<Vec, 3>& p) const {
+    double worst = 0.0;
+    for (int i = 0; i <= kSampleSteps; ++i) {
+      for (int j = 0; i + j <= kSampleSteps; ++j) {
+        const double s = double(i) / kSampleSteps, t = double(j) / kSampleSteps;
+        worst = std::max(worst, input_distance((1.0 - s - t) * p[0] + s * p[1] + t * p[2]));
+      }
+    }
+    return worst;
+  }
+
+ public:
+  std::size_t n_splits_ = 0;
+
+ private:
+  const StitchOptions& options_;
+  double bound_;
+  TriMesh& mesh_;
+  StitchResult& result_;
+  std::vector<std::uint8_t>& is_feature_;
+  std::vector<std::uint8_t> fixed_;
+  TriangleSoup input_soup_;
+  std::vector<Vec> probes_;
+  std::optional<quality_detail::AabbTree> input_tree_;
+  double min_double_area_ = 0.0;
+  double sin_floor_ = 0.0;
+  std::vector<std::uint32_t> near_face_;
+  std::vector<double> near_distance_;
+  std::vector<std::uint32_t> face_start_, face_inputs_;
+};
+
+}  // namespace
+
+FidelityResult move_toward_input(const TriMesh& input, const StitchOptions& options,
+                                 std::vector<std::uint8_t>& is_feature, double reference_edge,
+                                 StitchResult& result) {
+  FidelityResult out;
+  const double bound = options.fidelity_distance_edges * reference_edge;
+  TriMesh& mesh = result.mesh;
+  if (!(bound > 0.0) || input.n_faces() == 0 || mesh.n_faces() == 0) return out;
+  const std::size_t n_vertices = mesh.n_vertices(), n_faces = result.face_patch.size(), n_nodes = is_feature.size();
+  std::optional<TriMesh> before;
+  if (options.check_self_intersections) before = mesh;
+  const std::vector<Vec> start = vertex_points(mesh);
+  FidelityMover mover(input, options, bound, result, is_feature, fixed_vertices(mesh, result.vertex_node, is_feature));
+  for (int round = 0; round < kFidelityRounds; ++round) {
+    if (mover.sweep() == 0) break;
+  }
+  out.n_split = mover.n_splits_;
+  auto moved = [&](TriMesh::VertexHandle v) {
+    const auto i = static_cast<std::size_t>(v.idx());
+    return i >= n_vertices || point(mesh, v) != start[i];
+  };
+  if (options.check_self_intersections) {
+    // Moves on triangles that cross others go back; crossings left after the last round,
+    // or at new nodes: everything goes back.
+    bool restore = false;
+    for (int round = 0; round < kFidelityCheckRounds; ++round) {
+      std::vector<std::uint32_t> faces;
+      for (auto f : mesh.faces()) {
+        for (auto u : mesh.fv_range(f)) {
+          if (moved(u)) {
+            faces.push_back(static_cast<std::uint32_t>(f.idx()));
+            break;
+          }
+        }
+      }
+      if (faces.empty()) break;
+      const auto pairs = intersecting_pairs_of(to_soup(mesh), faces, options.n_threads);
+      if (pairs.empty()) break;
+      std::size_t n_put_back = 0;
+      for (const auto& pair : pairs) {
+        for (const std::uint32_t f : pair) {
+          for (auto u : mesh.fv_range(TriMesh::FaceHandle(static_cast<int>(f)))) {
+            const auto i = static_cast<std::size_t>(u.idx());
+            if (i >= n_vertices || !moved(u)) continue;
+            mesh.set_point(u, to_openmesh(start[i]));
+            ++n_put_back;
+          }
+        }
+      }
+      out.n_undone += n_put_back;
+      if (n_put_back == 0 || round + 1 == kFidelityCheckRounds) {
+        restore = true;
+        break;
+      }
+    }
+    if (restore) {
+      std::size_t n_changed = mover.n_splits_;
+      for (auto u : mesh.vertices()) n_changed += static_cast<std::size_t>(u.idx()) < n_vertices && moved(u) ? 1 : 0;
+      mesh = std::move(*before);
+      result.face_patch.resize(n_faces);
+      result.vertex_node.resize(n_vertices);
+      is_feature.resize(n_nodes);
+      out.n_undone += n_changed;
+      out.n_split = 0;
+      out.n_moved = 0;
+      return out;
+    }
+  }
+  for (auto u : mesh.vertices()) out.n_moved += static_cast<std::size_t>(u.idx()) < n_vertices && moved(u) ? 1 : 0;
+  return out;
+}
+
+}  // namespace nurbsfront::stitch_detail
