@@ -1785,7 +1785,7 @@ double gap_crease_angle(const TriMesh& mesh, double crease_angle_deg) {
     if (!(l0 > 0.0 && l1 > 0.0)) continue;
     ++n_edges;
     const double bend = std::acos(std::clamp(OpenMesh::dot(n0, n1) / (l0 * l1), -1.0, 1.0)) * 180.0 / std::numbers::pi;
-    if (bend > crease_angle_deg) continue;
+    if (!(bend <= crease_angle_deg)) continue;  // also a NaN bend (non-finite coordinates)
     const auto bin = static_cast<std::size_t>((crease_angle_deg - bend) / kStep);
     if (bin < bins.size()) ++bins[bin];
   }
