@@ -49,6 +49,7 @@ std::string to_json(const RemeshReport& r) {
   counts.count("narrow_patches_merged", r.n_narrow_merged);
   counts.count("tiny_patches_merged", r.n_tiny_merged);
   counts.count("fin_rim_curves", r.n_fin_rim_curves);
+  counts.num("crease_angle_deg", r.crease_angle_deg);
   json::Object seconds;
   seconds.num("segment", r.seconds_segment).num("surfmesh", r.seconds_surfmesh).num("stitch", r.seconds_stitch);
   seconds.num("distance", r.seconds_distance).num("total", r.seconds_total);

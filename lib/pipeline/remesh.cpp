@@ -171,6 +171,13 @@ RemeshResult remesh(const TriMesh& input, const RemeshOptions& options) {
   if (segment_options.sharp_crease_angle_deg > 0.0 &&
       (surfmesh_options.cell_grid.enabled || surfmesh_detail::marching_cubes_lattice(input_lattice())))
     segment_options.sharp_crease_angle_deg = 0.0;
+  // A gap in a CAD mesh's bends below the crease angle: its machined edges there are creases.
+  if (options.crease_gap && !surfmesh_options.cell_grid.enabled &&
+      !surfmesh_detail::marching_cubes_lattice(input_lattice())) {
+    segment_options.crease_angle_deg = gap_crease_angle(input, segment_options.crease_angle_deg);
+    surfmesh_options.crease_angle_deg = segment_options.crease_angle_deg;
+  }
+  report.crease_angle_deg = segment_options.crease_angle_deg;
   // segment()'s face graph and normals, kept for the splits of split_unfitted_patches.
   segment_detail::SplitterPtr splitter;
   Segmentation first_segmentation = segment_detail::segment(input, segment_options, mean_edge, &splitter);

@@ -56,6 +56,12 @@ struct RemeshOptions {
   //! in [0, 180]. Default 120 (the crease angle + 40; femur 5.48% obtuse at 100, 4.90% at
   //! 120, 4.81% at 140).
   double tiny_patch_max_dihedral_deg = 120.0;
+  //! On inputs not taken for marching cubes (nor with a cell grid), the crease angle
+  //! (segment.crease_angle_deg, also surfmesh's) drops to segment's gap_crease_angle() where
+  //! the input's bends leave a gap below it: a CAD mesh's machined edges at 65-80 deg become
+  //! creases (cheese.off: obtuse 6.66 -> 4.06%; docs/segment.md "Creases at a gap in the
+  //! bends"). Default true.
+  bool crease_gap = true;
   //! Measure the two-sided distance of the output to the input (Hausdorff, mean,
   //! relative volume change) into the report. Default true.
   bool compute_distances = true;
@@ -81,6 +87,9 @@ struct RemeshReport {
   std::size_t n_patches_split = 0;
   std::size_t n_curves = 0;
   std::size_t n_corners = 0;
+  //! The crease angle (deg) the segmentation used: segment.crease_angle_deg, or lower where
+  //! RemeshOptions::crease_gap found a gap in the input's bends.
+  double crease_angle_deg = 0.0;
   //! Input edges the segmentation made creases (Segmentation::n_crease_edges).
   std::size_t n_crease_edges = 0;
   std::size_t n_nodes = 0;        //!< nodes of the surface mesh (before stitching)

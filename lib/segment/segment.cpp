@@ -1842,6 +1842,41 @@ std::vector<int> tiny_patches(const TriMesh& mesh, const Segmentation& segmentat
   return result;
 }
 
+double gap_crease_angle(const TriMesh& mesh, double crease_angle_deg) {
+  if (!(crease_angle_deg > 0.0 && crease_angle_deg <= 180.0))
+    throw InvalidInput("gap_crease_angle: crease_angle_deg must be in (0, 180]");
+  // Interior edges per 5-deg bin of bend up to the crease angle (an edge bending by exactly
+  // the crease angle is no crease): bin i holds (crease - 5 (i + 1), crease - 5 i].
+  constexpr double kStep = 5.0;
+  constexpr int kSteps = 3;     // candidates down to crease - 15
+  constexpr int kValley = 3;    // the valley: 15 deg below a candidate
+  std::array<std::size_t, kSteps + kValley> bins{};
+  std::size_t n_edges = 0;
+  for (const auto e : mesh.edges()) {
+    if (e.is_boundary()) continue;
+    const auto n0 = mesh.calc_face_normal(e.h0().face()), n1 = mesh.calc_face_normal(e.h1().face());
+    const double l0 = n0.norm(), l1 = n1.norm();
+    if (!(l0 > 0.0 && l1 > 0.0)) continue;
+    ++n_edges;
+    const double bend = std::acos(std::clamp(OpenMesh::dot(n0, n1) / (l0 * l1), -1.0, 1.0)) * 180.0 / std::numbers::pi;
+    if (!(bend <= crease_angle_deg)) continue;  // also a NaN bend (non-finite coordinates)
+    const auto bin = static_cast<std::size_t>((crease_angle_deg - bend) / kStep);
+    if (bin < bins.size()) ++bins[bin];
+  }
+  std::size_t above = 0;  // edges bending by more than c, at most the crease angle
+  for (int i = 0; i < kSteps; ++i) {
+    above += bins[static_cast<std::size_t>(i)];
+    const double c = crease_angle_deg - kStep * (i + 1);
+    if (c <= 0.0) break;
+    std::size_t valley = 0;
+    for (int j = 1; j <= kValley; ++j) valley += bins[static_cast<std::size_t>(i + j)];
+    if (static_cast<double>(above) >= kCreaseGapMinShare * static_cast<double>(n_edges) &&
+        static_cast<double>(valley) <= kCreaseGapMaxValley * static_cast<double>(above))
+      return c;
+  }
+  return crease_angle_deg;
+}
+
 Segmentation split_patches(const TriMesh& mesh, const Segmentation& segmentation, const std::vector<int>& which,
                            const SegmentOptions& options) {
   return PatchSplitter(mesh, options).split(segmentation, which);

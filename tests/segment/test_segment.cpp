@@ -780,6 +780,57 @@ TEST(TinyPatches, SmallPatchesBehindMarginalBendsOnly) {
   EXPECT_THROW((void)tiny_patches(mesh, other, 2, 90.0), InvalidInput);
 }
 
+// An accordion: a grid of nx x 4 unit cells whose column lines x = 1 .. nx - 1 are folds
+// bending by folds_deg[i - 1] (alternately up and down); the cells' diagonals and the rows'
+// edges stay flat. Each fold is 4 edges of that bend among the grid's interior edges.
+TriMesh accordion(const std::vector<double>& folds_deg) {
+  const int nx = static_cast<int>(folds_deg.size()) + 1;
+  TriangleSoup soup = test::grid_patch(nx, 4, static_cast<double>(nx));
+  std::vector<Eigen::Vector2d> profile{{0.0, 0.0}};  // (x, z) of each column line
+  double direction = 0.0;
+  for (int i = 1; i <= nx; ++i) {
+    profile.push_back(profile.back() + Eigen::Vector2d(std::cos(direction), std::sin(direction)));
+    if (i < nx) direction += (i % 2 == 1 ? 1.0 : -1.0) * radians(folds_deg[static_cast<std::size_t>(i - 1)]);
+  }
+  for (auto& p : soup.points) {
+    const auto column = static_cast<std::size_t>(std::lround(p.x()));
+    p.x() = profile[column].x();
+    p.z() = profile[column].y();
+  }
+  return to_trimesh(soup);
+}
+
+// segment's gap_crease_angle (docs/segment.md "Creases at a gap in the bends"): 9 folds of 4
+// edges each among the accordion's interior edges (10 x 4 cells: 30 + 36 + 40 = 106 edges,
+// each fold 3.8% of them, above kCreaseGapMinShare).
+TEST(GapCreaseAngle, DropsToAGapBelowTheCreaseAngle) {
+  // Every fold at 72 deg, nothing between 55 and 70: the crease angle drops to 70.
+  EXPECT_EQ(gap_crease_angle(accordion(std::vector<double>(9, 72.0)), 80.0), 70.0);
+  // Folds at 77 and 67 (cheese's rims), nothing between 50 and 65: both kinds are creases at 65.
+  const std::vector<double> pairs{77, 67, 77, 67, 77, 67, 77, 67, 77};
+  EXPECT_EQ(gap_crease_angle(accordion(pairs), 80.0), 65.0);
+  // Folds at 72 and 62: no gap within 15 deg below the 72 deg folds: unchanged.
+  EXPECT_EQ(gap_crease_angle(accordion({72, 62, 72, 62, 72, 62, 72, 62, 72}), 80.0), 80.0);
+  // Bends spread evenly (femur): unchanged.
+  EXPECT_EQ(gap_crease_angle(accordion({78, 74, 71, 66, 62, 58, 54, 50, 46}), 80.0), 80.0);
+  // Folds above the crease angle are creases already; a flat grid has no bend at all.
+  EXPECT_EQ(gap_crease_angle(accordion(std::vector<double>(9, 85.0)), 80.0), 80.0);
+  EXPECT_EQ(gap_crease_angle(accordion(std::vector<double>(9, 0.0)), 80.0), 80.0);
+  // One fold of 4 edges among 106 (3.8%) is enough; a share under 2% is not (one fold of a
+  // 30 x 4 grid: 4 of 90 + 116 + 120 = 326 edges).
+  EXPECT_EQ(gap_crease_angle(accordion({0, 0, 0, 0, 72, 0, 0, 0, 0}), 80.0), 70.0);
+  std::vector<double> long_grid(29, 0.0);
+  long_grid[14] = 72.0;
+  EXPECT_EQ(gap_crease_angle(accordion(long_grid), 80.0), 80.0);
+  // The candidates stay above 0 and follow the crease angle given.
+  EXPECT_EQ(gap_crease_angle(accordion(std::vector<double>(9, 22.0)), 30.0), 20.0);
+  EXPECT_EQ(gap_crease_angle(accordion(std::vector<double>(9, 12.0)), 20.0), 20.0);  // the flat edges: no gap
+  EXPECT_EQ(gap_crease_angle(accordion(std::vector<double>(9, 3.0)), 5.0), 5.0);
+  EXPECT_THROW((void)gap_crease_angle(accordion(pairs), 0.0), InvalidInput);
+  EXPECT_THROW((void)gap_crease_angle(accordion(pairs), 181.0), InvalidInput);
+  EXPECT_THROW((void)gap_crease_angle(accordion(pairs), std::nan("")), InvalidInput);
+}
+
 // The pipeline's other remedy against crossings: segment_detail::bisect_patches cuts a patch
 // in two by a breadth-first partition from its two most distant faces. On a strip of 2 n
 // triangles (a chain through their shared edges) the cut is exactly at the middle.

@@ -69,6 +69,7 @@ struct RemeshArgs {
   std::optional<double> split_above;
   std::optional<double> crease;
   bool bevel_creases = false;
+  bool no_crease_gap = false;
   std::optional<double> sharp_crease;
   std::optional<double> unsmoothed_crease_angle;
   std::optional<double> tiny_curve_merge;
@@ -141,6 +142,7 @@ void run_remesh(RemeshArgs& args) {
   if (args.split_above) options.surfmesh.fit.split_above_edges = *args.split_above;
   if (args.crease) options.segment.crease_angle_deg = *args.crease;
   if (args.bevel_creases) options.segment.bevel_creases = true;
+  if (args.no_crease_gap) options.crease_gap = false;
   if (args.sharp_crease) options.segment.sharp_crease_angle_deg = *args.sharp_crease;
   if (args.unsmoothed_crease_angle) options.surfmesh.unsmoothed_crease_angle_deg = *args.unsmoothed_crease_angle;
   if (args.smoothed_boundary) options.surfmesh.unsmoothed_boundary_curves = false;
@@ -335,6 +337,10 @@ void add_remesh_command(CLI::App& app) {
   cmd->add_option("--tiny-curve-merge", args->tiny_curve_merge,
                   "Merge the two corners of a one-edge border curve shorter than this many target edges "
                   "(default 0.3; 0 = never; not with a cell grid; docs/surfmesh.md)");
+  cmd->add_flag("--no-crease-gap", args->no_crease_gap,
+                "Keep --crease where a non-marching-cubes input's bends leave a gap below it (by default the "
+                "crease angle drops to that gap, by at most 15 deg: a CAD mesh's 65-80 deg edges become creases; "
+                "docs/segment.md \"Creases at a gap in the bends\")");
   cmd->add_flag("--smoothed-boundary", args->smoothed_boundary,
                 "Place the border nodes of the input's boundary on its smoothed curve (rounds its corners; "
                 "the default keeps the input's boundary polyline)");
