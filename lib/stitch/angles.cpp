@@ -480,21 +480,9 @@ class AngleRepair {
     for (const Vec& target : targets) {
       const Vec q = project(v, std::span<const int>(patches.data(), n_patches), target);
       if (!q.allFinite() || q == p) continue;
-      Shape after;
-      bool ok = true;
-      double offset = std::numeric_limits<double>::infinity();
-      for (const RingTriangle& t : ring_) {
-        const Vec n = (t.b - q).cross(t.c - q);
-        const double l = n.norm(), l_old = t.n.norm();
-        if (l <= min_double_area_ || (l_old > 0.0 && n.dot(t.n) <= options_.min_normal_dot * l * l_old)) {
-          ok = false;
-          break;
-        }
-        after.add(q, t.b, t.c, sin_bound_);
-        offset = std::min(offset, (quality_detail::closest_point_on_triangle(q, p, t.b, t.c) - q).norm());
-      }
-      if (!ok || !(offset <= max_offset_) || !is_better(before, after) || !(after.min_sine > best)) continue;
-      best = after.min_sine;
+      const std::optional<Shape> after = ring_shape(p, q);
+      if (!after || !is_better(before, *after) || !(after->min_sine > best)) continue;
+      best = after->min_sine;
       best_q = q;
     }
     return best;
@@ -538,17 +526,9 @@ class AngleRepair {
     const Vec t1 = normal.unitOrthogonal(), t2 = normal.cross(t1);
     // The shape of v's triangles with v at q, when q passes the tests; nullopt otherwise.
     auto shape_at = [&](const Vec& q) -> std::optional<Shape> {
-      Shape after;
-      double offset = std::numeric_limits<double>::infinity();
-      for (const RingTriangle& t : ring_) {
-        const Vec n = (t.b - q).cross(t.c - q);
-        const double l = n.norm(), l_old = t.n.norm();
-        if (l <= min_double_area_ || (l_old > 0.0 && n.dot(t.n) <= options_.min_normal_dot * l * l_old)) return std::nullopt;
-        after.add(q, t.b, t.c, sin_bound_);
-        offset = std::min(offset, (quality_detail::closest_point_on_triangle(q, p, t.b, t.c) - q).norm());
-      }
-      if (!(offset <= max_offset_) || after.n_small > before.n_small ||
-          after.n_obtuse > before.n_obtuse + (before.n_small - after.n_small))
+      std::optional<Shape> after = ring_shape(p, q);
+      if (after && (after->n_small > before.n_small ||
+                    after->n_obtuse > before.n_obtuse + (before.n_small - after->n_small)))
         return std::nullopt;
       return after;
     };
@@ -584,6 +564,23 @@ class AngleRepair {
   // no farther than StitchOptions::fin_rim_max_move from where the front put it.
   Vec project(TriMesh::VertexHandle v, std::span<const int> patches, const Vec& target) const {
     return rim_.clamp(node(v), project_onto_patches(surface_, patches, target));
+  }
+
+  // The shape of ring_'s triangles (a vertex's, from p) with the vertex at q; nullopt when one
+  // degenerates or turns its normal by more than acos(min_normal_dot), or q lies farther than
+  // max_offset_ from every old triangle.
+  std::optional<Shape> ring_shape(const Vec& p, const Vec& q) const {
+    Shape after;
+    double offset = std::numeric_limits<double>::infinity();
+    for (const RingTriangle& t : ring_) {
+      const Vec n = (t.b - q).cross(t.c - q);
+      const double l = n.norm(), l_old = t.n.norm();
+      if (l <= min_double_area_ || (l_old > 0.0 && n.dot(t.n) <= options_.min_normal_dot * l * l_old)) return std::nullopt;
+      after.add(q, t.b, t.c, sin_bound_);
+      offset = std::min(offset, (quality_detail::closest_point_on_triangle(q, p, t.b, t.c) - q).norm());
+    }
+    if (!(offset <= max_offset_)) return std::nullopt;
+    return after;
   }
 
   static bool is_better(const Shape& before, const Shape& after) {
