@@ -191,9 +191,10 @@ struct MeshReport {
 
 //! The intersecting face pairs of self_intersecting_pairs() that involve at least one of
 //! `faces` (any order, repeats allowed), in the same form: (smaller, larger) face indices,
-//! ascending, each pair once. For re-checking a few changed faces of a large soup: a tree
-//! is built over `faces` only and every face of the soup is tested against it, so the cost
-//! is linear in the soup plus the candidates near `faces`. The soup's faces are taken on
+//! ascending, each pair once. For re-checking a few changed faces of a large soup: a uniform
+//! grid is built over the boxes of `faces` only (quality_detail::BoxGrid) and every face of
+//! the soup is looked up in it, so the cost is linear in the soup plus the candidates near
+//! `faces`. The soup's faces are taken on
 //! n_threads workers; the result does not depend on n_threads.
 //! \throw InvalidInput for out-of-range indices (in the soup or in `faces`), non-finite points
 //! or n_threads == 0.

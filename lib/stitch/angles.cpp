@@ -78,6 +78,10 @@ class AngleRepair {
         mesh_(part.mesh), rim_(whole.rim_), min_double_area_(whole.min_double_area_), sin_bound_(whole.sin_bound_),
         cos_dihedral_(whole.cos_dihedral_), max_offset_(whole.max_offset_) {}
 
+  // rim_ may refer to own_rim_: no copies.
+  AngleRepair(const AngleRepair&) = delete;
+  AngleRepair& operator=(const AngleRepair&) = delete;
+
   // Whether some triangle has no feature node and an angle below the bound.
   bool any_small() const {
     double s = 0.0;

@@ -540,7 +540,8 @@ StitchResult stitch_impl(const SurfaceMesh& surface, const TriMesh* input, const
     input_components = std::async(std::launch::async, [input] { return component_signatures(*input); });
   }
   // The volume compensation's marching-cubes gate (a pass over the input's edges: 0.13 G
-  // instructions on the liver), likewise; compensate_volume() is then given no input.
+  // instructions on the liver), likewise; compensate_volume() then skips it (it still needs the
+  // input for its enclosed-volume check).
   std::future<bool> input_on_lattice;
   if (input != nullptr && options.n_threads >= 2 && options.volume_compensation > 0.0 && !surface.triangles.empty()) {
     input_on_lattice = std::async(std::launch::async, [input] { return surfmesh_detail::vertices_on_lattice_edges(*input); });
@@ -582,8 +583,8 @@ StitchResult stitch_impl(const SurfaceMesh& surface, const TriMesh* input, const
     const bool gated = gate_known && input_on_lattice.get();
     report.n_volume_compensation_moves =
         gated ? 0
-              : stitch_detail::compensate_volume(surface, gate_known ? nullptr : input, mesh, result.face_patch,
-                                                 result.vertex_node, feature, options.volume_compensation);
+              : stitch_detail::compensate_volume(surface, input, mesh, result.face_patch, result.vertex_node, feature,
+                                                 options.volume_compensation, gate_known);
     if (report.n_chord_compensation_moves > 0 || report.n_volume_compensation_moves > 0) {
       stitch_detail::hold_detail_nodes(mesh, surface, result.vertex_node);
       stitch_detail::hold_fin_rim_nodes(mesh, result.vertex_node, stitch_detail::fin_rim_bound(surface, options));

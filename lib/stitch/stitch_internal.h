@@ -214,10 +214,12 @@ std::size_t hold_detail_nodes(TriMesh& mesh, const SurfaceMesh& surface, const s
 //! strength, at most 0.1 of its root-mean-square edge, half that or not at all where the
 //! move would add an obtuse triangle around it or an angle below min(the old smallest,
 //! kAwayFromFeaturesAngleBoundDeg). Nothing when input (may be null) is taken for a
-//! marching-cubes surface (its vertices on lattice edges). Returns the number of nodes moved.
+//! marching-cubes surface (its vertices on lattice edges; lattice_gate_done: the caller has
+//! tested that already, and input is still used for the enclosed-volume check). Returns the
+//! number of nodes moved.
 std::size_t compensate_volume(const SurfaceMesh& surface, const TriMesh* input, TriMesh& mesh,
                               const std::vector<int>& face_patch, const std::vector<int>& vertex_node,
-                              const std::vector<std::uint8_t>& is_feature, double strength);
+                              const std::vector<std::uint8_t>& is_feature, double strength, bool lattice_gate_done = false);
 
 //! alpha of every face, in face order.
 std::vector<double> face_alphas(const TriMesh& mesh);

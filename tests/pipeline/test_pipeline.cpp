@@ -635,6 +635,29 @@ TEST(Pipeline, PinionRootsKeepTheirVolume) {
   }
 }
 
+// CGAL's blobby (a closed smooth blob, not a marching-cubes surface): the volume compensation
+// moves nodes and then keeps the moves only if the enclosed volume gets nearer the input's.
+// With 2+ threads the compensation's marching-cubes gate runs on a helper thread; the volume
+// check must still run: on blobby it undoes the moves (0 kept); without the check at 2 threads
+// the moves stayed and the output differed from the 1-thread one.
+TEST(Pipeline, VolumeCompensationSameForAnyThreadCount) {
+  const TriMesh mesh = prepare_mesh(read_soup(test::test_data("meshes/blobby.off"))).mesh;
+  RemeshOptions options;
+  options.compute_distances = false;
+  options.set_threads(1);
+  const RemeshResult one = remesh(mesh, options);
+  options.set_threads(2);
+  const RemeshResult two = remesh(mesh, options);
+  ASSERT_TRUE(one.report.ok()) << errors_of(one.report);
+  ASSERT_TRUE(two.report.ok()) << errors_of(two.report);
+  EXPECT_EQ(one.report.stitch.n_volume_compensation_moves, two.report.stitch.n_volume_compensation_moves);
+  ASSERT_EQ(one.mesh.n_vertices(), two.mesh.n_vertices());
+  ASSERT_EQ(one.mesh.n_faces(), two.mesh.n_faces());
+  for (const auto v : one.mesh.vertices()) {
+    ASSERT_EQ(one.mesh.point(v), two.mesh.point(two.mesh.vertex_handle(static_cast<unsigned>(v.idx())))) << v.idx();
+  }
+}
+
 // CGAL's rotor by default (feature sizing, SizingOptions::feature_size, applies: a CAD mesh,
 // not a marching-cubes one): its narrow crease-bounded faces (hub walls, blade rims, narrower
 // than the uniform 1.5 mean input edges of a mesh of long fan triangles) were single rows of

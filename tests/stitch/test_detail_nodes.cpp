@@ -109,9 +109,9 @@ TEST(StitchDetailNodes, NoInnerNodeOfADetailFittedPatchIsMovedWhereItsPatchHasNo
   options.sizing.adaptive = true;
   options.sizing.size = 1.5 * edge;
   options.fit.detail_spacing_edges = 1.0;
-  // The borders as before the border look-ahead: with it (0.35) the small-angle repair's
-  // moves (angles.cpp move_gain, which projects without PatchSurface's face-below rule)
-  // move one inner node where its patch has no input face below. Known, not fixed here.
+  // The borders as before the border look-ahead: with it (0.35) this wavy grid's stitch
+  // reports an error (not located, session 12); the small-angle repair's moves now take the
+  // face-below rule (project_onto_patches), which the look-ahead's first failure was about.
   options.sizing.border_lookahead = 0.0;
   const SurfaceMesh surface = mesh_surface(input, seg, options);
   StitchOptions stitch_options;
