@@ -1391,17 +1391,12 @@ FaceNormals prepare_normals(FaceGraph& graph, const SegmentOptions& options, Seg
   return normals;
 }
 
-// Step 8 of segment(): border curves of the final (renumbered) patches, and the result.
-void finish_segmentation(const TriMesh& mesh, const FaceGraph& graph, const FaceNormals& normals, Patches& patches,
-                         const SegmentOptions& options, Segmentation& result) {
-  segment_detail::Borders borders = segment_detail::extract_borders(mesh, patches.face_patch, options.border_smoothing,
+// The border curves and corners of a segmentation's face -> patch map, and each patch's
+// list of its curves (replacing any it had).
+void attach_borders(const TriMesh& mesh, const SegmentOptions& options, Segmentation& result) {
+  segment_detail::Borders borders = segment_detail::extract_borders(mesh, result.face_patch, options.border_smoothing,
                                                                     segment_detail::worker_count(options.threads));
-  result.face_patch = std::move(patches.face_patch);
-  result.patches.assign(patches.faces.size(), Patch{});
-  for (std::size_t p = 0; p < patches.faces.size(); ++p) {
-    result.patches[p].faces = std::move(patches.faces[p]);
-    result.patches[p].axis = patches.axes[p];
-  }
+  for (Patch& patch : result.patches) patch.curves.clear();
   for (std::size_t c = 0; c < borders.curves.size(); ++c) {
     const BorderCurve& curve = borders.curves[c];
     result.patches[curve.patch_left].curves.push_back(static_cast<int>(c));
@@ -1409,6 +1404,21 @@ void finish_segmentation(const TriMesh& mesh, const FaceGraph& graph, const Face
   }
   result.curves = std::move(borders.curves);
   result.corners = std::move(borders.corners);
+}
+
+// Step 8 of segment(): border curves of the final (renumbered) patches (unless
+// `with_borders` is false: segment_detail::with_borders() adds them later), and the result.
+void finish_segmentation(const TriMesh& mesh, const FaceGraph& graph, const FaceNormals& normals, Patches& patches,
+                         const SegmentOptions& options, Segmentation& result, bool with_borders) {
+  result.face_patch = std::move(patches.face_patch);
+  result.patches.assign(patches.faces.size(), Patch{});
+  for (std::size_t p = 0; p < patches.faces.size(); ++p) {
+    result.patches[p].faces = std::move(patches.faces[p]);
+    result.patches[p].axis = patches.axes[p];
+  }
+  result.curves.clear();
+  result.corners.clear();
+  if (with_borders) attach_borders(mesh, options, result);
   result.n_crease_edges = result.n_degenerate_faces = result.n_slope_exceptions = 0;
   for (int f = 0; f < graph.n_faces(); ++f) {
     for (int i = 0; i < 3; ++i)
@@ -1499,7 +1509,8 @@ Patches editable_patches(const Segmentation& segmentation) {
 
 // The edited patches renumbered, with their curves; counts and island faces as given.
 Segmentation finish_edit(const segment_detail::Splitter& s, Patches& patches,
-                         std::size_t n_fold_splits, std::size_t n_islands_absorbed, std::vector<int> island_faces) {
+                         std::size_t n_fold_splits, std::size_t n_islands_absorbed, std::vector<int> island_faces,
+                         bool with_borders) {
   Segmentation result;
   result.n_fold_splits = n_fold_splits;
   result.n_bevel_crease_edges = s.n_bevel_crease_edges;
@@ -1509,7 +1520,7 @@ Segmentation finish_edit(const segment_detail::Splitter& s, Patches& patches,
   island_faces.erase(std::unique(island_faces.begin(), island_faces.end()), island_faces.end());
   result.island_faces = std::move(island_faces);
   renumber(patches);
-  finish_segmentation(s.mesh, s.graph, s.normals, patches, s.options, result);
+  finish_segmentation(s.mesh, s.graph, s.normals, patches, s.options, result, with_borders);
   return result;
 }
 
@@ -1520,7 +1531,7 @@ Segmentation segment(const TriMesh& mesh, const SegmentOptions& options) {
 }
 
 Segmentation segment_detail::segment(const TriMesh& mesh, const SegmentOptions& options, const double mean_edge,
-                                     SplitterPtr* splitter) {
+                                     SplitterPtr* splitter, const bool with_borders) {
   options.validate();
   validate_mesh(mesh);
   Segmentation result;
@@ -1554,7 +1565,7 @@ Segmentation segment_detail::segment(const TriMesh& mesh, const SegmentOptions& 
   renumber(patches);
   report_progress(options.progress, kStage, 0.7);
 
-  finish_segmentation(mesh, graph, normals, patches, options, result);
+  finish_segmentation(mesh, graph, normals, patches, options, result, with_borders);
   if (splitter != nullptr) {
     splitter->reset(new Splitter(mesh, options));
     Splitter& kept = **splitter;
@@ -1586,7 +1597,8 @@ Segmentation PatchSplitter::split(const Segmentation& segmentation, const std::v
   return segment_detail::split(*impl_, segmentation, which);
 }
 
-Segmentation segment_detail::split(Splitter& s, const Segmentation& segmentation, const std::vector<int>& which) {
+Segmentation segment_detail::split(Splitter& s, const Segmentation& segmentation, const std::vector<int>& which,
+                                   const bool with_borders) {
   const auto n_faces = static_cast<int>(s.mesh.n_faces());
   const auto n_patches = static_cast<int>(segmentation.patches.size());
   check_edit(s, segmentation, which, "split_patches");
@@ -1643,7 +1655,7 @@ Segmentation segment_detail::split(Splitter& s, const Segmentation& segmentation
   result.n_fold_splits += split_folds(grouping, s.mean_edge, scratch, patches, std::move(work),
                                       segment_detail::worker_count(s.options.threads), s.worker_scratch);
   renumber(patches);
-  finish_segmentation(s.mesh, s.graph, s.normals, patches, s.options, result);
+  finish_segmentation(s.mesh, s.graph, s.normals, patches, s.options, result, with_borders);
   s.last_face_patch = result.face_patch;
   s.last_axes.clear();
   for (const Patch& patch : result.patches) s.last_axes.push_back(patch.axis);
@@ -1651,7 +1663,7 @@ Segmentation segment_detail::split(Splitter& s, const Segmentation& segmentation
 }
 
 Segmentation segment_detail::merge_into_neighbours(Splitter& s, const Segmentation& segmentation,
-                                                   const std::vector<int>& which) {
+                                                   const std::vector<int>& which, const bool with_borders) {
   check_edit(s, segmentation, which, "merge_patches_into_neighbours");
   if (s.mesh.n_faces() == 0 || which.empty()) return segmentation;
   s.prepare();
@@ -1711,7 +1723,7 @@ Segmentation segment_detail::merge_into_neighbours(Splitter& s, const Segmentati
   }
   if (n_merged == 0) return segmentation;
   return finish_edit(s, patches, segmentation.n_fold_splits, segmentation.n_islands_absorbed + n_merged,
-                     std::move(island_faces));
+                     std::move(island_faces), with_borders);
 }
 
 Segmentation segment_detail::bisect_patches(Splitter& s, const Segmentation& segmentation, const std::vector<int>& which) {
@@ -1740,7 +1752,19 @@ Segmentation segment_detail::bisect_patches(Splitter& s, const Segmentation& seg
   const std::size_t n_fold_splits =
       segmentation.n_fold_splits + split_folds(grouping, s.mean_edge, scratch, patches, work,
                                                segment_detail::worker_count(s.options.threads), s.worker_scratch);
-  return finish_edit(s, patches, n_fold_splits, segmentation.n_islands_absorbed, segmentation.island_faces);
+  return finish_edit(s, patches, n_fold_splits, segmentation.n_islands_absorbed, segmentation.island_faces, true);
+}
+
+Segmentation segment_detail::with_borders(const TriMesh& mesh, const SegmentOptions& options, Segmentation segmentation) {
+  options.validate();
+  if (segmentation.face_patch.size() != mesh.n_faces())
+    throw InvalidInput("with_borders: the segmentation has " + std::to_string(segmentation.face_patch.size()) +
+                       " face labels for " + std::to_string(mesh.n_faces()) + " faces");
+  const auto n_patches = static_cast<int>(segmentation.patches.size());
+  for (const int p : segmentation.face_patch)
+    if (p < 0 || p >= n_patches) throw InvalidInput("with_borders: a face has patch id " + std::to_string(p));
+  attach_borders(mesh, options, segmentation);
+  return segmentation;
 }
 
 Segmentation merge_patches_into_neighbours(const TriMesh& mesh, const Segmentation& segmentation,

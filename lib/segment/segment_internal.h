@@ -164,22 +164,34 @@ using SplitterPtr = std::unique_ptr<Splitter, SplitterDeleter>;
 //! already has it (the pipeline computes it once per remesh). With splitter, *splitter
 //! becomes a splitter for the same mesh and options holding segment()'s face graph and
 //! normals (split() then does not compute them again).
+//! With with_borders false, the result has no curves and no corners (each patch lists no
+//! curve): a caller that edits the patches further (split(), merge_into_neighbours())
+//! extracts the borders once at the end with with_borders(mesh, options, result). The
+//! face -> patch map, axes and counts are the same either way.
 [[nodiscard]] Segmentation segment(const TriMesh& mesh, const SegmentOptions& options, double mean_edge,
-                                   SplitterPtr* splitter = nullptr);
+                                   SplitterPtr* splitter = nullptr, bool with_borders = true);
+
+//! The segmentation with the curves, corners and per-patch curve lists of its face -> patch
+//! map (step 8 of segment(), with options.border_smoothing and options.threads): what
+//! segment() gives with with_borders true, for a segmentation made without them.
+//! \throw InvalidInput when the face labels do not fit the mesh or the patches.
+[[nodiscard]] Segmentation with_borders(const TriMesh& mesh, const SegmentOptions& options, Segmentation segmentation);
 
 //! A splitter for mesh and options that computes its face graph and normals at first use
 //! (the same as segment()'s), for callers that let segment()'s splitter go to save memory.
 [[nodiscard]] SplitterPtr make_splitter(const TriMesh& mesh, const SegmentOptions& options);
 
-//! PatchSplitter::split() on a splitter made by segment().
-[[nodiscard]] Segmentation split(Splitter& splitter, const Segmentation& segmentation, const std::vector<int>& which);
+//! PatchSplitter::split() on a splitter made by segment() (with_borders: as segment()'s).
+[[nodiscard]] Segmentation split(Splitter& splitter, const Segmentation& segmentation, const std::vector<int>& which,
+                                 bool with_borders = true);
 
 //! Each listed patch bisected (bisect_patch), the parts checked as segment()'s step 7.
 [[nodiscard]] Segmentation bisect_patches(Splitter& splitter, const Segmentation& segmentation,
                                           const std::vector<int>& which);
 
-//! merge_patches_into_neighbours() on a splitter made by segment() (its graph and normals).
+//! merge_patches_into_neighbours() on a splitter made by segment() (its graph and normals;
+//! with_borders: as segment()'s).
 [[nodiscard]] Segmentation merge_into_neighbours(Splitter& splitter, const Segmentation& segmentation,
-                                                 const std::vector<int>& which);
+                                                 const std::vector<int>& which, bool with_borders = true);
 
 }  // namespace nurbsfront::segment_detail

@@ -151,11 +151,15 @@ SizeAt adaptive_sizing(const TriMesh& mesh, const Segmentation& segmentation, co
 double lattice_edge_vertex_share(const TriMesh& mesh) { return lattice_edge_shares(mesh).on_lattice_edges; }
 
 LatticeShares lattice_edge_shares(const TriMesh& mesh) {
+  return mesh.n_vertices() == 0 || mesh.n_edges() == 0 ? LatticeShares{} : lattice_edge_shares(mesh, mean_edge_length(mesh));
+}
+
+LatticeShares lattice_edge_shares(const TriMesh& mesh, const double mean_edge) {
   const std::size_t n = mesh.n_vertices();
   const std::size_t m = mesh.n_edges();
   if (n == 0 || m == 0) return {};
   // A cell is not much smaller than an edge: shorter extents are rounding or slivers.
-  const double shortest = 0.2 * mean_edge_length(mesh);
+  const double shortest = 0.2 * mean_edge;
   std::vector<std::uint8_t> on_lattice(n, 0);  // per vertex: axes on which it is a lattice value
   std::vector<std::uint8_t> on_half(n, 0);     // per vertex: axes on which it is half-way between two
   // The spacing is found from at most ~64k edges (evenly spread over the indices).

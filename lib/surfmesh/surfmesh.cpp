@@ -505,7 +505,8 @@ Segmentation split_unfitted_patches(const TriMesh& input, const Segmentation& se
 Segmentation surfmesh_detail::split_unfitted_patches(const TriMesh& input, const Segmentation& segmentation,
                                                      const SurfMeshOptions& options,
                                                      const SegmentOptions& segment_options, std::size_t* n_split,
-                                                     const double mean_edge, segment_detail::Splitter* splitter) {
+                                                     const double mean_edge, segment_detail::Splitter* splitter,
+                                                     const bool with_borders) {
   options.validate();
   segment_options.validate();
   validate_segmentation(input, segmentation);
@@ -515,7 +516,10 @@ Segmentation surfmesh_detail::split_unfitted_patches(const TriMesh& input, const
   const double bound = options.fit.split_above_edges * mean_edge;
   const unsigned threads = parallel::thread_count(options.threads);
   Segmentation seg = segmentation;
-  std::unique_ptr<PatchSplitter> own_splitter;  // made at the first split when none is given
+  segment_detail::SplitterPtr own_splitter;  // made at the first split when none is given
+  // The rounds' splits leave the borders out (only the last result's are used): they are
+  // extracted once at the end.
+  bool split_any = false;
   std::vector<int> candidates(seg.patches.size());
   for (std::size_t p = 0; p < candidates.size(); ++p) candidates[p] = static_cast<int>(p);
   for (int round = 0; round < options.fit.split_rounds && !candidates.empty(); ++round) {
@@ -532,8 +536,9 @@ Segmentation surfmesh_detail::split_unfitted_patches(const TriMesh& input, const
     std::vector<std::uint8_t> was_bad(seg.patches.size(), 0);
     for (const int p : bad) was_bad[static_cast<std::size_t>(p)] = 1;
     const std::size_t n_before = seg.patches.size();
-    if (splitter == nullptr && !own_splitter) own_splitter = std::make_unique<PatchSplitter>(input, segment_options);
-    Segmentation next = splitter != nullptr ? segment_detail::split(*splitter, seg, bad) : own_splitter->split(seg, bad);
+    if (splitter == nullptr && !own_splitter) own_splitter = segment_detail::make_splitter(input, segment_options);
+    Segmentation next = segment_detail::split(splitter != nullptr ? *splitter : *own_splitter, seg, bad, false);
+    split_any = true;
     if (n_split != nullptr) *n_split += next.patches.size() - n_before;
     candidates.clear();
     for (std::size_t q = 0; q < next.patches.size(); ++q) {
@@ -544,6 +549,7 @@ Segmentation surfmesh_detail::split_unfitted_patches(const TriMesh& input, const
     seg = std::move(next);
     if (!changed) break;
   }
+  if (split_any && with_borders) seg = segment_detail::with_borders(input, segment_options, std::move(seg));
   return seg;
 }
 

@@ -273,6 +273,9 @@ struct LatticeShares {
 //! lattice_edge_vertex_share and the share of vertices at their lattice edge's midpoint in
 //! one pass. Measured (2026-11-26): see docs/surfmesh.md "Detail fit: where it runs".
 [[nodiscard]] LatticeShares lattice_edge_shares(const TriMesh& mesh);
+//! lattice_edge_shares(mesh) with mean_edge = mean_edge_length(mesh) given by a caller that
+//! already has it (the pipeline).
+[[nodiscard]] LatticeShares lattice_edge_shares(const TriMesh& mesh, double mean_edge);
 
 //! True when the input looks like the marching-cubes surface of a label image (staircases):
 //! lattice_edge_shares(mesh).at_edge_midpoints >= 0.5.
@@ -397,12 +400,16 @@ std::size_t clamp_inner_nodes(const TriMesh& mesh, const Segmentation& segmentat
 //! given by a caller that already has it (the pipeline computes it once per remesh);
 //! splitter, when given, is the one segment() left for the same input and segment_options;
 //! shares, when given, are lattice_edge_shares(input) computed by the caller (not again).
+//! split_unfitted_patches() with with_borders false returns a result without curves and
+//! corners wherever it split (segment_detail::with_borders() adds them), and the given
+//! segmentation as it is where it did not.
 [[nodiscard]] SurfaceMesh mesh_surface(const TriMesh& input, const Segmentation& segmentation,
                                        const SurfMeshOptions& options, double mean_edge,
                                        const LatticeShares* shares = nullptr);
 [[nodiscard]] Segmentation split_unfitted_patches(const TriMesh& input, const Segmentation& segmentation,
                                                   const SurfMeshOptions& options,
                                                   const SegmentOptions& segment_options, std::size_t* n_split,
-                                                  double mean_edge, segment_detail::Splitter* splitter = nullptr);
+                                                  double mean_edge, segment_detail::Splitter* splitter = nullptr,
+                                                  bool with_borders = true);
 
 }  // namespace nurbsfront::surfmesh_detail

@@ -322,6 +322,73 @@ TEST(SplitPatches, SplitterFromSegmentMatchesPatchSplitter) {
   segment_test::expect_contracts(mesh, second, options, 10.0);
 }
 
+// The pipeline's order: segment(), merges and split rounds without border curves, the
+// borders extracted once at the end (with_borders) are those each step would have
+// extracted: the same curves (vertices, edges, sides, smoothed points), corners and
+// per-patch curve lists; the rest of every step's result is the same either way.
+TEST(SplitPatches, BordersExtractedOnceAtTheEndEqualEachStepsBorders) {
+  SegmentOptions options;
+  options.min_patch_faces = 20;
+  const TriMesh mesh = to_trimesh(test::torus(48, 24));
+  const double mean_edge = mean_edge_length(mesh);
+  auto expect_same = [](const Segmentation& a, const Segmentation& b) {
+    EXPECT_EQ(a.face_patch, b.face_patch);
+    ASSERT_EQ(a.patches.size(), b.patches.size());
+    for (std::size_t p = 0; p < a.patches.size(); ++p) {
+      EXPECT_EQ(a.patches[p].faces, b.patches[p].faces) << "patch " << p;
+      EXPECT_EQ(a.patches[p].axis, b.patches[p].axis) << "patch " << p;
+      EXPECT_EQ(a.patches[p].curves, b.patches[p].curves) << "patch " << p;
+    }
+    ASSERT_EQ(a.curves.size(), b.curves.size());
+    for (std::size_t c = 0; c < a.curves.size(); ++c) {
+      EXPECT_EQ(a.curves[c].vertices, b.curves[c].vertices) << "curve " << c;
+      EXPECT_EQ(a.curves[c].edges, b.curves[c].edges) << "curve " << c;
+      EXPECT_EQ(a.curves[c].patch_left, b.curves[c].patch_left) << "curve " << c;
+      EXPECT_EQ(a.curves[c].patch_right, b.curves[c].patch_right) << "curve " << c;
+      EXPECT_EQ(a.curves[c].is_closed, b.curves[c].is_closed) << "curve " << c;
+      EXPECT_EQ(a.curves[c].smoothed, b.curves[c].smoothed) << "curve " << c;
+    }
+    EXPECT_EQ(a.corners, b.corners);
+    EXPECT_EQ(a.n_crease_edges, b.n_crease_edges);
+    EXPECT_EQ(a.n_fold_splits, b.n_fold_splits);
+    EXPECT_EQ(a.n_islands_absorbed, b.n_islands_absorbed);
+    EXPECT_EQ(a.island_faces, b.island_faces);
+  };
+  segment_detail::SplitterPtr with, without;
+  const Segmentation seg = segment_detail::segment(mesh, options, mean_edge, &with);
+  const Segmentation bare = segment_detail::segment(mesh, options, mean_edge, &without, false);
+  ASSERT_GE(seg.patches.size(), 4u);
+  ASSERT_FALSE(seg.curves.empty());
+  EXPECT_TRUE(bare.curves.empty());
+  EXPECT_TRUE(bare.corners.empty());
+  for (const Patch& patch : bare.patches) EXPECT_TRUE(patch.curves.empty());
+  expect_same(segment_detail::with_borders(mesh, options, bare), seg);
+  // Two split rounds and a merge, each step on the previous result.
+  const Segmentation first = segment_detail::split(*with, seg, {0, 1});
+  const Segmentation first_bare = segment_detail::split(*without, bare, {0, 1}, false);
+  ASSERT_GT(first.patches.size(), seg.patches.size());
+  EXPECT_TRUE(first_bare.curves.empty());
+  expect_same(segment_detail::with_borders(mesh, options, first_bare), first);
+  const Segmentation second = segment_detail::split(*with, first, {0, 2});
+  const Segmentation second_bare = segment_detail::split(*without, first_bare, {0, 2}, false);
+  const Segmentation second_late = segment_detail::with_borders(mesh, options, second_bare);
+  expect_same(second_late, second);
+  segment_test::expect_contracts(mesh, second_late, options, 10.0);
+  const int smallest = static_cast<int>(std::min_element(second.patches.begin(), second.patches.end(),
+                                                         [](const Patch& a, const Patch& b) {
+                                                           return a.faces.size() < b.faces.size();
+                                                         }) -
+                                        second.patches.begin());
+  const Segmentation merged = segment_detail::merge_into_neighbours(*with, second, {smallest});
+  const Segmentation merged_bare = segment_detail::merge_into_neighbours(*without, second_bare, {smallest}, false);
+  ASSERT_LT(merged.patches.size(), second.patches.size());
+  EXPECT_TRUE(merged_bare.curves.empty());
+  expect_same(segment_detail::with_borders(mesh, options, merged_bare), merged);
+  // A segmentation of another mesh is refused.
+  const TriMesh other = to_trimesh(test::torus(24, 12));
+  EXPECT_THROW((void)segment_detail::with_borders(other, options, bare), InvalidInput);
+}
+
 TEST(Segment, SphereGivesFewLargePatches) {
   const TriMesh mesh = to_trimesh(test::icosphere(3));
   SegmentOptions options;
