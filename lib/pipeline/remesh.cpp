@@ -59,7 +59,7 @@ std::size_t merge_tiny_patches(segment_detail::Splitter& splitter, const TriMesh
                                              options.tiny_patch_max_dihedral_deg);
   if (tiny.empty()) return 0;
   const std::size_t n_before = segmentation.patches.size();
-  segmentation = segment_detail::merge_into_neighbours(splitter, segmentation, tiny);
+  segmentation = segment_detail::merge_into_neighbours(splitter, segmentation, tiny, false);
   return n_before - segmentation.patches.size();
 }
 
@@ -162,7 +162,7 @@ RemeshResult remesh(const TriMesh& input, const RemeshOptions& options) {
   // The input's lattice shares (the marching-cubes gate), computed when first needed.
   std::optional<surfmesh_detail::LatticeShares> lattice;
   auto input_lattice = [&]() -> const surfmesh_detail::LatticeShares& {
-    if (!lattice) lattice = surfmesh_detail::lattice_edge_shares(input);
+    if (!lattice) lattice = surfmesh_detail::lattice_edge_shares(input, mean_edge);
     return *lattice;
   };
   // Sharp creases are for CAD-like meshes: the terraces of a marching-cubes surface are
@@ -179,20 +179,23 @@ RemeshResult remesh(const TriMesh& input, const RemeshOptions& options) {
   }
   report.crease_angle_deg = segment_options.crease_angle_deg;
   // segment()'s face graph and normals, kept for the splits of split_unfitted_patches.
+  // The border curves are extracted once, after the merges and splits below (each of
+  // them would extract all of them again: 0.13 G instructions a time on the liver).
   segment_detail::SplitterPtr splitter;
-  Segmentation first_segmentation = segment_detail::segment(input, segment_options, mean_edge, &splitter);
+  Segmentation first_segmentation = segment_detail::segment(input, segment_options, mean_edge, &splitter, false);
   report.n_crease_edges = first_segmentation.n_crease_edges;
   // Narrow patches (one-voxel fins and strips of marching-cubes surfaces) join a neighbour.
-  if (options.narrow_patch_merge > 0.0) {
+  // Not on label images (0/1 cells: vertices at their lattice edges' midpoints): the liver's
+  // merges cost one crossing repair and twice the run's CPU (2.8 -> 5.4 s) for no bound it
+  // did not meet already (docs/segment.md, "Narrow patches"). The gate first: the search for
+  // narrow patches is a serial pass over every face (0.15 G instructions on the liver).
+  if (options.narrow_patch_merge > 0.0 && surfmesh_detail::marching_cubes_lattice(input_lattice()) &&
+      !surfmesh_detail::label_image_staircase(input_lattice())) {
     const double h = surfmesh_detail::uniform_size(surfmesh_options.sizing, mean_edge);
     const std::vector<int> narrow = narrow_patches(input, first_segmentation, options.narrow_patch_merge * h);
-    // Not on label images (0/1 cells: vertices at their lattice edges' midpoints): the liver's
-    // merges cost one crossing repair and twice the run's CPU (2.8 -> 5.4 s) for no bound it
-    // did not meet already (docs/segment.md, "Narrow patches").
-    if (!narrow.empty() && surfmesh_detail::marching_cubes_lattice(input_lattice()) &&
-        !surfmesh_detail::label_image_staircase(input_lattice())) {
+    if (!narrow.empty()) {
       const std::size_t n_before = first_segmentation.patches.size();
-      first_segmentation = segment_detail::merge_into_neighbours(*splitter, first_segmentation, narrow);
+      first_segmentation = segment_detail::merge_into_neighbours(*splitter, first_segmentation, narrow, false);
       report.n_narrow_merged = n_before - first_segmentation.patches.size();
     }
   }
@@ -204,14 +207,23 @@ RemeshResult remesh(const TriMesh& input, const RemeshOptions& options) {
 
   watch.restart();
   // Patches whose fit leaves their input (sharp bends inside) are split and refitted.
-  Segmentation segmentation =
+  Segmentation segmentation = segment_detail::with_borders(
+      input, segment_options,
       surfmesh_detail::split_unfitted_patches(input, first_segmentation, surfmesh_options, segment_options,
-                                              &report.n_patches_split, mean_edge, splitter.get());
+                                              &report.n_patches_split, mean_edge, splitter.get(), false));
   // The splitter's graph and normals are not held through surfmesh and stitch (about 100 MB
   // on DRAM 256); the rare crossing repair below makes a new one (the same graph and normals).
   splitter.reset();
   // The shares when computed above (mesh_surface does not compute them again).
   const surfmesh_detail::LatticeShares* shares = lattice ? &*lattice : nullptr;
+  // The stitch's volume compensation makes no move on a marching-cubes input (its own gate,
+  // the same lattice-edge test as here: a pass over the input's edges, 0.13 G instructions on
+  // the liver): with the answer known, it is switched off instead of tested again. Only where
+  // the stitch optimises anyway (volume compensation alone would start its optimisation).
+  if (lattice && surfmesh_detail::marching_cubes_lattice(*lattice) &&
+      (stitch_options.optimisation_passes > 0 || stitch_options.obtuse_repair_rounds > 0 ||
+       stitch_options.chord_compensation > 0.0))
+    stitch_options.volume_compensation = 0.0;
   SurfaceMesh surface = surfmesh_detail::mesh_surface(input, segmentation, surfmesh_options, mean_edge, shares);
   report.seconds_surfmesh = watch.seconds();
 
