@@ -937,6 +937,10 @@ TEST(Surfmesh, DetailFitSkipsLabelImageStaircases) {
   EXPECT_EQ(step_shares.on_lattice_edges, 1.0);
   EXPECT_GE(step_shares.at_edge_midpoints, 0.9);
   EXPECT_TRUE(surfmesh_detail::label_image_staircase(step_shares));
+  // With the mean edge given (the pipeline's): the same shares.
+  const surfmesh_detail::LatticeShares given = surfmesh_detail::lattice_edge_shares(steps, mean_edge_length(steps));
+  EXPECT_EQ(given.on_lattice_edges, step_shares.on_lattice_edges);
+  EXPECT_EQ(given.at_edge_midpoints, step_shares.at_edge_midpoints);
   for (const TriMesh& smooth : {scene_mesh("sphere", 24, SampleMode::LevelSet), read_mesh(test::test_data("io/brainImageSmooth.vtk"))}) {
     const surfmesh_detail::LatticeShares shares = surfmesh_detail::lattice_edge_shares(smooth);
     EXPECT_GE(shares.on_lattice_edges, 0.5);
