@@ -843,6 +843,13 @@ void optimise(const SurfaceMesh& surface, const StitchOptions& options, const st
   report_progress(options.progress, "stitch: optimise", 1.0);
 }
 
+std::array<std::size_t, 2> repair_obtuse_once(const SurfaceMesh& surface, const StitchOptions& options,
+                                              const std::vector<std::uint8_t>& is_feature, StitchResult& result) {
+  Optimiser optimiser(surface, options, result, is_feature);
+  const std::size_t n_flips = optimiser.obtuse_flip_sweep();
+  return {n_flips, optimiser.obtuse_sweep()};
+}
+
 SplitResult split_obtuse(const SurfaceMesh& surface, const StitchOptions& options, std::vector<std::uint8_t>& is_feature,
                          StitchResult& result, const std::vector<std::array<int, 2>>& refused) {
   SplitResult out;

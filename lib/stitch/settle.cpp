@@ -22,6 +22,7 @@
 #include "nurbsfront/quality/aabb_tree.h"
 #include "nurbsfront/quality/report.h"
 #include "nurbsfront/stitch/stitch_internal.h"
+#include "nurbsfront/surfmesh/surfmesh_internal.h"
 
 namespace nurbsfront::stitch_detail {
 
@@ -158,7 +159,25 @@ GarbageMaps settle_intersections(const SurfaceMesh& surface, const StitchOptions
     target = Vec::Zero();
     for (const std::size_t patch : patches) {
       if (!surface.surfaces[patch].input_heights) return false;
-      target += surface_on_input(patch).project(p);
+      const PatchSurface& s = surface_on_input(patch);
+      const Vec local = s.frame.to_local(p);
+      double z = 0.0;
+      if (!surface.patches[patch].detail_fit || s.input_heights->height(local.x(), local.y(), z)) {
+        target += s.project(p);
+        continue;
+      }
+      // A detail-fitted patch with no input face straight below: its fit is not held to the
+      // input there (past a crease its extrapolation can stand an edge off it, and two such
+      // patches' rows beside a valley cross). Along the axis to the mean height of the ring,
+      // whose nodes are on the input faces or the border.
+      double height = 0.0;
+      double n = 0.0;
+      for (auto w : mesh.vv_range(v)) {
+        height += s.frame.to_local(to_eigen(mesh.point(w))).z();
+        n += 1.0;
+      }
+      if (n == 0.0) return false;
+      target += s.frame.to_world(Vec(local.x(), local.y(), height / n));
     }
     target /= static_cast<double>(patches.size());
     target = rim.clamp(static_cast<int>(g), target);

@@ -585,6 +585,14 @@ StitchResult stitch_impl(const SurfaceMesh& surface, const TriMesh* input, const
         gated ? 0
               : stitch_detail::compensate_volume(surface, input, mesh, result.face_patch, result.vertex_node, feature,
                                                  options.volume_compensation, gate_known);
+    // The compensation's moves come after the obtuse repair and can leave triangles obtuse
+    // that the splits cannot take apart (rotor: 39 obtuse with it, 37 without): the repair once
+    // more. Not where the compensation is gated off (marching-cubes surfaces).
+    if (options.obtuse_repair_rounds > 0 && report.n_volume_compensation_moves > 0) {
+      const auto repaired = stitch_detail::repair_obtuse_once(surface, options, feature, result);
+      report.n_flips += repaired[0];
+      report.n_smoothing_moves += repaired[1];
+    }
     if (report.n_chord_compensation_moves > 0 || report.n_volume_compensation_moves > 0) {
       stitch_detail::hold_detail_nodes(mesh, surface, result.vertex_node);
       stitch_detail::hold_fin_rim_nodes(mesh, result.vertex_node, stitch_detail::fin_rim_bound(surface, options));

@@ -71,7 +71,9 @@ struct StitchOptions {
   //! an obtuse triangle moves towards the ideal apex of one of its obtuse triangles when
   //! that leaves fewer obtuse triangles around it and passes the smoothing tests above, the
   //! angle floor raised by 2.5 deg (counted in StitchReport::n_flips and n_smoothing_moves;
-  //! docs/stitch.md "Obtuse repair"). Default 2.
+  //! docs/stitch.md "Obtuse repair"). When the volume compensation moved nodes, one more
+  //! sweep follows it (docs/stitch.md "The CAD meshes' obtuse triangles, session 13").
+  //! Default 2.
   int obtuse_repair_rounds = 2;
   //! Sweeps of obtuse splits after the optimisation and the intersection checks (>= 0; 0
   //! switches them off): the longest edge of a triangle still obtuse is split at the foot of
@@ -278,7 +280,9 @@ struct StitchResult {
 //!    made in them are flipped back; only the faces around these changes are checked
 //!    again (up to 6 rounds). If changed triangles still intersect, the optimisation is
 //!    undone as a whole. Intersections already in the assembly: the nodes of the crossing
-//!    triangles move onto their patches' input faces along the patch axes, then their edges
+//!    triangles move onto their patches' input faces along the patch axes (a node of a
+//!    detail-fitted patch with no input face straight below: to its ring's mean height
+//!    along the axis), then their edges
 //!    are flipped, each change kept only if fewer pairs cross; what still crosses is an
 //!    error.
 //! 2b. Small-angle repair (angle_repair_rounds), when nothing crosses: each triangle with no

@@ -230,6 +230,12 @@ std::vector<double> face_alphas(const TriMesh& mesh);
 void optimise(const SurfaceMesh& surface, const StitchOptions& options, const std::vector<std::uint8_t>& is_feature,
               StitchResult& result, StitchReport& report);
 
+//! One sweep of the obtuse repair (its flips, then its moves) over the whole mesh, as
+//! optimise() ends with; returns {flips, moves}. Run again after the volume compensation,
+//! whose moves can make triangles obtuse that the splits then cannot take apart.
+std::array<std::size_t, 2> repair_obtuse_once(const SurfaceMesh& surface, const StitchOptions& options,
+                                              const std::vector<std::uint8_t>& is_feature, StitchResult& result);
+
 //! What split_obtuse() did.
 struct SplitResult {
   std::size_t n_splits = 0, n_flips = 0, n_moves = 0;

@@ -6,6 +6,7 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -633,6 +634,43 @@ TEST(Pipeline, PinionRootsKeepTheirVolume) {
       EXPECT_GT(change, 0.01) << "the roots' gain the compensation takes back";
     }
   }
+}
+
+// Obtuse triangles in a mesh (an angle above 90 deg, as the quality report counts them).
+std::size_t count_obtuse(const TriMesh& mesh) {
+  std::size_t n = 0;
+  for (const auto f : mesh.faces()) {
+    std::array<Eigen::Vector3d, 3> p;
+    std::size_t k = 0;
+    for (const auto v : mesh.fv_range(f)) p[k++] = to_eigen(mesh.point(v));
+    for (std::size_t i = 0; i < 3; ++i) {
+      if ((p[(i + 1) % 3] - p[i]).dot(p[(i + 2) % 3] - p[i]) < 0.0) {
+        ++n;
+        break;
+      }
+    }
+  }
+  return n;
+}
+
+// CGAL's rotor (issue 5): the volume compensation moves nodes after the obtuse repair, and
+// some of its moves made triangles obtuse that the splits then could not remove: 39 obtuse
+// triangles with it, 37 without (main 8ed1cb8, 1 thread). The repair's flips and moves once
+// more after the compensation (stitch.cpp) leave no more with it than without; the volume
+// stays within issue 5's bound.
+TEST(PipelineSlow, VolumeCompensationAddsNoObtuseTriangles) {
+  const TriMesh mesh = prepare_mesh(read_soup(test::test_data("meshes/rotor.off"))).mesh;
+  const double volume_in = enclosed_volume(to_soup(mesh));
+  RemeshOptions options = fast_options();
+  options.compute_distances = false;
+  const RemeshResult with = remesh(mesh, options);
+  ASSERT_TRUE(with.report.ok()) << errors_of(with.report);
+  EXPECT_GT(with.report.stitch.n_volume_compensation_moves, 0u);
+  options.stitch.volume_compensation = 0.0;
+  const RemeshResult without = remesh(mesh, options);
+  ASSERT_TRUE(without.report.ok()) << errors_of(without.report);
+  EXPECT_LE(count_obtuse(with.mesh), count_obtuse(without.mesh));
+  EXPECT_LT(std::abs(enclosed_volume(to_soup(with.mesh)) - volume_in), 0.01 * volume_in);
 }
 
 // CGAL's blobby (a closed smooth blob, not a marching-cubes surface): the volume compensation

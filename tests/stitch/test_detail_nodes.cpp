@@ -10,6 +10,7 @@
 
 #include "fixtures/shapes.h"
 #include "nurbsfront/io/mesh_io.h"
+#include "nurbsfront/quality/report.h"
 #include "nurbsfront/core/soup.h"
 #include "nurbsfront/segment/segment.h"
 #include "nurbsfront/stitch/stitch.h"
@@ -96,7 +97,12 @@ TEST(StitchDetailNodes, NoInnerNodeOfADetailFittedPatchIsMovedWhereItsPatchHasNo
   // makes no move there (stitch_detail::project_onto_patches). Without the rule 25 moved inner
   // nodes had no face below (the brain, the test's input until session 12, took 38 s under
   // ASan: 6). Without the chord compensation every move of an inner node is such a
-  // projection, which keeps its position in the patch plane.
+  // projection, which keeps its position in the patch plane. One exception: the assembly's
+  // own crossings (here beside a valley crease, where two detail-fitted patches' fits stand
+  // above the crease past their input faces) are settled by moving such nodes along their
+  // axes to their rings' mean heights (stitch_detail::settle_intersections); before that,
+  // with the border look-ahead (0.35), two crossing pairs were left and the report had an
+  // error.
   constexpr int kN = 16;
   const double edge = 1.0 / kN;
   TriMesh input = to_trimesh(test::grid_patch(kN, kN));
@@ -109,10 +115,6 @@ TEST(StitchDetailNodes, NoInnerNodeOfADetailFittedPatchIsMovedWhereItsPatchHasNo
   options.sizing.adaptive = true;
   options.sizing.size = 1.5 * edge;
   options.fit.detail_spacing_edges = 1.0;
-  // The borders as before the border look-ahead: with it (0.35) this wavy grid's stitch
-  // reports an error (not located, session 12); the small-angle repair's moves now take the
-  // face-below rule (project_onto_patches), which the look-ahead's first failure was about.
-  options.sizing.border_lookahead = 0.0;
   const SurfaceMesh surface = mesh_surface(input, seg, options);
   StitchOptions stitch_options;
   stitch_options.chord_compensation = 0.0;
@@ -134,7 +136,15 @@ TEST(StitchDetailNodes, NoInnerNodeOfADetailFittedPatchIsMovedWhereItsPatchHasNo
     if (!s.input_heights->height(local.x(), local.y(), z)) ++n_without_face;
   }
   EXPECT_GT(n_moved, 100u);
-  EXPECT_EQ(n_without_face, 0u);
+  EXPECT_LE(n_without_face, result.report.n_settled_nodes);
+  // The assembly crosses itself here (the settling has work to do) ...
+  TriangleSoup assembled;
+  assembled.points = surface.nodes;
+  for (const auto& t : surface.triangles)
+    assembled.triangles.push_back({static_cast<std::uint32_t>(t[0]), static_cast<std::uint32_t>(t[1]), static_cast<std::uint32_t>(t[2])});
+  EXPECT_GT(count_self_intersections(assembled, 1), 0u);
+  // ... and the output does not (2 pairs left without the settling's rule for such nodes).
+  EXPECT_EQ(result.report.output.topology.n_self_intersecting_pairs.value_or(1), 0u);
 }
 
 // stitch_detail::project_onto_patches, the one projection of every stitch move (smoothing,
