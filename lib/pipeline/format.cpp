@@ -82,6 +82,9 @@ std::string to_json(const RemeshReport& r) {
   stitch.count("triangles_away_from_features", s.n_away_from_features);
   stitch.num("min_angle_away_from_features_deg", s.min_angle_away_from_features_deg);
   stitch.count("small_angle_away_from_features", s.n_small_angle_away_from_features);
+  stitch.count("triangles_at_fin_rims", s.n_at_fin_rims);
+  stitch.num("min_angle_at_fin_rims_deg", s.min_angle_at_fin_rims_deg);
+  stitch.count("small_angle_at_fin_rims", s.n_small_angle_at_fin_rims);
   stitch.num("alpha_mean_before", s.alpha_mean_before).num("alpha_min_before", s.alpha_min_before);
   stitch.add("input_components", components_json(s.input_components));
   stitch.add("output_components", components_json(s.output_components));
@@ -118,6 +121,11 @@ std::string to_summary(const RemeshReport& r) {
          fixed(r.stitch.min_angle_away_from_features_deg, 2) + " deg, " +
          std::to_string(r.stitch.n_small_angle_away_from_features) + " below " +
          fixed(kAwayFromFeaturesAngleBoundDeg, 0) + " deg\n";
+  }
+  if (r.stitch.n_at_fin_rims > 0) {
+    s += "at fin rims only (" + std::to_string(r.stitch.n_at_fin_rims) + " triangles): angle min " +
+         fixed(r.stitch.min_angle_at_fin_rims_deg, 2) + " deg, " + std::to_string(r.stitch.n_small_angle_at_fin_rims) +
+         " below " + fixed(kAwayFromFeaturesAngleBoundDeg, 0) + " deg\n";
   }
   if (r.output.distance) {
     const DistanceReport& d = *r.output.distance;

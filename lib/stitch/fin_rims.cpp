@@ -9,17 +9,25 @@
 
 namespace nurbsfront::stitch_detail {
 
-FinRimBound fin_rim_bound(const SurfaceMesh& surface, const StitchOptions& options) {
-  FinRimBound out;
+std::vector<std::uint8_t> fin_rim_nodes(const SurfaceMesh& surface) {
+  std::vector<std::uint8_t> out;
   const std::vector<std::uint8_t>& rim = surface.curve_is_fin_rim;
-  if (rim.empty() || !std::isfinite(options.fin_rim_max_move) || surface.curve_nodes.size() != rim.size()) return out;
-  out.on_rim.assign(surface.nodes.size(), 0);
+  if (rim.empty() || surface.curve_nodes.size() != rim.size()) return out;
+  out.assign(surface.nodes.size(), 0);
   for (std::size_t c = 0; c < rim.size(); ++c) {
     if (rim[c] == 0) continue;
     for (const int g : surface.curve_nodes[c]) {
-      if (g >= 0 && static_cast<std::size_t>(g) < out.on_rim.size()) out.on_rim[static_cast<std::size_t>(g)] = 1;
+      if (g >= 0 && static_cast<std::size_t>(g) < out.size()) out[static_cast<std::size_t>(g)] = 1;
     }
   }
+  return out;
+}
+
+FinRimBound fin_rim_bound(const SurfaceMesh& surface, const StitchOptions& options) {
+  FinRimBound out;
+  if (!std::isfinite(options.fin_rim_max_move)) return out;
+  out.on_rim = fin_rim_nodes(surface);
+  if (out.on_rim.empty()) return out;
   out.radius = options.fin_rim_max_move * surface.input_mean_edge;
   out.origins = &surface.nodes;
   return out;

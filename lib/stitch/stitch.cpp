@@ -178,33 +178,50 @@ std::vector<std::uint8_t> feature_nodes(const SurfaceMesh& s) {
   return out;
 }
 
-// The StitchReport figures of the triangles away from features.
-void measure_away_from_features(const std::vector<std::uint8_t>& feature, const StitchResult& result, StitchReport& report) {
+// The StitchReport figures of the triangles away from features (no feature node, no fin
+// rim node: `rim` per SurfaceMesh node, may be empty) and of those at fin rims only.
+void measure_away_from_features(const std::vector<std::uint8_t>& feature, const std::vector<std::uint8_t>& rim,
+                                const StitchResult& result, StitchReport& report) {
   const TriMesh& mesh = result.mesh;
-  double min_angle = 180.0;
-  // Triangles surely above both min_angle and the bound change neither figure: not measured
-  // (from the first triangle on, min_angle <= 60 deg; before it, every triangle is).
-  double sin_bound = 2.0;
+  // Smallest angle, the sine below which a triangle may change a figure, and the count below
+  // the bound, of the two sets. Triangles surely above both min_angle and the bound change
+  // neither figure: not measured (from a set's first triangle on, its min_angle <= 60 deg;
+  // before it, every triangle is).
+  struct Smallest {
+    double min_angle = 180.0;
+    double sin_bound = 2.0;
+    std::size_t n = 0, n_small = 0;
+    void add(const std::array<Eigen::Vector3d, 3>& p) {
+      ++n;
+      if (!stitch_detail::may_have_angle_below(p[0], p[1], p[2], sin_bound)) return;
+      const std::array<double, 3> angles = triangle_angles_deg(p[0], p[1], p[2]);
+      const double smallest = std::min({angles[0], angles[1], angles[2]});
+      if (smallest < min_angle) {
+        min_angle = smallest;
+        sin_bound = std::sin(std::max(min_angle, kAwayFromFeaturesAngleBoundDeg) * std::numbers::pi / 180.0);
+      }
+      if (smallest < kAwayFromFeaturesAngleBoundDeg) ++n_small;
+    }
+  } away, at_rims;
   for (auto f : mesh.faces()) {
     std::array<Eigen::Vector3d, 3> p;
-    bool is_away = true;
+    bool at_feature = false, at_rim = false;
     int k = 0;
     for (auto v : mesh.fv_range(f)) {
-      if (feature[static_cast<std::size_t>(result.vertex_node[static_cast<std::size_t>(v.idx())])] != 0) is_away = false;
+      const auto node = static_cast<std::size_t>(result.vertex_node[static_cast<std::size_t>(v.idx())]);
+      if (feature[node] != 0) at_feature = true;
+      if (node < rim.size() && rim[node] != 0) at_rim = true;
       p[static_cast<std::size_t>(k++)] = to_eigen(mesh.point(v));
     }
-    if (!is_away) continue;
-    ++report.n_away_from_features;
-    if (!stitch_detail::may_have_angle_below(p[0], p[1], p[2], sin_bound)) continue;
-    const std::array<double, 3> angles = triangle_angles_deg(p[0], p[1], p[2]);
-    const double smallest = std::min({angles[0], angles[1], angles[2]});
-    if (smallest < min_angle) {
-      min_angle = smallest;
-      sin_bound = std::sin(std::max(min_angle, kAwayFromFeaturesAngleBoundDeg) * std::numbers::pi / 180.0);
-    }
-    if (smallest < kAwayFromFeaturesAngleBoundDeg) ++report.n_small_angle_away_from_features;
+    if (at_feature) continue;
+    (at_rim ? at_rims : away).add(p);
   }
-  report.min_angle_away_from_features_deg = report.n_away_from_features > 0 ? min_angle : 0.0;
+  report.n_away_from_features = away.n;
+  report.min_angle_away_from_features_deg = away.n > 0 ? away.min_angle : 0.0;
+  report.n_small_angle_away_from_features = away.n_small;
+  report.n_at_fin_rims = at_rims.n;
+  report.min_angle_at_fin_rims_deg = at_rims.n > 0 ? at_rims.min_angle : 0.0;
+  report.n_small_angle_at_fin_rims = at_rims.n_small;
 }
 
 using FacePair = std::array<std::uint32_t, 2>;
@@ -674,13 +691,14 @@ StitchResult stitch_impl(const SurfaceMesh& surface, const TriMesh* input, const
     };
   }
   if (!soup) soup = to_soup(mesh);
+  const std::vector<std::uint8_t> rim = stitch_detail::fin_rim_nodes(surface);
   // The mesh is final here: with two or more threads its component signatures and the
   // figures away from features are taken on a helper thread while this one makes the
   // report (they write other members of the report).
   std::future<std::vector<ComponentSignature>> output_components;
   if (options.n_threads >= 2) {
-    output_components = std::async(std::launch::async, [&feature, &result, &report] {
-      measure_away_from_features(feature, result, report);
+    output_components = std::async(std::launch::async, [&feature, &rim, &result, &report] {
+      measure_away_from_features(feature, rim, result, report);
       return component_signatures(result.mesh);
     });
   }
@@ -710,7 +728,7 @@ StitchResult stitch_impl(const SurfaceMesh& surface, const TriMesh* input, const
   if (output_components.valid()) {
     report.output_components = output_components.get();
   } else {
-    measure_away_from_features(feature, result, report);
+    measure_away_from_features(feature, rim, result, report);
     report.output_components = component_signatures(mesh);
   }
   if (input != nullptr) {

@@ -109,10 +109,11 @@ struct StitchOptions {
   //! of where the front put it (SurfaceMesh::nodes): a move beyond stops at the bound on the
   //! way to its target (a merge: not made when the survivor lies beyond). A fin
   //! rim is a crease the fits of its two narrow patches may round off (docs/stitch.md "Fin
-  //! rims"). >= 0 (0: such nodes stay); infinity: no bound. Default infinity (opt-in with
-  //! SurfMeshOptions::fin_rim_max_angle_deg 180 and fin_rim_max_gap_edges infinity; docs/stitch.md
-  //! "Fin rims: a bound on the moves", "Lead decision").
-  double fin_rim_max_move = std::numeric_limits<double>::infinity();
+  //! rims"). >= 0 (0: such nodes stay); infinity: no bound. Default 0.2 (with
+  //! SurfMeshOptions::fin_rim_max_angle_deg 180 and fin_rim_max_gap_edges infinity; until
+  //! session 13 infinity: docs/stitch.md "Fin rims: a bound on the moves", "Fin rims as creases
+  //! in the report").
+  double fin_rim_max_move = 0.2;
   //! Fidelity moves, last (docs/stitch.md "Fidelity moves"; issue 6): where a vertex is
   //! farther from the input than this many input mean edges (SurfaceMesh::input_mean_edge),
   //! or an input vertex that far from the output, a vertex moves onto the input when its
@@ -212,16 +213,25 @@ struct StitchReport {
   std::size_t n_fidelity_splits = 0;
   double alpha_mean_before = 0.0;      //!< mean alpha after assembly, before optimisation
   double alpha_min_before = 0.0;       //!< min alpha after assembly, before optimisation
-  //! Triangles of the result away from features: none of their vertices is a feature node,
+  //! Triangles of the result away from features: none of their vertices is a crease node,
   //! i.e. a node of a feature curve (SurfaceMesh::curve_is_feature: crease or input
-  //! boundary) or a corner that ends one (with empty SurfaceMesh::curve_nodes: any corner).
-  //! Corners where only smooth curves meet are not features. Issue 5's 25 deg bound on the
-  //! smallest angle applies to these triangles.
+  //! boundary) or of a fin rim curve (SurfaceMesh::curve_is_fin_rim: a crease of the input by
+  //! the same test, which stitch may move within StitchOptions::fin_rim_max_move), or a
+  //! corner that ends one (with empty SurfaceMesh::curve_nodes: any corner). Corners where
+  //! only smooth curves meet are not features. Issue 5's 25 deg bound on the smallest angle
+  //! applies to these triangles.
   std::size_t n_away_from_features = 0;
   //! Smallest interior angle (deg) of those triangles; 0 when there is none.
   double min_angle_away_from_features_deg = 0.0;
   //! Those of them whose smallest angle is below kAwayFromFeaturesAngleBoundDeg (25 deg).
   std::size_t n_small_angle_away_from_features = 0;
+  //! Triangles with a fin rim node but no node of a feature curve (nor a corner ending one):
+  //! the ones the set above leaves out only because of the fin rims. Their smallest angle
+  //! (deg; 0 when there is none) and those below kAwayFromFeaturesAngleBoundDeg; the sum of
+  //! both small-angle counts is the count that treats fin rims as smooth borders.
+  std::size_t n_at_fin_rims = 0;
+  double min_angle_at_fin_rims_deg = 0.0;
+  std::size_t n_small_angle_at_fin_rims = 0;
   //! Topology and quality of the result (no distances), from the quality module.
   MeshReport output;
   //! Components of the result, and of the input when stitch() was given one.

@@ -195,6 +195,9 @@ struct FinRimBound {
   Eigen::Vector3d clamp(int node, const Eigen::Vector3d& q) const;
 };
 FinRimBound fin_rim_bound(const SurfaceMesh& surface, const StitchOptions& options);
+//! Per SurfaceMesh node, 1 for a node of a fin rim curve (SurfaceMesh::curve_is_fin_rim,
+//! corners included); empty when there is none or the curves' node lists are missing.
+std::vector<std::uint8_t> fin_rim_nodes(const SurfaceMesh& surface);
 
 //! Moves every vertex of a bounded node (vertex_node) that lies beyond the bound back onto it,
 //! towards its origin (after the chord and volume compensations). Returns the number moved.

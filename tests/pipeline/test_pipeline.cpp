@@ -1043,6 +1043,11 @@ TEST(Pipeline, FinRimNodesStayWithinTheBoundInEveryStage) {
     EXPECT_LE(moved, bound * me * (1.0 + 1e-9)) << "bound " << bound;
     EXPECT_EQ(r.report.n_small_angle_away_from_features, 0u) << "bound " << bound;
     EXPECT_GE(r.report.min_angle_away_from_features_deg, kAwayFromFeaturesAngleBoundDeg) << "bound " << bound;
+    // The rims are creases of the input: their triangles are counted apart, and here they
+    // meet the bound too (the count that treats rims as smooth borders is 0 as well).
+    EXPECT_GT(r.report.n_at_fin_rims, 0u) << "bound " << bound;
+    EXPECT_EQ(r.report.n_small_angle_at_fin_rims, 0u) << "bound " << bound;
+    EXPECT_GE(r.report.min_angle_at_fin_rims_deg, kAwayFromFeaturesAngleBoundDeg) << "bound " << bound;
   }
 }
 

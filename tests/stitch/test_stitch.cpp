@@ -1247,3 +1247,91 @@ TEST(Stitch, AngleRepairMakesAPairOfChangesWhereNoSingleOneHelps) {
 }
 
 }  // namespace nurbsfront
+
+namespace nurbsfront {
+namespace {
+
+// The report's away-from-features set leaves out the triangles at a fin rim node (a crease of
+// the input that stitch may move within a bound: docs/pipeline.md "Report"), and counts them
+// apart. Unit square, edges h = 1/8, node (i, j) = 9 j + i; patches left and right of x = 1/2,
+// the curve between them (nodes (4, 1..7), corners (4, 0) and (4, 8)) a fin rim; the square's
+// boundary is a feature. Two slivers planted the same way: the rim node (4, 4) and the inner
+// node (2, 2) moved 0.8 of the way to (5, 5) and (3, 3). Each leaves six triangles inside the
+// boundary ring below 25 deg: two at atan(1/4) = 14.036 deg, four at 21.04 deg. The ring
+// holds 56 triangles, the columns i = 3, 4 inside it 24 (at the rim), the rest 48.
+TEST(Stitch, TrianglesAtFinRimNodesAreNotAwayFromFeatures) {
+  TriangleSoup sheet = test::grid_patch(8, 8);
+  std::vector<int> face_patch(sheet.triangles.size());
+  for (std::size_t t = 0; t < sheet.triangles.size(); ++t) {
+    const auto& tri = sheet.triangles[t];
+    face_patch[t] = (sheet.points[tri[0]] + sheet.points[tri[1]] + sheet.points[tri[2]]).x() < 1.5 ? 0 : 1;
+  }
+  const double h = 0.125;
+  auto id = [](int i, int j) { return static_cast<std::size_t>(9 * j + i); };
+  sheet.points[id(4, 4)] += Eigen::Vector3d(0.8 * h, 0.8 * h, 0.0);
+  sheet.points[id(2, 2)] += Eigen::Vector3d(0.8 * h, 0.8 * h, 0.0);
+  SurfaceMesh surface = make_surface(sheet, face_patch, 2);
+  surface.target_size = h;
+  // Curves: their border nodes, then both corners (each ends all three curves).
+  surface.curve_nodes.assign(surface.curve_is_feature.size(), {});
+  for (std::size_t g = 0; g < surface.nodes.size(); ++g) {
+    if (surface.node_kind[g] == NodeKind::Border)
+      surface.curve_nodes[static_cast<std::size_t>(surface.node_owner[g])].push_back(static_cast<int>(g));
+  }
+  for (auto& nodes : surface.curve_nodes) {
+    nodes.insert(nodes.begin(), static_cast<int>(id(4, 0)));
+    nodes.push_back(static_cast<int>(id(4, 8)));
+  }
+  const int rim_curve = surface.node_owner[id(4, 1)];
+  ASSERT_EQ(surface.curve_is_feature[static_cast<std::size_t>(rim_curve)], 0);
+  ASSERT_EQ(surface.curve_nodes[static_cast<std::size_t>(rim_curve)].size(), 9u);
+  const TriMesh input = to_trimesh(sheet);
+  StitchOptions as_assembled;  // no stage moves, flips, collapses or splits
+  as_assembled.optimisation_passes = 0;
+  as_assembled.obtuse_repair_rounds = 0;
+  as_assembled.chord_compensation = 0.0;
+  as_assembled.volume_compensation = 0.0;
+  as_assembled.obtuse_split_rounds = 0;
+  as_assembled.angle_repair_rounds = 0;
+  as_assembled.collapse_below_angle_deg = 0.0;
+  const double sliver = std::atan(0.25) * 180.0 / M_PI;
+
+  // A smooth border: every triangle off the boundary ring is away from features.
+  const StitchResult smooth = stitch(surface, input, as_assembled);
+  ASSERT_TRUE(smooth.report.ok()) << joined(smooth.report.errors);
+  ASSERT_EQ(smooth.mesh.n_faces(), 128u);
+  EXPECT_EQ(smooth.report.n_away_from_features, 72u);
+  EXPECT_EQ(smooth.report.n_small_angle_away_from_features, 12u);
+  EXPECT_NEAR(smooth.report.min_angle_away_from_features_deg, sliver, 1e-9);
+  EXPECT_EQ(smooth.report.n_at_fin_rims, 0u);
+  EXPECT_EQ(smooth.report.n_small_angle_at_fin_rims, 0u);
+  EXPECT_EQ(smooth.report.min_angle_at_fin_rims_deg, 0.0);
+
+  // A fin rim: the triangles at its nodes are counted apart, the others as before.
+  surface.curve_is_fin_rim.assign(surface.curve_is_feature.size(), 0);
+  surface.curve_is_fin_rim[static_cast<std::size_t>(rim_curve)] = 1;
+  for (const double bound : {std::numeric_limits<double>::infinity(), 1.0}) {
+    StitchOptions options = as_assembled;
+    options.fin_rim_max_move = bound;
+    const StitchResult rim = stitch(surface, input, options);
+    ASSERT_TRUE(rim.report.ok()) << joined(rim.report.errors);
+    EXPECT_EQ(rim.report.n_away_from_features, 48u) << "bound " << bound;
+    EXPECT_EQ(rim.report.n_small_angle_away_from_features, 6u) << "bound " << bound;
+    EXPECT_NEAR(rim.report.min_angle_away_from_features_deg, sliver, 1e-9);
+    EXPECT_EQ(rim.report.n_at_fin_rims, 24u) << "bound " << bound;
+    EXPECT_EQ(rim.report.n_small_angle_at_fin_rims, 6u) << "bound " << bound;
+    EXPECT_NEAR(rim.report.min_angle_at_fin_rims_deg, sliver, 1e-9);
+  }
+
+  // Without the planted sliver at (2, 2) nothing away from features is below 25 deg.
+  sheet.points[id(2, 2)] -= Eigen::Vector3d(0.8 * h, 0.8 * h, 0.0);
+  surface.nodes[id(2, 2)] = sheet.points[id(2, 2)];
+  const StitchResult clean = stitch(surface, to_trimesh(sheet), as_assembled);
+  ASSERT_TRUE(clean.report.ok()) << joined(clean.report.errors);
+  EXPECT_EQ(clean.report.n_small_angle_away_from_features, 0u);
+  EXPECT_NEAR(clean.report.min_angle_away_from_features_deg, 45.0, 1e-9);
+  EXPECT_EQ(clean.report.n_small_angle_at_fin_rims, 6u);
+}
+
+}  // namespace
+}  // namespace nurbsfront

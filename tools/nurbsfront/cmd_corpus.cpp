@@ -107,6 +107,7 @@ std::string outcome_json(const OneArgs& a, const std::string& outcome, const std
     // Issue 5's angle bound applies away from creases and corners (StitchReport).
     o.num("min_angle_away_from_features_deg", report->stitch.min_angle_away_from_features_deg);
     o.count("small_angle_away_from_features", report->stitch.n_small_angle_away_from_features);
+    o.count("small_angle_at_fin_rims", report->stitch.n_small_angle_at_fin_rims);
     o.add("self_intersecting_pairs", out.topology.n_self_intersecting_pairs
                                          ? std::to_string(*out.topology.n_self_intersecting_pairs)
                                          : "null");
