@@ -109,11 +109,10 @@ struct StitchOptions {
   //! of where the front put it (SurfaceMesh::nodes): a move beyond stops at the bound on the
   //! way to its target (a merge: not made when the survivor lies beyond). A fin
   //! rim is a crease the fits of its two narrow patches may round off (docs/stitch.md "Fin
-  //! rims"). >= 0 (0: such nodes stay); infinity: no bound. Default 0.2 (with
-  //! SurfMeshOptions::fin_rim_max_angle_deg 180 and fin_rim_max_gap_edges infinity; until
-  //! session 13 infinity: docs/stitch.md "Fin rims: a bound on the moves", "Fin rims as creases
-  //! in the report").
-  double fin_rim_max_move = 0.2;
+  //! rims"). >= 0 (0: such nodes stay); infinity: no bound. Default infinity (opt-in with
+  //! SurfMeshOptions::fin_rim_max_angle_deg 180 and fin_rim_max_gap_edges infinity; docs/stitch.md
+  //! "Fin rims: a bound on the moves", "Lead decision").
+  double fin_rim_max_move = std::numeric_limits<double>::infinity();
   //! Fidelity moves, last (docs/stitch.md "Fidelity moves"; issue 6): where a vertex is
   //! farther from the input than this many input mean edges (SurfaceMesh::input_mean_edge),
   //! or an input vertex that far from the output, a vertex moves onto the input when its

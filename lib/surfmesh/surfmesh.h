@@ -267,15 +267,15 @@ struct SurfMeshOptions {
   //! Default 1.
   double fin_rim_width = 1.0;
   //! The largest crease angle (deg) of a fin rim curve (fin_rim_width): sharper folds stay
-  //! features. In [0, 180]. Default 180 (with StitchOptions::fin_rim_max_move 0.2 and
-  //! fin_rim_max_gap_edges infinity; until session 13 120, infinity and 0.25: docs/stitch.md
-  //! "Fin rims: a bound on the moves", "Fin rims as creases in the report").
-  double fin_rim_max_angle_deg = 180.0;
+  //! features. In [0, 180]. Default 120 (180 with StitchOptions::fin_rim_max_move 0.25 and
+  //! fin_rim_max_gap_edges infinity: fewer obtuse triangles on headsq, but more below 25 deg
+  //! away from features; docs/stitch.md "Fin rims: a bound on the moves").
+  double fin_rim_max_angle_deg = 120.0;
   //! A fin rim curve's nodes have their projections onto both patches' fits within this many
   //! mean input edges of each other, and their mean within it of the node; infinity: no test.
   //! With a finite StitchOptions::fin_rim_max_move the test can be dropped (docs/stitch.md
-  //! "Fin rims: a bound on the moves"). >= 0. Default infinity (was 0.25).
-  double fin_rim_max_gap_edges = std::numeric_limits<double>::infinity();
+  //! "Fin rims: a bound on the moves"). >= 0. Default 0.25.
+  double fin_rim_max_gap_edges = 0.25;
   //! Largest distance, in mean input edges, of a new inner node from the patch's own input
   //! faces along the patch axis: a node the fit lifts further (the fit smooths thin fins,
   //! tips and sharp bends by several edges, and such a node can pass through the

@@ -270,14 +270,14 @@ void add_remesh_command(CLI::App& app) {
                   "On marching-cubes inputs, crease curves beside a strip narrower than this many target edges "
                   "are no features for stitch (fin rims; docs/stitch.md); 0 = off (default 1)");
   cmd->add_option("--fin-rim-angle", args->fin_rim_angle,
-                  "Largest crease angle (deg) of such a fin rim curve (default 180; main's setting until session 13: "
-                  "--fin-rim-angle 120 --fin-rim-gap 0.25 --fin-rim-max-move inf)");
+                  "Largest crease angle (deg) of such a fin rim curve (default 120; 180 with --fin-rim-gap inf "
+                  "--fin-rim-max-move 0.25: fewer obtuse triangles on CT bone, more small angles)");
   cmd->add_option("--fin-rim-gap", args->fin_rim_gap,
                   "A fin rim's nodes have their projections onto both sides' fits within this many mean input "
-                  "edges (default inf = no test)");
+                  "edges (default 0.25; inf = no test)");
   cmd->add_option("--fin-rim-max-move", args->fin_rim_max_move,
                   "Stitch moves the nodes of fin rims at most this many mean input edges from where the front "
-                  "put them (default 0.2; inf = no bound; docs/stitch.md \"Fin rims: a bound on the moves\")");
+                  "put them (default inf = no bound; docs/stitch.md \"Fin rims: a bound on the moves\")");
   cmd->add_option("--narrow-merge", args->narrow_merge,
                   "On marching-cubes inputs, patches narrower than this many target edges join a neighbour "
                   "(default 0.5; 0 = off; docs/segment.md \"Narrow patches\")");
