@@ -358,7 +358,7 @@ void collapse(const SurfaceMesh& surface, const StitchOptions& options, const st
         return;
       }
       pairs.clear();
-      if (options.check_self_intersections) pairs = intersecting_pairs_of(to_soup(apart->mesh), touched, options.n_threads);
+      if (options.check_self_intersections) pairs = intersecting_pairs_of(stitch_detail::mesh_soup(apart->mesh), touched, options.n_threads);
     }
     if (pairs.empty()) {
       report.n_unused_nodes = soup.n_unused_nodes - merges.n_merges;
@@ -465,7 +465,7 @@ bool repair_intersections(const TriMesh& assembled, TriMesh& mesh, std::vector<F
       touch(mesh.opposite_face_handle(h));
     }
     // Pairs with a changed face are replaced by that face's pairs now.
-    stitch_detail::replace_pairs(pairs, [&](std::uint32_t f) { return changed[f] != 0; }, intersecting_pairs_of(to_soup(mesh), touched));
+    stitch_detail::replace_pairs(pairs, [&](std::uint32_t f) { return changed[f] != 0; }, intersecting_pairs_of(stitch_detail::mesh_soup(mesh), touched));
     for (const std::uint32_t f : touched) changed[f] = 0;
   }
   return offending().empty();
@@ -507,7 +507,7 @@ void split_obtuse_checked(const SurfaceMesh& surface, const StitchOptions& optio
           }
         }
       }
-      pairs = intersecting_pairs_of(to_soup(result.mesh), touched, options.n_threads);
+      pairs = intersecting_pairs_of(stitch_detail::mesh_soup(result.mesh), touched, options.n_threads);
     }
     if (pairs.empty()) {
       report.n_obtuse_splits = split.n_splits;
@@ -623,7 +623,7 @@ StitchResult stitch_impl(const SurfaceMesh& surface, const TriMesh* input, const
   // found, neither the repair nor settling changes the mesh.
   std::optional<TriangleSoup> soup;
   if (options.check_self_intersections) {
-    soup = to_soup(mesh);
+    soup = stitch_detail::mesh_soup(mesh);
     pairs = self_intersecting_pairs(*soup, options.n_threads);
     // The last whole-mesh count and its soup, while pairs are left: settling's changes are
     // counted again from them (recount_pairs checks again every face not as it was then:
@@ -642,7 +642,7 @@ StitchResult stitch_impl(const SurfaceMesh& surface, const TriMesh* input, const
       mesh = std::move(assembled);
       result.face_patch = std::move(assembled_patch);
       report.optimisation_undone = true;
-      counted = to_soup(mesh);
+      counted = stitch_detail::mesh_soup(mesh);
       pairs = self_intersecting_pairs(*counted, options.n_threads);
       counted_pairs = pairs;
     }
@@ -652,8 +652,8 @@ StitchResult stitch_impl(const SurfaceMesh& surface, const TriMesh* input, const
     // counted again when settling changed anything.
     const stitch_detail::GarbageMaps old = stitch_detail::settle_intersections(surface, options, feature, result, pairs, report);
     if (report.n_settled_nodes + report.n_settled_flips + report.n_settled_collapses > 0) {
-      pairs = counted ? stitch_detail::recount_pairs(*counted, counted_pairs, to_soup(mesh), old, options.n_threads)
-                      : self_intersecting_pairs(to_soup(mesh), options.n_threads);
+      pairs = counted ? stitch_detail::recount_pairs(*counted, counted_pairs, stitch_detail::mesh_soup(mesh), old, options.n_threads)
+                      : self_intersecting_pairs(stitch_detail::mesh_soup(mesh), options.n_threads);
     }
   }
   if (options.obtuse_split_rounds > 0 && pairs.empty() && mesh.n_faces() > 0) {
@@ -686,7 +686,7 @@ StitchResult stitch_impl(const SurfaceMesh& surface, const TriMesh* input, const
       return options.progress("stitch: verify", 0.5 + 0.5 * fraction);
     };
   }
-  if (!soup) soup = to_soup(mesh);
+  if (!soup) soup = stitch_detail::mesh_soup(mesh);
   // The mesh is final here: with two or more threads its component signatures and the
   // figures away from features are taken on a helper thread while this one makes the
   // report (they write other members of the report).
@@ -736,6 +736,28 @@ StitchResult stitch_impl(const SurfaceMesh& surface, const TriMesh* input, const
 }
 
 }  // namespace
+
+TriangleSoup stitch_detail::mesh_soup(const TriMesh& mesh) {
+  for (auto v : mesh.all_vertices()) {
+    if (mesh.status(v).deleted()) return to_soup(mesh);
+  }
+  for (auto f : mesh.all_faces()) {
+    if (mesh.status(f).deleted()) return to_soup(mesh);
+  }
+  TriangleSoup soup;
+  soup.points.reserve(mesh.n_vertices());
+  for (std::size_t v = 0; v < mesh.n_vertices(); ++v) soup.points.push_back(to_eigen(mesh.point(TriMesh::VertexHandle(static_cast<int>(v)))));
+  soup.triangles.resize(mesh.n_faces());
+  for (std::size_t f = 0; f < mesh.n_faces(); ++f) {
+    const auto h0 = mesh.halfedge_handle(TriMesh::FaceHandle(static_cast<int>(f)));
+    const auto h1 = mesh.next_halfedge_handle(h0);
+    const auto h2 = mesh.next_halfedge_handle(h1);
+    soup.triangles[f] = {static_cast<std::uint32_t>(mesh.to_vertex_handle(h0).idx()),
+                         static_cast<std::uint32_t>(mesh.to_vertex_handle(h1).idx()),
+                         static_cast<std::uint32_t>(mesh.to_vertex_handle(h2).idx())};
+  }
+  return soup;
+}
 
 std::vector<ComponentSignature> component_signatures(const TriMesh& mesh) {
   // Union-find over the vertices of every face (faces joined through shared vertices):
