@@ -696,7 +696,7 @@ AngleRepairResult repair_small_angles(const SurfaceMesh& surface, const StitchOp
           }
         }
       }
-      pairs = intersecting_pairs_of(to_soup(result.mesh), touched);
+      pairs = intersecting_pairs_of(mesh_soup(result.mesh), touched, options.n_threads);
     }
     if (pairs.empty()) {
       out.n_flips = repair.n_flips_;

@@ -4,10 +4,12 @@
 // result depends only on the input (the flips' tests run in parallel, with the same flips).
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <cstdint>
 #include <limits>
 #include <numbers>
+#include <numeric>
 #include <span>
 #include <vector>
 
@@ -68,6 +70,13 @@ struct NodeInfo {
 };
 
 class Optimiser {
+  // The far corners of a smoothed vertex p's triangles (p, b, c), with their area vector
+  // and its norm at p's old position.
+  struct RingTriangle {
+    Vec b, c, n_old;
+    double l_old;
+  };
+
  public:
   Optimiser(const SurfaceMesh& surface, const StitchOptions& options, StitchResult& result,
             const std::vector<std::uint8_t>& is_feature)
@@ -116,41 +125,198 @@ class Optimiser {
     return n_flips;
   }
 
-  // Returns {accepted, rejected}.
+  // Returns {accepted, rejected}. Gauss-Seidel in vertex order: a vertex sees the moves of
+  // the vertices before it. With two or more threads the sweep runs on a SweepSchedule of
+  // its vertices (sweep_schedule()): the same moves for any thread count.
   std::array<std::size_t, 2> smoothing_sweep() {
+    if (options_.n_threads < 2) {
+      std::array<std::size_t, 2> counts{0, 0};
+      for (auto v : mesh_.vertices()) {
+        const int outcome = smooth_vertex(v, ring_);
+        if (outcome >= 0) ++counts[static_cast<std::size_t>(outcome == 1 ? 0 : 1)];
+      }
+      return counts;
+    }
+    const SweepSchedule schedule = sweep_schedule();
+    std::vector<std::array<std::size_t, 2>> per_worker(options_.n_threads, {0, 0});
+    run_schedule(schedule, [this, &per_worker](TriMesh::VertexHandle v, std::vector<RingTriangle>& ring, unsigned worker) {
+      const int outcome = smooth_vertex(v, ring);
+      if (outcome >= 0) ++per_worker[worker][static_cast<std::size_t>(outcome == 1 ? 0 : 1)];
+    });
     std::array<std::size_t, 2> counts{0, 0};
+    for (const auto& c : per_worker) counts[0] += c[0], counts[1] += c[1];
+    return counts;
+  }
+
+  // One vertex of smoothing_sweep(), its triangles gathered in `ring` (scratch): 1 moved, 0
+  // refused by the tests, -1 not tried (not movable, on the boundary, no area, no projection).
+  int smooth_vertex(TriMesh::VertexHandle v, std::vector<RingTriangle>& ring) {
+    const NodeInfo& info = nodes_[static_cast<std::size_t>(v.idx())];
+    if (!info.is_movable || mesh_.is_boundary(v)) return -1;
+    const Vec p = point(mesh_, v);
+    // Area-weighted centroid of the incident triangles.
+    Vec centroid = Vec::Zero();
+    double total = 0.0;
+    ring.clear();
+    for (auto h : mesh_.voh_range(v)) {
+      const auto vb = mesh_.to_vertex_handle(h);
+      const auto vc = mesh_.to_vertex_handle(mesh_.next_halfedge_handle(h));
+      const Vec b = point(mesh_, vb), c = point(mesh_, vc);
+      const Vec n = area_vector(p, b, c);
+      const double area = n.norm();
+      centroid += area * (p + b + c) / 3.0;
+      total += area;
+      ring.push_back({b, c, n, area});
+    }
+    if (!(total > 0.0) || ring.empty()) return -1;
+    centroid /= total;
+    const Vec target = p + options_.smoothing_relaxation * (centroid - p);
+    const Vec q = project(info, target);
+    if (!q.allFinite()) return -1;
+    if (!passes_ring_tests(ring, p, q, sin_angle_floor_, alpha_sine_skip_)) return 0;
+    mesh_.set_point(v, to_openmesh(q));
+    return 1;
+  }
+
+  // The vertices a smoothing sweep tries (movable, not on the boundary), cut so that several
+  // threads give the serial sweep's result. A vertex reads only its ring, so the order
+  // matters only between neighbours, the lower index first. `serial`: the border nodes and
+  // corners and every tried vertex before a neighbour of theirs (closed downwards: a tried
+  // neighbour of a serial vertex with a lower index is serial), run in vertex order by one
+  // thread. The others (inner nodes) form groups, connected through their edges (a patch's
+  // inner nodes, joined where flips made an edge across a border), each run in vertex order by
+  // one thread; a group's serial neighbours all have lower indices (the closure), so it starts
+  // once the serial run has done the first `ready` of them, and groups share no edge.
+  struct SweepSchedule {
+    std::vector<int> serial;
+    std::vector<int> group_vertices;         // group after group, each in vertex order
+    std::vector<std::size_t> group_begin;    // group g: group_vertices[group_begin[g], group_begin[g + 1])
+    std::vector<std::size_t> group_ready;    // serial vertices done before group g starts
+    std::vector<std::size_t> order;          // groups by ready, then by first vertex
+  };
+
+  SweepSchedule sweep_schedule() const {
+    const std::size_t n = mesh_.n_vertices();
+    // 0 not tried, 1 tried and serial, 2 tried in a group.
+    std::vector<std::uint8_t> role(n, 0);
     for (auto v : mesh_.vertices()) {
       const NodeInfo& info = nodes_[static_cast<std::size_t>(v.idx())];
       if (!info.is_movable || mesh_.is_boundary(v)) continue;
-      const Vec p = point(mesh_, v);
-      // Area-weighted centroid of the incident triangles.
-      Vec centroid = Vec::Zero();
-      double total = 0.0;
-      ring_.clear();
-      for (auto h : mesh_.voh_range(v)) {
-        const auto vb = mesh_.to_vertex_handle(h);
-        const auto vc = mesh_.to_vertex_handle(mesh_.next_halfedge_handle(h));
-        const Vec b = point(mesh_, vb), c = point(mesh_, vc);
-        const Vec n = area_vector(p, b, c);
-        const double area = n.norm();
-        centroid += area * (p + b + c) / 3.0;
-        total += area;
-        ring_.push_back({b, c, n, area});
-      }
-      if (!(total > 0.0) || ring_.empty()) continue;
-      centroid /= total;
-      const Vec target = p + options_.smoothing_relaxation * (centroid - p);
-      const Vec q = project(info, target);
-      if (!q.allFinite()) continue;
-      const bool ok = passes_ring_tests(p, q, sin_angle_floor_, alpha_sine_skip_);
-      if (ok) {
-        mesh_.set_point(v, to_openmesh(q));
-        ++counts[0];
-      } else {
-        ++counts[1];
+      role[static_cast<std::size_t>(v.idx())] = info.curve >= 0 || info.is_corner ? 1 : 2;
+    }
+    for (std::size_t i = n; i-- > 0;) {
+      if (role[i] != 1) continue;
+      for (auto u : mesh_.vv_range(TriMesh::VertexHandle(static_cast<int>(i)))) {
+        const auto j = static_cast<std::size_t>(u.idx());
+        if (j < i && role[j] == 2) role[j] = 1;
       }
     }
-    return counts;
+    SweepSchedule s;
+    std::vector<std::size_t> position(n, 0);  // serial vertex: 1 + its place in s.serial
+    for (std::size_t i = 0; i < n; ++i) {
+      if (role[i] != 1) continue;
+      s.serial.push_back(static_cast<int>(i));
+      position[i] = s.serial.size();
+    }
+    // Groups: union-find over the edges between group vertices.
+    std::vector<int> parent(n);
+    std::iota(parent.begin(), parent.end(), 0);
+    auto find = [&parent](int x) {
+      while (parent[static_cast<std::size_t>(x)] != x) {
+        parent[static_cast<std::size_t>(x)] = parent[static_cast<std::size_t>(parent[static_cast<std::size_t>(x)])];
+        x = parent[static_cast<std::size_t>(x)];
+      }
+      return x;
+    };
+    for (auto e : mesh_.edges()) {
+      const auto h = mesh_.halfedge_handle(e, 0);
+      const int a = mesh_.from_vertex_handle(h).idx(), b = mesh_.to_vertex_handle(h).idx();
+      if (role[static_cast<std::size_t>(a)] != 2 || role[static_cast<std::size_t>(b)] != 2) continue;
+      const int ra = find(a), rb = find(b);
+      if (ra != rb) parent[static_cast<std::size_t>(std::max(ra, rb))] = std::min(ra, rb);
+    }
+    // Group ids in order of their first vertex; then the vertices bucketed by group.
+    std::vector<int> group(n, -1);
+    std::size_t n_groups = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+      if (role[i] != 2) continue;
+      const auto r = static_cast<std::size_t>(find(static_cast<int>(i)));
+      if (group[r] < 0) group[r] = static_cast<int>(n_groups++);
+      group[i] = group[r];
+    }
+    s.group_begin.assign(n_groups + 1, 0);
+    s.group_ready.assign(n_groups, 0);
+    for (std::size_t i = 0; i < n; ++i) {
+      if (role[i] == 2) ++s.group_begin[static_cast<std::size_t>(group[i]) + 1];
+    }
+    for (std::size_t g = 0; g < n_groups; ++g) s.group_begin[g + 1] += s.group_begin[g];
+    s.group_vertices.resize(s.group_begin[n_groups]);
+    std::vector<std::size_t> fill(s.group_begin.begin(), s.group_begin.end() - 1);
+    for (std::size_t i = 0; i < n; ++i) {
+      if (role[i] == 2) s.group_vertices[fill[static_cast<std::size_t>(group[i])]++] = static_cast<int>(i);
+    }
+    for (auto e : mesh_.edges()) {
+      const auto h = mesh_.halfedge_handle(e, 0);
+      auto a = static_cast<std::size_t>(mesh_.from_vertex_handle(h).idx()), b = static_cast<std::size_t>(mesh_.to_vertex_handle(h).idx());
+      if (role[a] == 2) std::swap(a, b);
+      if (role[a] != 1 || role[b] != 2) continue;
+      std::size_t& ready = s.group_ready[static_cast<std::size_t>(group[b])];
+      ready = std::max(ready, position[a]);
+    }
+    s.order.resize(n_groups);
+    std::iota(s.order.begin(), s.order.end(), std::size_t{0});
+    std::stable_sort(s.order.begin(), s.order.end(),
+                     [&s](std::size_t x, std::size_t y) { return s.group_ready[x] < s.group_ready[y]; });
+    return s;
+  }
+
+  // Runs visit(v, ring, worker) for every vertex of `schedule` on options_.n_threads threads
+  // (ring: the worker's scratch; worker < n_threads): the serial vertices in order on one
+  // thread, each group in order on one thread once the serial run has done its `ready`
+  // vertices. visit must read only v's ring and write only v (and per-worker state).
+  template <class Visit>
+  void run_schedule(const SweepSchedule& schedule, const Visit& visit) {
+    const unsigned n_threads = options_.n_threads;
+    std::vector<std::vector<RingTriangle>> rings(n_threads);
+    std::atomic<std::size_t> done{0};        // serial vertices done
+    std::atomic<std::size_t> next_group{0};  // next place in schedule.order to take
+    std::atomic<bool> failed{false};
+    constexpr std::size_t kNotifyEvery = 64;
+    const std::size_t n_serial = schedule.serial.size();
+    auto run_groups = [&](unsigned worker) {
+      for (;;) {
+        const std::size_t k = next_group.fetch_add(1);
+        if (k >= schedule.order.size() || failed.load()) return;
+        const std::size_t g = schedule.order[k];
+        const std::size_t ready = schedule.group_ready[g];
+        for (std::size_t seen = done.load(std::memory_order_acquire); seen < ready;
+             seen = done.load(std::memory_order_acquire)) {
+          done.wait(seen, std::memory_order_acquire);
+        }
+        if (failed.load()) return;
+        for (std::size_t i = schedule.group_begin[g]; i < schedule.group_begin[g + 1]; ++i) {
+          visit(TriMesh::VertexHandle(schedule.group_vertices[i]), rings[worker], worker);
+        }
+      }
+    };
+    parallel::for_chunks(n_threads, n_threads, 1, [&](std::size_t role, std::size_t, unsigned worker) {
+      if (role == 0) {
+        try {
+          for (std::size_t i = 0; i < n_serial; ++i) {
+            visit(TriMesh::VertexHandle(schedule.serial[i]), rings[worker], worker);
+            done.store(i + 1, std::memory_order_release);
+            if ((i + 1) % kNotifyEvery == 0) done.notify_all();
+          }
+        } catch (...) {
+          failed = true;
+          done.store(n_serial, std::memory_order_release);
+          done.notify_all();
+          throw;
+        }
+        done.notify_all();
+      }
+      run_groups(worker);
+    });
   }
 
   // Obtuse repair (StitchOptions::obtuse_repair_rounds): each movable vertex of an obtuse
@@ -602,8 +768,14 @@ class Optimiser {
   // least min(old, sin_floor): the old ring is needed only below the floors. sine_skip:
   // sqrt(3) (sin_floor + kSineSkipMargin), see alpha_sine_skip_.
   bool passes_ring_tests(const Vec& p, const Vec& q, double sin_floor, double sine_skip) const {
+    return passes_ring_tests(ring_, p, q, sin_floor, sine_skip);
+  }
+
+  // passes_ring_tests() for the triangles in `ring`.
+  bool passes_ring_tests(const std::vector<RingTriangle>& ring, const Vec& p, const Vec& q, double sin_floor,
+                         double sine_skip) const {
     double new_min = 1.0, new_sine = 1.0;  // smallest alpha, sine of the smallest angle
-    for (const RingTriangle& t : ring_) {
+    for (const RingTriangle& t : ring) {
       const Vec n_new = area_vector(q, t.b, t.c);
       const double l_new = n_new.norm();
       if (l_new <= min_double_area_ || (t.l_old > 0.0 && n_new.dot(t.n_old) <= options_.min_normal_dot * t.l_old * l_new)) {
@@ -615,12 +787,12 @@ class Optimiser {
     }
     if (new_min < options_.alpha_floor) {
       double old_min = 1.0;
-      for (const RingTriangle& t : ring_) old_min = std::min(old_min, alpha_with_area(p, t.b, t.c, t.l_old));
+      for (const RingTriangle& t : ring) old_min = std::min(old_min, alpha_with_area(p, t.b, t.c, t.l_old));
       if (!(new_min >= old_min)) return false;
     }
     if (new_sine < sin_floor) {
       double old_sine = 1.0;
-      for (const RingTriangle& t : ring_) old_sine = std::min(old_sine, alpha_and_min_angle_sine(p, t.b, t.c, t.l_old)[1]);
+      for (const RingTriangle& t : ring) old_sine = std::min(old_sine, alpha_and_min_angle_sine(p, t.b, t.c, t.l_old)[1]);
       if (!(new_sine >= old_sine)) return false;
     }
     return true;
@@ -765,12 +937,6 @@ class Optimiser {
   const std::vector<std::uint8_t>& is_feature_;
   std::vector<NodeInfo> nodes_;
   std::vector<std::vector<int>> corner_patches_;
-  // The far corners of a smoothed vertex p's triangles (p, b, c), with their area vector
-  // and its norm at p's old position.
-  struct RingTriangle {
-    Vec b, c, n_old;
-    double l_old;
-  };
   std::vector<RingTriangle> ring_;
   double min_double_area_ = 0.0;
   double cos_dihedral_ = 1.0;

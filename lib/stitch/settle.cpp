@@ -190,7 +190,7 @@ GarbageMaps settle_intersections(const SurfaceMesh& surface, const StitchOptions
   // outside is not made, nor one that takes a triangle's box out of every grown box (a
   // triangle inside a grown box can only cross triangles whose box meets it, all local,
   // and the triangles outside never change).
-  const TriangleSoup whole = to_soup(mesh);
+  const TriangleSoup whole = mesh_soup(mesh);
   const double diagonal = bounding_box(whole).diagonal();
   const double min_double_area = 2.0 * tolerance::kDegenerateAreaRelative * diagonal * diagonal;
   std::vector<BoundingBox> boxes;

@@ -226,59 +226,75 @@ void measure_away_from_features(const std::vector<std::uint8_t>& feature, const 
 
 using FacePair = std::array<std::uint32_t, 2>;
 
+// The soup of an assembly: every node used by a triangle becomes a point (in node order,
+// vertex_node names it), the triangles follow in order by those points.
+struct AssemblySoup {
+  TriangleSoup soup;
+  std::vector<int> vertex_node;
+  std::size_t n_unused_nodes = 0;
+};
+
+AssemblySoup assembly_soup(const std::vector<Eigen::Vector3d>& nodes, const std::vector<std::array<int, 3>>& triangles) {
+  AssemblySoup out;
+  std::vector<char> used(nodes.size(), 0);
+  for (const auto& t : triangles) {
+    for (int k : t) used[static_cast<std::size_t>(k)] = 1;
+  }
+  std::vector<std::uint32_t> index(nodes.size(), 0);
+  for (std::size_t i = 0; i < nodes.size(); ++i) {
+    if (!used[i]) {
+      ++out.n_unused_nodes;
+      continue;
+    }
+    index[i] = static_cast<std::uint32_t>(out.soup.points.size());
+    out.soup.points.push_back(nodes[i]);
+    out.vertex_node.push_back(static_cast<int>(i));
+  }
+  out.soup.triangles.reserve(triangles.size());
+  for (const auto& t : triangles) {
+    out.soup.triangles.push_back({index[static_cast<std::size_t>(t[0])], index[static_cast<std::size_t>(t[1])],
+                                  index[static_cast<std::size_t>(t[2])]});
+  }
+  return out;
+}
+
 // Every node used by a triangle becomes a vertex (in node order); triangles are added in
-// order, those OpenMesh cannot take are counted (n_rejected_triangles).
+// order, those OpenMesh cannot take are counted (n_rejected_triangles). `prepared`: the
+// triangles' assembly_soup() already found an oriented 2-manifold by check_manifold().
 void assemble(const std::vector<Eigen::Vector3d>& nodes, const std::vector<std::array<int, 3>>& triangles,
-              const std::vector<int>& triangle_patch, unsigned n_threads, StitchResult& result, StitchReport& report) {
+              const std::vector<int>& triangle_patch, unsigned n_threads, StitchResult& result, StitchReport& report,
+              AssemblySoup* prepared = nullptr) {
   result.mesh = TriMesh();
   result.vertex_node.clear();
   result.face_patch.clear();
   report.n_unused_nodes = 0;
   report.n_rejected_triangles = 0;
-  std::vector<char> used(nodes.size(), 0);
-  for (const auto& t : triangles) {
-    for (int k : t) used[static_cast<std::size_t>(k)] = 1;
-  }
   // The usual case, an oriented 2-manifold: built directly by to_trimesh(), which gives
   // exactly the mesh that add_face() in triangle order gives (same vertex, edge, halfedge
   // and face numbering; add_face() never refuses a triangle of such a soup), at about half
   // the cost. Otherwise face by face below, skipping the triangles add_face() refuses.
   // With 2+ threads the manifold check runs beside the direct build (check_and_build).
-  {
-    TriangleSoup soup;
-    std::vector<std::uint32_t> index(nodes.size(), 0);
-    for (std::size_t i = 0; i < nodes.size(); ++i) {
-      if (!used[i]) continue;
-      index[i] = static_cast<std::uint32_t>(soup.points.size());
-      soup.points.push_back(nodes[i]);
-    }
-    soup.triangles.reserve(triangles.size());
-    for (const auto& t : triangles) {
-      soup.triangles.push_back({index[static_cast<std::size_t>(t[0])], index[static_cast<std::size_t>(t[1])],
-                                index[static_cast<std::size_t>(t[2])]});
-    }
-    if (core_detail::check_and_build(soup, result.mesh, n_threads).ok()) {
-      for (std::size_t i = 0; i < nodes.size(); ++i) {
-        if (used[i]) {
-          result.vertex_node.push_back(static_cast<int>(i));
-        } else {
-          ++report.n_unused_nodes;
-        }
-      }
-      result.face_patch = triangle_patch;
-      return;
-    }
-    result.mesh = TriMesh();
+  std::optional<AssemblySoup> own;
+  if (prepared == nullptr) own = assembly_soup(nodes, triangles);
+  AssemblySoup& a = prepared != nullptr ? *prepared : *own;
+  report.n_unused_nodes = a.n_unused_nodes;
+  if (prepared != nullptr) {
+    core_detail::to_trimesh_checked(a.soup, result.mesh);
+    result.vertex_node = std::move(a.vertex_node);
+    result.face_patch = triangle_patch;
+    return;
   }
+  if (core_detail::check_and_build(a.soup, result.mesh, n_threads).ok()) {
+    result.vertex_node = std::move(a.vertex_node);
+    result.face_patch = triangle_patch;
+    return;
+  }
+  result.mesh = TriMesh();
   TriMesh& mesh = result.mesh;
   std::vector<TriMesh::VertexHandle> handle(nodes.size());
-  for (std::size_t i = 0; i < nodes.size(); ++i) {
-    if (!used[i]) {
-      ++report.n_unused_nodes;
-      continue;
-    }
-    handle[i] = mesh.add_vertex(to_openmesh(nodes[i]));
-    result.vertex_node.push_back(static_cast<int>(i));
+  for (const int i : a.vertex_node) {
+    handle[static_cast<std::size_t>(i)] = mesh.add_vertex(to_openmesh(nodes[static_cast<std::size_t>(i)]));
+    result.vertex_node.push_back(i);
   }
   for (std::size_t t = 0; t < triangles.size(); ++t) {
     const auto& tri = triangles[t];
@@ -302,11 +318,15 @@ constexpr int kCollapseRounds = 12;
 // node ids. Merges whose triangles intersect others (exact check of the faces around the
 // survivors, when check_self_intersections) or that OpenMesh cannot assemble are given up:
 // their removed nodes are frozen and the collapses are decided again.
+// A trial is checked on its assembly soup (the points and triangles to_soup() of its
+// assembled mesh gives), so result keeps the assembly until a trial is kept: only the kept
+// trial is built (a trial given up costs no mesh build and no copy back). With 2+ threads the
+// soup's manifold check runs beside the crossing check. A soup that is no oriented
+// 2-manifold (OpenMesh's face-by-face path) is assembled apart and checked as a mesh.
 void collapse(const SurfaceMesh& surface, const StitchOptions& options, const std::vector<std::uint8_t>& feature,
               StitchResult& result, StitchReport& report) {
   if (!(options.collapse_below_angle_deg > 0.0) || result.mesh.n_faces() == 0) return;
   std::vector<std::uint8_t> frozen(surface.nodes.size(), 0);
-  std::optional<StitchResult> original;  // the assembly, while trials replace it
   for (int round = 0; round < kCollapseRounds; ++round) {
     const stitch_detail::NodeMerges merges = stitch_detail::collapse_short_edges(surface, options, result, feature, frozen);
     if (merges.n_merges == 0) return;
@@ -323,55 +343,57 @@ void collapse(const SurfaceMesh& surface, const StitchOptions& options, const st
       triangles.push_back(tri);
       triangle_patch.push_back(surface.triangle_patch[t]);
     }
-    // The trial is assembled in place (OpenMesh meshes have no move: a trial assembled
-    // apart would be copied into result); given up, the merges are undone by copying back
-    // the assembly as it was, kept before the first trial (the copy: 8 M instructions on
-    // the liver, assembling the triangles again: 147 M).
-    if (!original) {
-      original.emplace();
-      original->mesh = result.mesh;
-      original->face_patch = result.face_patch;
-      original->vertex_node = result.vertex_node;
-    }
-    auto restore = [&] {
-      result.mesh = original->mesh;
-      result.face_patch = original->face_patch;
-      result.vertex_node = original->vertex_node;
-    };
-    StitchResult& trial = result;
-    StitchReport trial_report;
-    assemble(nodes, triangles, triangle_patch, options.n_threads, trial, trial_report);
-    if (trial_report.n_rejected_triangles > 0) {
-      report.n_collapses_undone += merges.n_merges;
-      restore();
-      return;
-    }
-    // The faces around the survivors that moved or took a node.
+    // The faces around the survivors that moved or took a node: with every triangle
+    // assembled (checked below), face t is triangle t.
     std::vector<std::uint8_t> is_survivor(surface.nodes.size(), 0);
     for (std::size_t g = 0; g < merges.target.size(); ++g) {
       if (merges.target[g] != static_cast<int>(g)) is_survivor[static_cast<std::size_t>(merges.target[g])] = 1;
     }
     std::vector<std::uint32_t> touched;
-    for (auto f : trial.mesh.faces()) {
-      for (auto v : trial.mesh.fv_range(f)) {
-        if (is_survivor[static_cast<std::size_t>(trial.vertex_node[static_cast<std::size_t>(v.idx())])] != 0) {
-          touched.push_back(static_cast<std::uint32_t>(f.idx()));
-          break;
-        }
+    for (std::size_t t = 0; t < triangles.size(); ++t) {
+      const auto& tri = triangles[t];
+      if (is_survivor[static_cast<std::size_t>(tri[0])] != 0 || is_survivor[static_cast<std::size_t>(tri[1])] != 0 ||
+          is_survivor[static_cast<std::size_t>(tri[2])] != 0) {
+        touched.push_back(static_cast<std::uint32_t>(t));
       }
     }
+    AssemblySoup soup = assembly_soup(nodes, triangles);
+    std::future<bool> manifold_check;
+    if (options.n_threads >= 2) {
+      manifold_check = std::async(std::launch::async, [&soup] { return check_manifold(soup.soup).ok(); });
+    }
     std::vector<FacePair> pairs;
-    if (options.check_self_intersections) pairs = intersecting_pairs_of(to_soup(trial.mesh), touched, options.n_threads);
+    if (options.check_self_intersections) pairs = intersecting_pairs_of(soup.soup, touched, options.n_threads);
+    const bool is_manifold = manifold_check.valid() ? manifold_check.get() : check_manifold(soup.soup).ok();
+    std::optional<StitchResult> apart;  // the trial of a soup that is no oriented 2-manifold
+    if (!is_manifold) {
+      apart.emplace();
+      StitchReport apart_report;
+      assemble(nodes, triangles, triangle_patch, options.n_threads, *apart, apart_report);
+      if (apart_report.n_rejected_triangles > 0) {
+        report.n_collapses_undone += merges.n_merges;
+        return;
+      }
+      pairs.clear();
+      if (options.check_self_intersections) pairs = intersecting_pairs_of(stitch_detail::mesh_soup(apart->mesh), touched, options.n_threads);
+    }
     if (pairs.empty()) {
-      report.n_unused_nodes = trial_report.n_unused_nodes - merges.n_merges;
+      report.n_unused_nodes = soup.n_unused_nodes - merges.n_merges;
       report.n_collapses = merges.n_merges;
+      if (apart) {
+        result.mesh = apart->mesh;
+        result.face_patch = std::move(apart->face_patch);
+        result.vertex_node = std::move(apart->vertex_node);
+      } else {
+        StitchReport trial_report;
+        assemble(nodes, triangles, triangle_patch, options.n_threads, result, trial_report, &soup);
+      }
       return;
     }
     // Freeze the nodes merged into a survivor of an intersecting face.
     for (const auto& pair : pairs) {
       for (const std::uint32_t f : pair) {
-        for (auto v : trial.mesh.fv_range(TriMesh::FaceHandle(static_cast<int>(f)))) {
-          const int s = trial.vertex_node[static_cast<std::size_t>(v.idx())];
+        for (const int s : triangles[f]) {
           if (is_survivor[static_cast<std::size_t>(s)] == 0) continue;
           for (std::size_t g = 0; g < merges.target.size(); ++g) {
             if (merges.target[g] == s && static_cast<int>(g) != s && frozen[g] == 0) {
@@ -382,7 +404,6 @@ void collapse(const SurfaceMesh& surface, const StitchOptions& options, const st
         }
       }
     }
-    restore();
   }
 }
 
@@ -461,7 +482,7 @@ bool repair_intersections(const TriMesh& assembled, TriMesh& mesh, std::vector<F
       touch(mesh.opposite_face_handle(h));
     }
     // Pairs with a changed face are replaced by that face's pairs now.
-    stitch_detail::replace_pairs(pairs, [&](std::uint32_t f) { return changed[f] != 0; }, intersecting_pairs_of(to_soup(mesh), touched));
+    stitch_detail::replace_pairs(pairs, [&](std::uint32_t f) { return changed[f] != 0; }, intersecting_pairs_of(stitch_detail::mesh_soup(mesh), touched));
     for (const std::uint32_t f : touched) changed[f] = 0;
   }
   return offending().empty();
@@ -503,7 +524,7 @@ void split_obtuse_checked(const SurfaceMesh& surface, const StitchOptions& optio
           }
         }
       }
-      pairs = intersecting_pairs_of(to_soup(result.mesh), touched, options.n_threads);
+      pairs = intersecting_pairs_of(stitch_detail::mesh_soup(result.mesh), touched, options.n_threads);
     }
     if (pairs.empty()) {
       report.n_obtuse_splits = split.n_splits;
@@ -627,7 +648,7 @@ StitchResult stitch_impl(const SurfaceMesh& surface, const TriMesh* input, const
   // found, neither the repair nor settling changes the mesh.
   std::optional<TriangleSoup> soup;
   if (options.check_self_intersections) {
-    soup = to_soup(mesh);
+    soup = stitch_detail::mesh_soup(mesh);
     pairs = self_intersecting_pairs(*soup, options.n_threads);
     // The last whole-mesh count and its soup, while pairs are left: settling's changes are
     // counted again from them (recount_pairs checks again every face not as it was then:
@@ -646,7 +667,7 @@ StitchResult stitch_impl(const SurfaceMesh& surface, const TriMesh* input, const
       mesh = std::move(assembled);
       result.face_patch = std::move(assembled_patch);
       report.optimisation_undone = true;
-      counted = to_soup(mesh);
+      counted = stitch_detail::mesh_soup(mesh);
       pairs = self_intersecting_pairs(*counted, options.n_threads);
       counted_pairs = pairs;
     }
@@ -656,8 +677,8 @@ StitchResult stitch_impl(const SurfaceMesh& surface, const TriMesh* input, const
     // counted again when settling changed anything.
     const stitch_detail::GarbageMaps old = stitch_detail::settle_intersections(surface, options, feature, result, pairs, report);
     if (report.n_settled_nodes + report.n_settled_flips + report.n_settled_collapses > 0) {
-      pairs = counted ? stitch_detail::recount_pairs(*counted, counted_pairs, to_soup(mesh), old, options.n_threads)
-                      : self_intersecting_pairs(to_soup(mesh), options.n_threads);
+      pairs = counted ? stitch_detail::recount_pairs(*counted, counted_pairs, stitch_detail::mesh_soup(mesh), old, options.n_threads)
+                      : self_intersecting_pairs(stitch_detail::mesh_soup(mesh), options.n_threads);
     }
   }
   if (options.obtuse_split_rounds > 0 && pairs.empty() && mesh.n_faces() > 0) {
@@ -690,7 +711,7 @@ StitchResult stitch_impl(const SurfaceMesh& surface, const TriMesh* input, const
       return options.progress("stitch: verify", 0.5 + 0.5 * fraction);
     };
   }
-  if (!soup) soup = to_soup(mesh);
+  if (!soup) soup = stitch_detail::mesh_soup(mesh);
   const std::vector<std::uint8_t> rim = stitch_detail::fin_rim_nodes(surface);
   // The mesh is final here: with two or more threads its component signatures and the
   // figures away from features are taken on a helper thread while this one makes the
@@ -741,6 +762,28 @@ StitchResult stitch_impl(const SurfaceMesh& surface, const TriMesh* input, const
 }
 
 }  // namespace
+
+TriangleSoup stitch_detail::mesh_soup(const TriMesh& mesh) {
+  for (auto v : mesh.all_vertices()) {
+    if (mesh.status(v).deleted()) return to_soup(mesh);
+  }
+  for (auto f : mesh.all_faces()) {
+    if (mesh.status(f).deleted()) return to_soup(mesh);
+  }
+  TriangleSoup soup;
+  soup.points.reserve(mesh.n_vertices());
+  for (std::size_t v = 0; v < mesh.n_vertices(); ++v) soup.points.push_back(to_eigen(mesh.point(TriMesh::VertexHandle(static_cast<int>(v)))));
+  soup.triangles.resize(mesh.n_faces());
+  for (std::size_t f = 0; f < mesh.n_faces(); ++f) {
+    const auto h0 = mesh.halfedge_handle(TriMesh::FaceHandle(static_cast<int>(f)));
+    const auto h1 = mesh.next_halfedge_handle(h0);
+    const auto h2 = mesh.next_halfedge_handle(h1);
+    soup.triangles[f] = {static_cast<std::uint32_t>(mesh.to_vertex_handle(h0).idx()),
+                         static_cast<std::uint32_t>(mesh.to_vertex_handle(h1).idx()),
+                         static_cast<std::uint32_t>(mesh.to_vertex_handle(h2).idx())};
+  }
+  return soup;
+}
 
 std::vector<ComponentSignature> component_signatures(const TriMesh& mesh) {
   // Union-find over the vertices of every face (faces joined through shared vertices):

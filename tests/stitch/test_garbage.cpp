@@ -2,7 +2,7 @@
 // stitch_detail::collect_garbage against OpenMesh's garbage_collection(): the same mesh
 // (element order, every handle, points, statuses, properties) after collapses and deletions;
 // stitch_detail::recount_pairs against a whole-mesh count after moves, flips and collapses;
-// stitch_detail::make_angle_changes all or none.
+// stitch_detail::make_angle_changes all or none; stitch_detail::mesh_soup against to_soup.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -253,6 +253,28 @@ std::vector<double> fingerprint(const TriMesh& mesh) {
     for (auto v : mesh.fv_range(f)) x.push_back(v.idx());
   }
   return x;
+}
+
+// stitch_detail::mesh_soup reads the halfedges directly: the soup to_soup() gives, after
+// flips (which change faces' halfedges) and, through to_soup itself, with deleted elements.
+TEST(MeshSoup, EqualsToSoupAfterFlipsAndWithDeletedElements) {
+  TriMesh mesh = to_trimesh(test::torus(24, 12));
+  std::size_t n_flips = 0;
+  for (int e = 0; e < static_cast<int>(mesh.n_edges()); e += 3) {
+    if (!mesh.is_flip_ok(EH(e))) continue;
+    mesh.flip(EH(e));
+    ++n_flips;
+  }
+  ASSERT_GT(n_flips, 10u);
+  mesh.set_point(VH(5), mesh.point(VH(5)) + Point3(0.01, -0.02, 0.03));
+  const TriangleSoup a = stitch_detail::mesh_soup(mesh), b = to_soup(mesh);
+  EXPECT_EQ(a.points, b.points);
+  EXPECT_EQ(a.triangles, b.triangles);
+  const TriMesh damaged = damaged_torus(7, 11);
+  const TriangleSoup c = stitch_detail::mesh_soup(damaged), d = to_soup(damaged);
+  EXPECT_LT(d.triangles.size(), damaged.n_faces());  // deleted faces left out
+  EXPECT_EQ(c.points, d.points);
+  EXPECT_EQ(c.triangles, d.triangles);
 }
 
 TEST(AngleChanges, ARefusedSecondFlipUndoesTheFirstMove) {

@@ -543,6 +543,52 @@ TEST(Stitch, SameResultForAnyThreadCount) {
   }
 }
 
+// The smoothing sweep is Gauss-Seidel in vertex order; with 2+ threads it runs on a schedule
+// (border nodes and corners, and every node before a neighbour of theirs, in order on one
+// thread; the other inner nodes in connected groups, each after the border nodes it touches).
+// The same positions bit for bit and the same counts for any thread count, with the nodes in
+// the icosphere's order (inner and border nodes mixed: many inner nodes go with the border
+// nodes) and with the inner nodes last (as mesh_surface numbers them: one group per patch).
+TEST(Stitch, ScheduledSmoothingGivesTheSerialSweep) {
+  const TriangleSoup sphere = jittered_sphere(3, 0.6);
+  // The inner nodes last, else in the same order.
+  const SurfaceMesh mixed = cube_map_surface(sphere);
+  std::vector<std::uint32_t> order;
+  for (const bool inner : {false, true}) {
+    for (std::uint32_t i = 0; i < sphere.points.size(); ++i) {
+      if ((mixed.node_kind[i] == NodeKind::Inner) == inner) order.push_back(i);
+    }
+  }
+  std::vector<std::uint32_t> new_index(order.size());
+  for (std::uint32_t k = 0; k < order.size(); ++k) new_index[order[k]] = k;
+  TriangleSoup inner_last;
+  for (const std::uint32_t i : order) inner_last.points.push_back(sphere.points[i]);
+  for (const auto& t : sphere.triangles) inner_last.triangles.push_back({new_index[t[0]], new_index[t[1]], new_index[t[2]]});
+  for (const TriangleSoup* soup : std::array<const TriangleSoup*, 2>{&sphere, &inner_last}) {
+    const SurfaceMesh surface = cube_map_surface(*soup);
+    const TriMesh input = to_trimesh(*soup);
+    StitchOptions options;
+    options.obtuse_repair_rounds = 0;
+    options.obtuse_split_rounds = 0;
+    options.angle_repair_rounds = 0;
+    options.collapse_below_angle_deg = 0.0;
+    options.chord_compensation = 0.0;
+    options.volume_compensation = 0.0;
+    options.n_threads = 1;
+    const StitchResult r1 = stitch(surface, input, options);
+    ASSERT_GT(r1.report.n_smoothing_moves, 100u);
+    for (const unsigned n : {2u, 4u}) {
+      options.n_threads = n;
+      const StitchResult r = stitch(surface, input, options);
+      EXPECT_EQ(r.report.n_flips, r1.report.n_flips);
+      EXPECT_EQ(r.report.n_smoothing_moves, r1.report.n_smoothing_moves);
+      EXPECT_EQ(r.report.n_smoothing_rejected, r1.report.n_smoothing_rejected);
+      ASSERT_EQ(r.mesh.n_vertices(), r1.mesh.n_vertices());
+      for (auto v : r.mesh.vertices()) ASSERT_EQ(r.mesh.point(v), r1.mesh.point(v)) << "vertex " << v.idx() << ", " << n << " threads";
+    }
+  }
+}
+
 // Issue 5: a short edge no flip or smoothing removes (an inner node planted next to
 // another) is collapsed; the result keeps the contract and its worst triangle improves.
 TEST(Stitch, CollapsesAPlantedShortEdge) {
