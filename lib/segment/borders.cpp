@@ -3,10 +3,13 @@
 // the smoothing of the zig-zag curves that marching cubes leaves.
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <limits>
 #include <string>
 
 #include "nurbsfront/core/error.h"
+#include "nurbsfront/quality/aabb_tree.h"
 #include "nurbsfront/segment/segment_internal.h"
 
 namespace nurbsfront {
@@ -18,6 +21,7 @@ void BorderSmoothingOptions::validate() const {
   if (!(mu >= -1.0 && mu <= 0.0)) fail("mu must be in [-1, 0], got " + std::to_string(mu));
   if (!(max_displacement >= 0.0 && std::isfinite(max_displacement)))
     fail("max_displacement must be finite and >= 0, got " + std::to_string(max_displacement));
+  if (!(max_input_distance >= 0.0)) fail("max_input_distance must be >= 0, got " + std::to_string(max_input_distance));
 }
 
 std::vector<Eigen::Vector3d> smooth_polyline(const std::vector<Eigen::Vector3d>& points, bool is_closed,
@@ -52,6 +56,56 @@ std::vector<Eigen::Vector3d> smooth_polyline(const std::vector<Eigen::Vector3d>&
 }
 
 namespace segment_detail {
+
+namespace {
+
+// BorderSmoothingOptions::max_input_distance: each smoothed point of the curve farther than
+// the bound (times the curve's mean edge) from the input faces around the curve's vertices
+// up to two away goes back towards its input position: three quarters, half, a quarter of
+// its move, or none, the first within the bound.
+void hold_near_input(const TriMesh& mesh, const BorderCurve& curve, const std::vector<Eigen::Vector3d>& positions,
+                     const BorderSmoothingOptions& options, std::vector<Eigen::Vector3d>& smoothed) {
+  const auto n = static_cast<int>(positions.size());
+  if (!std::isfinite(options.max_input_distance) || n < 3 || smoothed.size() != positions.size()) return;
+  const int n_segments = curve.is_closed ? n : n - 1;
+  double length = 0.0;
+  for (int i = 0; i < n_segments; ++i) length += (positions[static_cast<std::size_t>((i + 1) % n)] - positions[static_cast<std::size_t>(i)]).norm();
+  const double bound = options.max_input_distance * length / n_segments;
+  std::vector<std::array<Eigen::Vector3d, 3>> faces;
+  for (int i = 0; i < n; ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    if (smoothed[k] == positions[k]) continue;
+    faces.clear();
+    for (int j = i - 2; j <= i + 2; ++j) {
+      if (!curve.is_closed && (j < 0 || j >= n)) continue;
+      const int w = curve.vertices[static_cast<std::size_t>((j % n + n) % n)];
+      for (const auto f : mesh.vf_range(mesh.vertex_handle(static_cast<unsigned>(w)))) {
+        std::array<Eigen::Vector3d, 3> t;
+        int c = 0;
+        for (const auto u : mesh.fv_range(f)) t[static_cast<std::size_t>(c++)] = to_eigen(mesh.point(u));
+        faces.push_back(t);
+      }
+    }
+    auto distance = [&](const Eigen::Vector3d& q) {
+      double best = std::numeric_limits<double>::infinity();
+      for (const auto& t : faces) best = std::min(best, (q - quality_detail::closest_point_on_triangle(q, t[0], t[1], t[2])).norm());
+      return best;
+    };
+    if (distance(smoothed[k]) <= bound) continue;
+    const Eigen::Vector3d move = smoothed[k] - positions[k];
+    Eigen::Vector3d held = positions[k];
+    for (const double share : {0.75, 0.5, 0.25}) {
+      const Eigen::Vector3d q = positions[k] + share * move;
+      if (distance(q) <= bound) {
+        held = q;
+        break;
+      }
+    }
+    smoothed[k] = held;
+  }
+}
+
+}  // namespace
 
 Borders extract_borders(const TriMesh& mesh, const std::vector<int>& face_patch,
                         const BorderSmoothingOptions& options, const unsigned workers) {
@@ -155,6 +209,7 @@ Borders extract_borders(const TriMesh& mesh, const std::vector<int>& face_patch,
       positions.reserve(curve.vertices.size());
       for (int w : curve.vertices) positions.push_back(to_eigen(mesh.point(mesh.vertex_handle(w))));
       curve.smoothed = smooth_polyline(positions, curve.is_closed, options);
+      hold_near_input(mesh, curve, positions, options, curve.smoothed);
     }
   });
   return borders;

@@ -8,6 +8,7 @@
 //! stages can fit z = f(x, y) per patch and mesh it in 2D.
 
 #include <cstddef>
+#include <limits>
 #include <memory>
 #include <vector>
 
@@ -43,6 +44,11 @@ struct BorderSmoothingOptions {
   //! Bound on how far a point may move from its input position, as a multiple of the
   //! curve's mean edge length (dimensionless, >= 0). Default 1.0.
   double max_displacement = 1.0;
+  //! Bound on a smoothed point's distance to the input (the faces around the curve's input
+  //! vertices up to two along the curve on either side), as a multiple of the curve's mean
+  //! edge length: a point farther off is pulled back towards its input position until it
+  //! is within (>= 0, not NaN; infinity = no bound). Default infinity.
+  double max_input_distance = std::numeric_limits<double>::infinity();
   //! Throws InvalidInput if a field is out of range.
   void validate() const;
 };

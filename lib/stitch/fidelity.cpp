@@ -54,10 +54,11 @@ struct Ring {
 
 class FidelityMover {
  public:
-  FidelityMover(const TriMesh& input, const StitchOptions& options, double bound, StitchResult& result,
-                std::vector<std::uint8_t>& is_feature, std::vector<std::uint8_t> fixed)
-      : options_(options), bound_(bound), mesh_(result.mesh), result_(result), is_feature_(is_feature),
-        fixed_(std::move(fixed)), input_soup_(to_soup(input)) {
+  FidelityMover(const TriMesh& input, const StitchOptions& options, double bound, double cell, const FinRimBound& rim,
+                bool incremental, StitchResult& result, std::vector<std::uint8_t>& is_feature,
+                std::vector<std::uint8_t> fixed)
+      : options_(options), bound_(bound), rim_(rim), incremental_(incremental), mesh_(result.mesh), result_(result),
+        is_feature_(is_feature), fixed_(std::move(fixed)), input_soup_(to_soup(input)) {
     std::vector<std::uint32_t> all(input_soup_.triangles.size());
     std::iota(all.begin(), all.end(), 0U);
     input_tree_.emplace(input_soup_, std::move(all));
@@ -73,14 +74,75 @@ class FidelityMover {
     const double diagonal = bounding_box(mesh_).diagonal();
     min_double_area_ = 2.0 * tolerance::kDegenerateAreaRelative * diagonal * diagonal;
     sin_floor_ = std::sin(options.angle_floor_deg * std::numbers::pi / 180.0);
+    build_probe_grid(cell);
   }
 
-  // One sweep: returns the number of moves and splits.
+  // One sweep: returns the number of moves and splits. The first sweep (and every sweep
+  // when not incremental) measures every vertex and input sample and tries every candidate;
+  // later incremental sweeps measure again only the vertices changed in the last sweep and
+  // the samples whose nearest output face changed or that a changed face may now be nearer
+  // to, and try only the candidates whose checks read a changed place (a refused candidate
+  // with nothing changed around it is refused again): the same moves as a full sweep.
   std::size_t sweep() {
     const TriangleSoup out = to_soup(mesh_);
     std::vector<std::uint32_t> all(out.triangles.size());
     std::iota(all.begin(), all.end(), 0U);
     const quality_detail::AabbTree out_tree(out, std::move(all));
+    const bool full = !incremental_ || first_sweep_;
+    first_sweep_ = false;
+    const std::size_t n_v = mesh_.n_vertices(), n_in = probes_.size();
+    // changed: vertices moved or made in the last sweep (all of them in a full sweep).
+    std::vector<std::uint8_t> changed(n_v, full ? 1 : 0);
+    for (const int v : changed_vertices_) changed[static_cast<std::size_t>(v)] = 1;
+    changed_vertices_.clear();
+    // Output nodes off the input: their closest input point (kept for unchanged vertices).
+    vertex_distance_.resize(n_v, 0.0);
+    vertex_target_.resize(n_v, Vec::Zero());
+    for (std::size_t i = 0; i < n_v; ++i) {
+      if (changed[i] == 0 || fixed_[i] != 0) continue;
+      const Vec p = point(mesh_, TriMesh::VertexHandle(static_cast<int>(i)));
+      vertex_target_[i] = closest_input(p);
+      vertex_distance_[i] = (p - vertex_target_[i]).norm();
+    }
+    // dirty: the corners of the faces that changed or whose listed samples did.
+    std::vector<std::uint8_t> dirty(n_v, full ? 1 : 0);
+    std::vector<std::uint8_t> face_changed(out.triangles.size(), full ? 1 : 0);
+    if (!full) {
+      for (std::size_t i = 0; i < n_v; ++i) {
+        if (changed[i] == 0) continue;
+        for (auto f : mesh_.vf_range(TriMesh::VertexHandle(static_cast<int>(i)))) face_changed[static_cast<std::size_t>(f.idx())] = 1;
+      }
+    }
+    // Input samples: their nearest output face and distance (again where it may differ).
+    near_face_.resize(n_in, 0);
+    near_distance_.resize(n_in, 0.0);
+    std::vector<std::uint8_t> requery(n_in, full ? 1 : 0);
+    if (!full) mark_near_changed_faces(out, face_changed, requery);
+    std::uint32_t hint = UINT32_MAX;
+    for (const std::uint32_t i : probe_order_) {
+      if (requery[i] == 0) continue;
+      const auto c = out_tree.closest(probes_[i], hint);
+      hint = c.face;
+      const double d = std::sqrt(c.squared_distance);
+      if (!full && (c.face != near_face_[i] || d != near_distance_[i])) {
+        for (const std::uint32_t f : {near_face_[i], c.face}) {
+          if (f >= out.triangles.size()) continue;
+          for (const auto k : out.triangles[f]) dirty[k] = 1;
+        }
+      }
+      near_face_[i] = c.face;
+      near_distance_[i] = d;
+    }
+    if (!full) {
+      for (std::size_t f = 0; f < face_changed.size(); ++f) {
+        if (face_changed[f] == 0) continue;
+        for (const auto k : out.triangles[f]) dirty[k] = 1;
+      }
+    }
+    // A vertex's move reads its ring (dirty within one ring), a sample's move or split the
+    // faces around its face's corners and their neighbours (within two rings).
+    const std::vector<std::uint8_t> dirty1 = full ? dirty : grow(dirty);
+    const std::vector<std::uint8_t> dirty2 = full ? dirty : grow(dirty1);
     struct Candidate {
       double distance;
       int vertex;
@@ -90,29 +152,18 @@ class FidelityMover {
       std::uint32_t face = UINT32_MAX;  // input side: the nearest output face
     };
     std::vector<Candidate> candidates;
-    // Output nodes off the input: onto their closest input point.
-    for (auto v : mesh_.vertices()) {
-      if (fixed_[static_cast<std::size_t>(v.idx())] != 0) continue;
-      const Vec p = point(mesh_, v);
-      const Vec c = closest_input(p);
-      const double d = (p - c).norm();
-      if (d > bound_) candidates.push_back({d, v.idx(), c, p, false, UINT32_MAX});
+    for (std::size_t i = 0; i < n_v; ++i) {
+      if (fixed_[i] != 0 || dirty1[i] == 0 || !(vertex_distance_[i] > bound_)) continue;
+      const Vec p = point(mesh_, TriMesh::VertexHandle(static_cast<int>(i)));
+      candidates.push_back({vertex_distance_[i], static_cast<int>(i), vertex_target_[i], p, false, UINT32_MAX});
     }
     // Input samples far from the output: the nearest free corner of their nearest output face
-    // onto them (else a split there). Each sample is listed under its nearest output face
-    // (the local checks).
-    const std::size_t n_in = probes_.size();
-    near_face_.assign(n_in, 0);
-    near_distance_.assign(n_in, 0.0);
-    std::uint32_t hint = UINT32_MAX;
-    for (const std::uint32_t i : quality_detail::morton_order(probes_)) {
-      const Vec& u = probes_[i];
-      const auto c = out_tree.closest(u, hint);
-      hint = c.face;
-      near_face_[i] = c.face;
-      near_distance_[i] = std::sqrt(c.squared_distance);
+    // onto them (else a split there).
+    for (std::uint32_t i = 0; i < n_in; ++i) {
       if (near_distance_[i] <= bound_) continue;
-      const auto& t = out.triangles[c.face];
+      const auto& t = out.triangles[near_face_[i]];
+      if (dirty2[t[0]] == 0 && dirty2[t[1]] == 0 && dirty2[t[2]] == 0) continue;
+      const Vec& u = probes_[i];
       const Vec q = quality_detail::closest_point_on_triangle(u, out.points[t[0]], out.points[t[1]], out.points[t[2]]);
       int best = -1;  // none: only a split
       double best_d = 0.0;
@@ -121,9 +172,9 @@ class FidelityMover {
         const double d = (out.points[k] - q).squaredNorm();
         if (best < 0 || d < best_d) best = static_cast<int>(k), best_d = d;
       }
-      candidates.push_back({near_distance_[i], best, u, u, true, c.face});
+      candidates.push_back({near_distance_[i], best, u, u, true, near_face_[i]});
     }
-    // Input vertices by nearest output face.
+    // Input samples by nearest output face (the local checks).
     face_start_.assign(out.triangles.size() + 1, 0);
     for (const std::uint32_t f : near_face_) ++face_start_[f + 1];
     std::partial_sum(face_start_.begin(), face_start_.end(), face_start_.begin());
@@ -149,6 +200,7 @@ class FidelityMover {
       if (c.vertex >= 0 && try_move(TriMesh::VertexHandle(c.vertex), c.target, c.probe, c.input_side, c.distance)) {
         ++n_moves;
         mark(TriMesh::VertexHandle(c.vertex));
+        changed_vertices_.push_back(c.vertex);
         continue;
       }
       // An input sample the moves cannot reach: a new node on it, splitting an edge of its
@@ -163,11 +215,96 @@ class FidelityMover {
       ++n_splits_;
       ++n_moves;
       mark(made);
+      changed_vertices_.push_back(made.idx());
     }
     return n_moves;
   }
 
  private:
+  // The input samples in a uniform grid of cubic cells (kept for every sweep: the samples
+  // do not move).
+  void build_probe_grid(double cell) {
+    probe_order_ = quality_detail::morton_order(probes_);
+    if (probes_.empty()) return;
+    grid_origin_ = probes_[0];
+    for (const Vec& p : probes_) grid_origin_ = grid_origin_.cwiseMin(p);
+    grid_cell_ = cell > 0.0 ? cell : 1.0;
+    std::vector<std::pair<std::uint64_t, std::uint32_t>> keyed(probes_.size());
+    for (std::uint32_t i = 0; i < probes_.size(); ++i) keyed[i] = {grid_key(cell_of(probes_[i])), i};
+    std::sort(keyed.begin(), keyed.end());
+    grid_items_.resize(keyed.size());
+    for (std::size_t k = 0; k < keyed.size(); ++k) {
+      grid_items_[k] = keyed[k].second;
+      if (k == 0 || keyed[k].first != keyed[k - 1].first) {
+        grid_keys_.push_back(keyed[k].first);
+        grid_start_.push_back(static_cast<std::uint32_t>(k));
+      }
+    }
+    grid_start_.push_back(static_cast<std::uint32_t>(keyed.size()));
+  }
+
+  static constexpr std::int64_t kGridAxis = std::int64_t{1} << 21;
+  std::array<std::int64_t, 3> cell_of(const Vec& p) const {
+    std::array<std::int64_t, 3> c{};
+    for (int k = 0; k < 3; ++k) {
+      const double x = std::floor((p[k] - grid_origin_[k]) / grid_cell_);
+      c[static_cast<std::size_t>(k)] = static_cast<std::int64_t>(std::clamp(x, 0.0, double(kGridAxis - 1)));
+    }
+    return c;
+  }
+  static std::uint64_t grid_key(const std::array<std::int64_t, 3>& c) {
+    return (static_cast<std::uint64_t>(c[0]) << 42) | (static_cast<std::uint64_t>(c[1]) << 21) | static_cast<std::uint64_t>(c[2]);
+  }
+
+  // Marks for a new query the samples whose nearest face changed and those a changed face
+  // (face_changed, its corners where they are now) may be as near to as their nearest one.
+  void mark_near_changed_faces(const TriangleSoup& out, const std::vector<std::uint8_t>& face_changed,
+                               std::vector<std::uint8_t>& requery) const {
+    double reach = 0.0;
+    for (std::size_t i = 0; i < probes_.size(); ++i) {
+      if (face_changed[near_face_[i]] != 0) requery[i] = 1;
+      reach = std::max(reach, near_distance_[i]);
+    }
+    for (std::size_t f = 0; f < face_changed.size(); ++f) {
+      if (face_changed[f] == 0) continue;
+      const auto& t = out.triangles[f];
+      const Vec lo = out.points[t[0]].cwiseMin(out.points[t[1]]).cwiseMin(out.points[t[2]]);
+      const Vec hi = out.points[t[0]].cwiseMax(out.points[t[1]]).cwiseMax(out.points[t[2]]);
+      auto test = [&](std::uint32_t i) {
+        const Vec& u = probes_[i];
+        const double s = (u - u.cwiseMax(lo).cwiseMin(hi)).squaredNorm();
+        if (s <= near_distance_[i] * near_distance_[i]) requery[i] = 1;
+      };
+      const auto a = cell_of(lo - Vec::Constant(reach)), b = cell_of(hi + Vec::Constant(reach));
+      const std::int64_t n_cells = (b[0] - a[0] + 1) * (b[1] - a[1] + 1) * (b[2] - a[2] + 1);
+      if (n_cells > static_cast<std::int64_t>(grid_keys_.size())) {
+        for (std::uint32_t i = 0; i < probes_.size(); ++i) test(i);
+        continue;
+      }
+      for (std::int64_t x = a[0]; x <= b[0]; ++x) {
+        for (std::int64_t y = a[1]; y <= b[1]; ++y) {
+          for (std::int64_t z = a[2]; z <= b[2]; ++z) {
+            const std::uint64_t key = grid_key({x, y, z});
+            const auto it = std::lower_bound(grid_keys_.begin(), grid_keys_.end(), key);
+            if (it == grid_keys_.end() || *it != key) continue;
+            const auto k = static_cast<std::size_t>(it - grid_keys_.begin());
+            for (std::uint32_t j = grid_start_[k]; j < grid_start_[k + 1]; ++j) test(grid_items_[j]);
+          }
+        }
+      }
+    }
+  }
+
+  // The flags and those of every neighbour of a flagged vertex.
+  std::vector<std::uint8_t> grow(const std::vector<std::uint8_t>& flags) const {
+    std::vector<std::uint8_t> out = flags;
+    for (auto v : mesh_.vertices()) {
+      if (flags[static_cast<std::size_t>(v.idx())] == 0) continue;
+      for (auto u : mesh_.vv_range(v)) out[static_cast<std::size_t>(u.idx())] = 1;
+    }
+    return out;
+  }
+
   Vec closest_input(const Vec& p) const {
     const auto c = input_tree_->closest(p, UINT32_MAX);
     const auto& t = input_soup_.triangles[c.face];
@@ -259,6 +396,10 @@ class FidelityMover {
     }
     if (ring.faces.empty()) return false;
     const Vec p = point(mesh_, v);
+    // A fin rim node stays within its bound (StitchOptions::fin_rim_max_move): the target
+    // is cut there (the half-way point then lies within it too).
+    const int node = result_.vertex_node[static_cast<std::size_t>(v.idx())];
+    const Vec goal = rim_.clamp(node, target);
     // The input vertices listed under the ring's faces.
     std::vector<std::uint32_t> near;
     double old_in = 0.0;
@@ -272,8 +413,8 @@ class FidelityMover {
     }
     const double old_worst = std::max(old_in, ring_to_input(ring, p));
     for (const double t : {1.0, 0.5}) {
-      const Vec q = p + t * (target - p);
-      if (!keeps_shape(ring, p, q)) continue;
+      const Vec q = p + t * (goal - p);
+      if (!rim_.allows(node, q) || !keeps_shape(ring, p, q)) continue;
       const double gain_distance = input_side ? to_ring(ring, q, probe) : input_distance(q);
       if (gain_distance > (1.0 - kMinGain) * distance) continue;
       double new_worst = ring_to_input(ring, q);
@@ -465,6 +606,21 @@ class FidelityMover {
  private:
   const StitchOptions& options_;
   double bound_;
+  const FinRimBound& rim_;
+  bool incremental_;
+  bool first_sweep_ = true;
+  // Vertices moved or made in this sweep (measured again in the next one).
+  std::vector<int> changed_vertices_;
+  // Per vertex: its distance to the input and its closest input point (free vertices).
+  std::vector<double> vertex_distance_;
+  std::vector<Vec> vertex_target_;
+  // The input samples in Morton order, and in a grid: cell keys (sorted), the start of each
+  // cell's samples in grid_items_ (one more at the end).
+  std::vector<std::uint32_t> probe_order_;
+  Vec grid_origin_ = Vec::Zero();
+  double grid_cell_ = 1.0;
+  std::vector<std::uint64_t> grid_keys_;
+  std::vector<std::uint32_t> grid_start_, grid_items_;
   TriMesh& mesh_;
   StitchResult& result_;
   std::vector<std::uint8_t>& is_feature_;
@@ -482,8 +638,8 @@ class FidelityMover {
 }  // namespace
 
 FidelityResult move_toward_input(const TriMesh& input, const StitchOptions& options,
-                                 std::vector<std::uint8_t>& is_feature, double reference_edge,
-                                 StitchResult& result) {
+                                 std::vector<std::uint8_t>& is_feature, double reference_edge, const FinRimBound& rim,
+                                 StitchResult& result, bool incremental) {
   FidelityResult out;
   const double bound = options.fidelity_distance_edges * reference_edge;
   TriMesh& mesh = result.mesh;
@@ -492,9 +648,11 @@ FidelityResult move_toward_input(const TriMesh& input, const StitchOptions& opti
   std::optional<TriMesh> before;
   if (options.check_self_intersections) before = mesh;
   const std::vector<Vec> start = vertex_points(mesh);
-  FidelityMover mover(input, options, bound, result, is_feature, fixed_vertices(mesh, result.vertex_node, is_feature));
+  FidelityMover mover(input, options, bound, reference_edge, rim, incremental, result, is_feature,
+                      fixed_vertices(mesh, result.vertex_node, is_feature));
   for (int round = 0; round < kFidelityRounds; ++round) {
     if (mover.sweep() == 0) break;
+    ++out.n_sweeps_changing;
   }
   out.n_split = mover.n_splits_;
   auto moved = [&](TriMesh::VertexHandle v) {

@@ -695,9 +695,13 @@ StitchResult stitch_impl(const SurfaceMesh& surface, const TriMesh* input, const
     report.n_angle_repairs_undone = angles.n_undone;
     if (angles.n_flips + angles.n_collapses + angles.n_moves > 0) soup.reset();
   }
-  if (options.fidelity_distance_edges > 0.0 && input != nullptr && pairs.empty() && mesh.n_faces() > 0) {
-    const stitch_detail::FidelityResult fidelity =
-        stitch_detail::move_toward_input(*input, options, feature, surface.input_mean_edge, result);
+  // Not on a label image's marching-cubes staircase (0/1 cells, occupancy scenes): its
+  // truth is the smooth surface the fits follow, not the staircase (docs/stitch.md,
+  // "Fidelity moves: where they apply").
+  if (options.fidelity_distance_edges > 0.0 && input != nullptr && pairs.empty() && mesh.n_faces() > 0 &&
+      !surfmesh_detail::label_image_staircase(surfmesh_detail::lattice_edge_shares(*input))) {
+    const stitch_detail::FidelityResult fidelity = stitch_detail::move_toward_input(
+        *input, options, feature, surface.input_mean_edge, stitch_detail::fin_rim_bound(surface, options), result);
     report.n_fidelity_moves = fidelity.n_moved;
     report.n_fidelity_moves_undone = fidelity.n_undone;
     report.n_fidelity_splits = fidelity.n_split;

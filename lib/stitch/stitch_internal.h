@@ -267,6 +267,7 @@ struct FidelityResult {
   std::size_t n_moved = 0;   //!< vertices left at another place
   std::size_t n_split = 0;   //!< new vertices on input vertices (edge splits)
   std::size_t n_undone = 0;  //!< moves put back because their triangles crossed others
+  std::size_t n_sweeps_changing = 0;  //!< sweeps that moved or split something
 };
 
 //! StitchOptions::fidelity_distance_edges (times reference_edge, the input's mean edge): up
@@ -280,12 +281,16 @@ struct FidelityResult {
 //! smallest angle at least min(old, angle_floor_deg), no more of them are obtuse, the
 //! candidate's distance falls by 5% at least and the largest distance to the input of the
 //! triangles (samples on a 1/3 lattice) and of the input vertices nearest to them does not
-//! grow. A moved vertex and its neighbours wait for the next sweep. When
-//! check_self_intersections, moves on triangles that cross others are put back (four
-//! rounds, then all of them). Nothing for a bound of 0 or an empty input.
+//! grow. A moved vertex and its neighbours wait for the next sweep. A fin rim node (rim)
+//! moves only within its bound. When check_self_intersections, moves on triangles that
+//! cross others are put back (four rounds, then all of them). Nothing for a bound of 0 or an
+//! empty input. incremental: after the first sweep only the vertices and input samples near
+//! the last sweep's changes are measured again and only the candidates whose checks read a
+//! changed place are tried (the same result as false, which measures and tries everything
+//! in every sweep).
 FidelityResult move_toward_input(const TriMesh& input, const StitchOptions& options,
-                                 std::vector<std::uint8_t>& is_feature, double reference_edge,
-                                 StitchResult& result);
+                                 std::vector<std::uint8_t>& is_feature, double reference_edge, const FinRimBound& rim,
+                                 StitchResult& result, bool incremental = true);
 
 //! The old index of every kept element after collect_garbage() (vertices, faces).
 struct GarbageMaps {

@@ -4,16 +4,22 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <numbers>
+#include <numeric>
 #include <set>
 #include <string>
 #include <vector>
 
 #include <Eigen/Geometry>
 
+#include "nurbsfront/core/error.h"
+#include "nurbsfront/core/soup.h"
 #include "nurbsfront/isosurface/marching_cubes.h"
 #include "nurbsfront/isosurface/scenes.h"
+#include "nurbsfront/quality/aabb_tree.h"
 #include "nurbsfront/segment/segment.h"
 #include "segment/contracts.h"
 
@@ -52,6 +58,47 @@ TEST(SegmentIsosurface, RawNormalsFragmentTheTerracedSphere) {
   options.min_patch_faces = 0;
   const Segmentation raw = segment_test::run(mesh, options, kTerracedSlack);
   EXPECT_GT(raw.patches.size(), 2 * smoothed);
+}
+
+// BorderSmoothingOptions::max_input_distance: the largest distance to the input of a curve's
+// smoothed points, in mean curve edges, over all curves.
+double largest_border_distance(const TriMesh& mesh, const SegmentOptions& options) {
+  const Segmentation seg = segment(mesh, options);
+  const TriangleSoup soup = to_soup(mesh);
+  std::vector<std::uint32_t> faces(soup.triangles.size());
+  std::iota(faces.begin(), faces.end(), 0U);
+  const quality_detail::AabbTree tree(soup, faces);
+  double worst = 0.0;
+  for (const BorderCurve& curve : seg.curves) {
+    const std::size_t n = curve.vertices.size();
+    if (n < 3) continue;
+    const std::size_t n_segments = curve.is_closed ? n : n - 1;
+    double length = 0.0;
+    for (std::size_t i = 0; i < n_segments; ++i) {
+      length += (to_eigen(mesh.point(mesh.vertex_handle(static_cast<unsigned>(curve.vertices[(i + 1) % n])))) -
+                 to_eigen(mesh.point(mesh.vertex_handle(static_cast<unsigned>(curve.vertices[i])))))
+                    .norm();
+    }
+    const double mean_edge = length / static_cast<double>(n_segments);
+    for (const auto& p : curve.smoothed) {
+      worst = std::max(worst, std::sqrt(tree.closest(p, UINT32_MAX).squared_distance) / mean_edge);
+    }
+  }
+  return worst;
+}
+
+TEST(SegmentIsosurface, SmoothedBordersStayWithinTheirBoundOfTheInput) {
+  // Level-set torus: the Taubin steps cut the curves' bends across the curved surface; with
+  // the bound every smoothed point lies within it of the input (the exact distance to the
+  // whole input, at most the one to the faces around the curve that the bound reads).
+  const TriMesh mesh = scene_mesh("torus", 32, SampleMode::LevelSet);
+  SegmentOptions options;
+  const double unbounded = largest_border_distance(mesh, options);
+  EXPECT_GT(unbounded, 0.05);
+  options.border_smoothing.max_input_distance = 0.05;
+  EXPECT_LE(largest_border_distance(mesh, options), 0.05 * (1.0 + 1e-9));
+  options.border_smoothing.max_input_distance = -1.0;
+  EXPECT_THROW((void)segment(mesh, options), InvalidInput);
 }
 
 // SegmentOptions::threads: the per-face loops (more than one chunk of faces here), the

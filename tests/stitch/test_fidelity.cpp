@@ -13,10 +13,13 @@
 #include "nurbsfront/core/error.h"
 #include "nurbsfront/core/soup.h"
 #include "nurbsfront/io/mesh_io.h"
+#include "nurbsfront/isosurface/marching_cubes.h"
+#include "nurbsfront/isosurface/scenes.h"
 #include "nurbsfront/quality/aabb_tree.h"
 #include "nurbsfront/quality/report.h"
 #include "nurbsfront/segment/segment.h"
 #include "nurbsfront/stitch/stitch.h"
+#include "nurbsfront/stitch/stitch_internal.h"
 #include "nurbsfront/surfmesh/surfmesh.h"
 #include "support/test_data.h"
 
@@ -96,6 +99,116 @@ TEST(StitchFidelity, ZeroLeavesTheStitchAsItWasAndBadBoundsThrow) {
     options.fidelity_distance_edges = bad;
     EXPECT_THROW((void)stitch(surface, input, options), InvalidInput);
   }
+}
+
+// Per node of the stitched mesh: 1 for the surface's border nodes and corners (the test's
+// stand-in for the feature nodes; the fidelity moves leave them alone), 0 for inner nodes and
+// the nodes the stitch made.
+std::vector<std::uint8_t> border_nodes(const SurfaceMesh& surface, const StitchResult& result) {
+  std::size_t n = surface.nodes.size();
+  for (const int node : result.vertex_node) n = std::max(n, static_cast<std::size_t>(node + 1));
+  std::vector<std::uint8_t> out(n, 0);
+  for (std::size_t i = 0; i < surface.nodes.size(); ++i) out[i] = surface.node_kind[i] == NodeKind::Inner ? 0 : 1;
+  return out;
+}
+
+TEST(StitchFidelity, IncrementalSweepsGiveTheFullSweepsResult) {
+  // The brain with the bound at 0.3 mean edges: several sweeps change the mesh. Measuring
+  // again only near the last sweep's changes (and trying only the candidates there) makes
+  // exactly the moves and splits of sweeps that measure and try everything.
+  const TriMesh input = read_mesh(test::test_data("io/brainImageSmooth.vtk"));
+  const SurfaceMesh surface = mesh_surface(input, segment(input));
+  StitchOptions options;
+  const StitchResult plain = stitch(surface, input, options);
+  ASSERT_TRUE(plain.report.ok());
+  options.fidelity_distance_edges = 0.3;
+  const stitch_detail::FinRimBound no_bound;
+  StitchResult full = plain, incremental = plain;
+  std::vector<std::uint8_t> feature_full = border_nodes(surface, plain), feature_incremental = feature_full;
+  const auto a = stitch_detail::move_toward_input(input, options, feature_full, surface.input_mean_edge, no_bound, full, false);
+  const auto b =
+      stitch_detail::move_toward_input(input, options, feature_incremental, surface.input_mean_edge, no_bound, incremental, true);
+  EXPECT_GE(a.n_sweeps_changing, 2u);
+  EXPECT_GT(a.n_moved, 20u);
+  EXPECT_GT(a.n_split, 0u);
+  EXPECT_EQ(a.n_moved, b.n_moved);
+  EXPECT_EQ(a.n_split, b.n_split);
+  EXPECT_EQ(a.n_undone, b.n_undone);
+  EXPECT_EQ(a.n_sweeps_changing, b.n_sweeps_changing);
+  ASSERT_EQ(full.mesh.n_vertices(), incremental.mesh.n_vertices());
+  ASSERT_EQ(full.mesh.n_faces(), incremental.mesh.n_faces());
+  for (const auto v : full.mesh.vertices()) EXPECT_EQ(full.mesh.point(v), incremental.mesh.point(v)) << "vertex " << v.idx();
+  for (const auto f : full.mesh.faces()) {
+    std::vector<int> x, y;
+    for (const auto v : full.mesh.fv_range(f)) x.push_back(v.idx());
+    for (const auto v : incremental.mesh.fv_range(f)) y.push_back(v.idx());
+    EXPECT_EQ(x, y) << "face " << f.idx();
+  }
+  EXPECT_EQ(full.face_patch, incremental.face_patch);
+  EXPECT_EQ(feature_full, feature_incremental);
+}
+
+TEST(StitchFidelity, BoundedNodesStayWithinTheirBound) {
+  // Every node bounded at a tenth of a mean edge from where the front put it: after the moves
+  // each vertex of a bounded node is where it was or within the bound of its origin.
+  const TriMesh input = read_mesh(test::test_data("io/brainImageSmooth.vtk"));
+  const SurfaceMesh surface = mesh_surface(input, segment(input));
+  StitchOptions options;
+  StitchResult result = stitch(surface, input, options);
+  ASSERT_TRUE(result.report.ok());
+  const StitchResult before = result;
+  options.fidelity_distance_edges = 0.3;
+  stitch_detail::FinRimBound rim;
+  rim.on_rim.assign(surface.nodes.size(), 1);
+  rim.radius = 0.1 * surface.input_mean_edge;
+  rim.origins = &surface.nodes;
+  std::vector<std::uint8_t> feature = border_nodes(surface, result);
+  StitchResult unbounded = result;
+  std::vector<std::uint8_t> feature_unbounded = feature;
+  const auto free_run = stitch_detail::move_toward_input(input, options, feature_unbounded, surface.input_mean_edge,
+                                                         stitch_detail::FinRimBound{}, unbounded);
+  (void)stitch_detail::move_toward_input(input, options, feature, surface.input_mean_edge, rim, result);
+  // Without the bound some vertex goes farther than it from its origin.
+  std::size_t n_beyond_unbounded = 0;
+  for (const auto v : before.mesh.vertices()) {
+    const auto i = static_cast<std::size_t>(v.idx());
+    const int node = result.vertex_node[i];
+    if (node < 0 || static_cast<std::size_t>(node) >= surface.nodes.size()) continue;
+    const Eigen::Vector3d origin = surface.nodes[static_cast<std::size_t>(node)];
+    const Eigen::Vector3d p = to_eigen(result.mesh.point(v)), q = to_eigen(unbounded.mesh.point(v));
+    if (p != to_eigen(before.mesh.point(v))) {
+      EXPECT_LE((p - origin).norm(), rim.radius * (1.0 + 1e-9)) << "vertex " << i;
+    }
+    if (q != to_eigen(before.mesh.point(v)) && (q - origin).norm() > rim.radius) ++n_beyond_unbounded;
+  }
+  EXPECT_GT(free_run.n_moved, 0u);
+  EXPECT_GT(n_beyond_unbounded, 0u);
+}
+
+TEST(StitchFidelity, LabelImageStaircaseIsLeftAsItWas) {
+  // An occupancy (0/1) sphere's marching-cubes staircase: the moves would pull the output
+  // onto the staircase, away from the smooth truth the band fits follow, so the stitch does
+  // not make them there (the same mesh as without the bound) although they would move
+  // vertices (called directly).
+  const Scene scene = scene_by_name("sphere");
+  const ScalarGrid grid = sample_scene(scene, 20, SampleMode::Occupancy);
+  const TriMesh input = to_trimesh(marching_cubes(grid, scene_marching_cubes_options(SampleMode::Occupancy)));
+  SurfMeshOptions surf;
+  surf.cell_grid = {true, grid.origin, grid.spacing};
+  const SurfaceMesh surface = mesh_surface(input, segment(input), surf);
+  StitchOptions options;
+  const StitchResult plain = stitch(surface, input, options);
+  options.fidelity_distance_edges = 0.25;
+  const StitchResult with_bound = stitch(surface, input, options);
+  ASSERT_TRUE(plain.report.ok());
+  EXPECT_EQ(with_bound.report.n_fidelity_moves + with_bound.report.n_fidelity_splits, 0u);
+  ASSERT_EQ(plain.mesh.n_vertices(), with_bound.mesh.n_vertices());
+  for (const auto v : plain.mesh.vertices()) EXPECT_EQ(plain.mesh.point(v), with_bound.mesh.point(v));
+  StitchResult direct = plain;
+  std::vector<std::uint8_t> feature = border_nodes(surface, plain);
+  const auto moved = stitch_detail::move_toward_input(input, options, feature, surface.input_mean_edge,
+                                                      stitch_detail::FinRimBound{}, direct);
+  EXPECT_GT(moved.n_moved + moved.n_split, 0u);
 }
 
 }  // namespace

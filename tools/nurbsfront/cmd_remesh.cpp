@@ -61,6 +61,7 @@ struct RemeshArgs {
   std::optional<int> obtuse_split_rounds;
   std::optional<int> angle_repair_rounds;
   std::optional<double> fidelity_distance;
+  std::optional<double> border_input_distance;
   std::optional<double> corner_angle;
   std::optional<double> flat_face_edges;
   std::optional<double> small_patch_offset;
@@ -134,6 +135,7 @@ void run_remesh(RemeshArgs& args) {
   if (args.obtuse_split_rounds) options.stitch.obtuse_split_rounds = *args.obtuse_split_rounds;
   if (args.angle_repair_rounds) options.stitch.angle_repair_rounds = *args.angle_repair_rounds;
   if (args.fidelity_distance) options.stitch.fidelity_distance_edges = *args.fidelity_distance;
+  if (args.border_input_distance) options.segment.border_smoothing.max_input_distance = *args.border_input_distance;
   if (args.corner_angle) options.surfmesh.corner_split_angle_deg = *args.corner_angle;
   if (args.flat_face_edges) options.surfmesh.fit.flat_face_edges = *args.flat_face_edges;
   if (args.small_patch_offset) options.surfmesh.small_patch_node_offset_edges = *args.small_patch_offset;
@@ -300,6 +302,9 @@ void add_remesh_command(CLI::App& app) {
   cmd->add_option("--fidelity-distance", args->fidelity_distance,
                   "The stitch's fidelity moves: vertices move onto the input where the output is farther from it "
                   "than this many input mean edges (0 = off; docs/stitch.md \"Fidelity moves\")");
+  cmd->add_option("--border-input-distance", args->border_input_distance,
+                  "Smoothed border curves stay within this many mean curve edges of the input (>= 0; default "
+                  "infinity = no bound; docs/segment.md \"Border curves near the input\")");
   cmd->add_option("--corner-angle", args->corner_angle,
                   "Patch corners wider than this (deg, in the surface metric) get a node on their bisector "
                   "instead of one closing triangle (in (0, 180]; default 89.5; 180 = off; docs/front2d.md "
