@@ -445,44 +445,32 @@ class AngleRepair {
   // Shape), no triangle degenerates or turns its normal by more than acos(min_normal_dot) and
   // q lies within kMaxCollapseOffsetEdges input mean edges of its old triangles; else -1.
   double move_gain(TriMesh::VertexHandle v, Vec& best_q) const {
+    constexpr std::size_t kMaxPatches = 8;
     if (is_feature(v) || is_frozen(v) || mesh_.is_boundary(v)) return -1.0;
     const Vec p = point(mesh_, v);
-    std::array<int, 8> patches{};
-    std::size_t n_patches = 0;
-    ring_.clear();
     Shape before;
+    gather_ring(v, p, before);
+    if (ring_.empty() || ring_patches_.size() > kMaxPatches) return -1.0;
     Vec centroid = Vec::Zero();
     std::vector<Vec> targets;
-    for (auto h : mesh_.voh_range(v)) {
-      const Vec b = point(mesh_, mesh_.to_vertex_handle(h));
-      const Vec c = point(mesh_, mesh_.to_vertex_handle(mesh_.next_halfedge_handle(h)));
-      const Vec n = (b - p).cross(c - p);
-      ring_.push_back({b, c, n});
-      before.add(p, b, c, sin_bound_);
-      centroid += b;
-      const int patch = result_.face_patch[static_cast<std::size_t>(mesh_.face_handle(h).idx())];
-      if (std::find(patches.begin(), patches.begin() + static_cast<long>(n_patches), patch) ==
-          patches.begin() + static_cast<long>(n_patches)) {
-        if (n_patches == patches.size()) return -1.0;
-        patches[n_patches++] = patch;
-      }
-      if (smallest_angle_sine(p, b, c) < sin_bound_) {
-        const Vec e = c - b, side = n.cross(e);
+    for (const RingTriangle& t : ring_) {
+      centroid += t.b;
+      if (smallest_angle_sine(p, t.b, t.c) < sin_bound_) {
+        const Vec e = t.c - t.b, side = t.n.cross(e);
         const double side_norm = side.norm();
         if (side_norm > 0.0) {
-          const Vec apex = 0.5 * (b + c) + (0.5 * std::numbers::sqrt3 * e.norm() / side_norm) * side;
+          const Vec apex = 0.5 * (t.b + t.c) + (0.5 * std::numbers::sqrt3 * e.norm() / side_norm) * side;
           targets.push_back(p + 0.5 * (apex - p));
           targets.push_back(p + 0.25 * (apex - p));
         }
       }
     }
-    if (ring_.empty()) return -1.0;
     centroid /= static_cast<double>(ring_.size());
     targets.push_back(centroid);
     targets.push_back(0.5 * (p + centroid));
     double best = -1.0;
     for (const Vec& target : targets) {
-      const Vec q = project(v, std::span<const int>(patches.data(), n_patches), target);
+      const Vec q = project(v, ring_patches_, target);
       if (!q.allFinite() || q == p) continue;
       const std::optional<Shape> after = ring_shape(p, q);
       if (!after || !is_better(before, *after) || !(after->min_sine > best)) continue;
@@ -509,21 +497,14 @@ class AngleRepair {
     constexpr int kMaxSteps = 64;
     if (is_feature(v) || is_frozen(v) || mesh_.is_boundary(v)) return -1.0;
     const Vec p = point(mesh_, v);
-    std::vector<int> patches;
-    ring_.clear();
     Shape before;
+    gather_ring(v, p, before);
+    const std::vector<int>& patches = ring_patches_;
     Vec normal = Vec::Zero();
     double shortest = std::numeric_limits<double>::infinity();
-    for (auto h : mesh_.voh_range(v)) {
-      const Vec b = point(mesh_, mesh_.to_vertex_handle(h));
-      const Vec c = point(mesh_, mesh_.to_vertex_handle(mesh_.next_halfedge_handle(h)));
-      const Vec n = (b - p).cross(c - p);
-      ring_.push_back({b, c, n});
-      before.add(p, b, c, sin_bound_);
-      normal += n;
-      shortest = std::min(shortest, (b - p).norm());
-      const int patch = result_.face_patch[static_cast<std::size_t>(mesh_.face_handle(h).idx())];
-      if (std::find(patches.begin(), patches.end(), patch) == patches.end()) patches.push_back(patch);
+    for (const RingTriangle& t : ring_) {
+      normal += t.n;
+      shortest = std::min(shortest, (t.b - p).norm());
     }
     if (ring_.empty() || !(normal.norm() > 0.0) || !(shortest > 0.0)) return -1.0;
     normal.normalize();
@@ -570,6 +551,23 @@ class AngleRepair {
     return rim_.clamp(node(v), project_onto_patches(surface_, patches, target));
   }
 
+  // v's triangles seen from its place p, for move_gain and search_move: ring_ (their far
+  // corners and area vectors, around v), their shape (before) and ring_patches_ (their
+  // patches, in the order first met: the order project_onto_patches averages in).
+  void gather_ring(TriMesh::VertexHandle v, const Vec& p, Shape& before) const {
+    ring_.clear();
+    ring_patches_.clear();
+    before = Shape{};
+    for (auto h : mesh_.voh_range(v)) {
+      const Vec b = point(mesh_, mesh_.to_vertex_handle(h));
+      const Vec c = point(mesh_, mesh_.to_vertex_handle(mesh_.next_halfedge_handle(h)));
+      ring_.push_back({b, c, (b - p).cross(c - p)});
+      before.add(p, b, c, sin_bound_);
+      const int patch = result_.face_patch[static_cast<std::size_t>(mesh_.face_handle(h).idx())];
+      if (std::find(ring_patches_.begin(), ring_patches_.end(), patch) == ring_patches_.end()) ring_patches_.push_back(patch);
+    }
+  }
+
   // The shape of ring_'s triangles (a vertex's, from p) with the vertex at q; nullopt when one
   // degenerates or turns its normal by more than acos(min_normal_dot), or q lies farther than
   // max_offset_ from every old triangle.
@@ -610,6 +608,7 @@ class AngleRepair {
     Vec b, c, n;
   };
   mutable std::vector<RingTriangle> ring_;
+  mutable std::vector<int> ring_patches_;
   // The vertices whose triangles the last apply() changed.
   std::vector<TriMesh::VertexHandle> touched_;
   // Per vertex of mesh_, its index in repair_in_two_steps's copy (-1 between calls).

@@ -215,12 +215,34 @@ std::size_t hold_fin_rim_nodes(TriMesh& mesh, const std::vector<int>& vertex_nod
 //! nodes along their normals). Returns the number of vertices moved.
 std::size_t hold_detail_nodes(TriMesh& mesh, const SurfaceMesh& surface, const std::vector<int>& vertex_node);
 
+//! The mean of f over the triangle abc, exact for f quadratic: the triangle cut into 9
+//! similar ones, each by the mean of f at its edge midpoints, i.e. f at the 18 points
+//! (i a + j b + k c) / 6 with i + j + k = 6 and two of i, j, k odd, weight 1 on abc's border
+//! (one index 0: one sub-triangle's edge), 2 inside (two sub-triangles'), the sum over 27.
+//! The lattice of step 1/3 (10 points, exact for linear f) reads the bulge l1 l2 + l2 l3 +
+//! l3 l1 of a flat triangle under a curved surface as 1/6 where its mean is 1/4.
+template <class F>
+double mean_over_triangle(F&& f, const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
+  double sum = 0.0;
+  for (int i = 0; i <= 6; ++i) {
+    for (int j = 0; i + j <= 6; ++j) {
+      const int k = 6 - i - j;
+      if (i % 2 + j % 2 + k % 2 != 2) continue;
+      const double weight = i == 0 || j == 0 || k == 0 ? 1.0 : 2.0;
+      sum += weight * f(Eigen::Vector3d((i * a + j * b + k * c) / 6.0));
+    }
+  }
+  return sum / 27.0;
+}
+
 //! StitchOptions::volume_compensation: every triangle's volume between it and its patch's
-//! input faces, measured along the patch axis (patches of fewer than 100 input faces with
+//! input faces, measured along the patch axis (mean_over_triangle of the height difference
+//! over the triangle's area projected on the patch plane; patches with
 //! PatchSurface::input_heights; others add nothing), is shared by its corners that are no
 //! feature node nor on the boundary (a triangle with none gives it to its patch's such
 //! nodes, by area); each such node moves along its normal to take its share back, times
-//! strength, at most 0.1 of its root-mean-square edge, half that or not at all where the
+//! strength, at most 0.1 of its root-mean-square edge (the volume beyond that handed to its
+//! free neighbours by area, four rounds), half that or not at all where the
 //! move would add an obtuse triangle around it or an angle below min(the old smallest,
 //! kAwayFromFeaturesAngleBoundDeg). Nothing when input (may be null) is taken for a
 //! marching-cubes surface (its vertices on lattice edges; lattice_gate_done: the caller has

@@ -76,4 +76,42 @@ TEST(ChordCompensation, OffOrInputChordsOnlyMovesNothing) {
 }
 
 }  // namespace
+// stitch_detail::mean_over_triangle, the volume compensation's quadrature (docs/stitch.md,
+// "The volume measure's quadrature"): exact for quadratics. A flat triangle with its corners
+// on the paraboloid z = x^2 + y^2, over (0,0), (1,0), (0,1): the plane is z = x + y, the gap
+// x + y - x^2 - y^2 has the integral 1/6 + 1/6 - 1/12 - 1/12 = 1/6 over the half-unit
+// triangle, so its mean is 1/3.
+TEST(VolumeQuadrature, ExactForAFlatTriangleOverAParaboloid) {
+  const Eigen::Vector3d a(0.0, 0.0, 0.0), b(1.0, 0.0, 1.0), c(0.0, 1.0, 1.0);
+  auto gap = [](const Eigen::Vector3d& p) { return p.z() - (p.x() * p.x() + p.y() * p.y()); };
+  EXPECT_NEAR(stitch_detail::mean_over_triangle(gap, a, b, c), 1.0 / 3.0, 1e-15);
+  // The volume between the flat triangle and the paraboloid: the mean times the area 1/2.
+  EXPECT_NEAR(0.5 * stitch_detail::mean_over_triangle(gap, a, b, c), 1.0 / 6.0, 1e-15);
+}
+
+// The bulge b = l1 l2 + l2 l3 + l3 l1 (barycentric; 0 at the corners) has the mean 1/4 over
+// any triangle (each l_i l_j integrates to A / 12); the 10-point lattice of step 1/3 gives 1/6.
+TEST(VolumeQuadrature, ReadsTheWholeBulgeOfAnyTriangle) {
+  const Eigen::Vector3d a(0.3, -0.2, 0.7), b(1.7, 0.4, -0.1), c(0.5, 1.9, 0.2);
+  const Eigen::Vector3d n = (b - a).cross(c - a);
+  const double twice_area = n.squaredNorm();
+  // Barycentric coordinates of p (in the triangle's plane) by area vectors.
+  auto bulge = [&](const Eigen::Vector3d& p) {
+    const double l1 = (b - p).cross(c - p).dot(n) / twice_area;
+    const double l2 = (c - p).cross(a - p).dot(n) / twice_area;
+    const double l3 = 1.0 - l1 - l2;
+    return l1 * l2 + l2 * l3 + l3 * l1;
+  };
+  EXPECT_NEAR(stitch_detail::mean_over_triangle(bulge, a, b, c), 0.25, 1e-14);
+  // A general quadratic against the three-edge-midpoint rule (exact for quadratics too).
+  auto q = [](const Eigen::Vector3d& p) { return 2.0 * p.x() * p.x() - p.x() * p.y() + 0.5 * p.y() * p.y() + 3.0 * p.z() - 1.0; };
+  const double midpoints = (q(0.5 * (a + b)) + q(0.5 * (b + c)) + q(0.5 * (c + a))) / 3.0;
+  EXPECT_NEAR(stitch_detail::mean_over_triangle(q, a, b, c), midpoints, 1e-13);
+  // Of degree 2, not more: x^3 over the unit right triangle (integral 1/4 - 1/5 = 1/20, mean
+  // 1/10) is not read exactly.
+  auto cubic = [](const Eigen::Vector3d& p) { return p.x() * p.x() * p.x(); };
+  const Eigen::Vector3d o(0.0, 0.0, 0.0), x(1.0, 0.0, 0.0), y(0.0, 1.0, 0.0);
+  EXPECT_GT(std::abs(stitch_detail::mean_over_triangle(cubic, o, x, y) - 0.1), 1e-4);
+}
+
 }  // namespace nurbsfront

@@ -1292,6 +1292,41 @@ TEST(Stitch, AngleRepairMakesAPairOfChangesWhereNoSingleOneHelps) {
   for (auto u : r.mesh.vertices()) EXPECT_NEAR(to_eigen(r.mesh.point(u)).norm(), 1.0, 0.02);
 }
 
+// Issue 5, the step search (AngleRepair::search_move): a node of the cube-map sphere pulled
+// toward a neighbour (to 0.466 of its distance; found by a seeded search over such
+// plantings, session 13) under an input far finer than the output (input mean edge 0.00075,
+// the sphere's edges about 0.15: the repair's collapses and moves must stay within half an
+// input mean edge of the old triangles). One triangle is below 25 deg; the search runs only
+// where no flip, collapse, move_gain place or pair of changes is better, and here its small
+// steps on the fits lift the triangle over the bound: every change the repair makes is one
+// of the search's.
+TEST(Stitch, AngleRepairStepSearchLiftsATriangleWhereNoOtherChangeHelps) {
+  TriangleSoup soup = test::icosphere(3);
+  ASSERT_EQ(cube_map_surface(soup).node_kind[377], NodeKind::Inner);
+  soup.points[377] = (soup.points[616] + 0.46576536456057949 * (soup.points[377] - soup.points[616])).normalized();
+  SurfaceMesh surface = cube_map_surface(soup);
+  surface.input_mean_edge = 0.00075;
+  const StitchResult off = stitch_with_angle_repair(surface, soup, 0);
+  ASSERT_GE(off.report.n_small_angle_away_from_features, 1u);
+  ASSERT_LT(off.report.min_angle_away_from_features_deg, kAwayFromFeaturesAngleBoundDeg);
+  const StitchResult r = stitch_with_angle_repair(surface, soup, 4);
+  EXPECT_TRUE(r.report.ok()) << joined(r.report.errors);
+  EXPECT_GE(r.report.n_angle_searches, 1u);
+  EXPECT_EQ(r.report.n_angle_moves, r.report.n_angle_searches);
+  EXPECT_EQ(r.report.n_angle_flips + r.report.n_angle_collapses + r.report.n_angle_two_steps, 0u);
+  EXPECT_EQ(r.report.n_small_angle_away_from_features, 0u);
+  EXPECT_GE(r.report.min_angle_away_from_features_deg, kAwayFromFeaturesAngleBoundDeg);
+  EXPECT_EQ(r.report.n_angle_repairs_undone, 0u);
+  const TopologyReport& topology = r.report.output.topology;
+  EXPECT_TRUE(topology.is_closed);
+  EXPECT_TRUE(topology.is_manifold);
+  EXPECT_EQ(topology.euler_characteristic, 2);
+  EXPECT_EQ(topology.n_self_intersecting_pairs.value_or(1), 0u);
+  EXPECT_EQ(r.mesh.n_vertices(), off.mesh.n_vertices());
+  // The moved nodes stay on the fits (the sphere).
+  for (auto u : r.mesh.vertices()) EXPECT_NEAR(to_eigen(r.mesh.point(u)).norm(), 1.0, 0.02);
+}
+
 }  // namespace nurbsfront
 
 namespace nurbsfront {
