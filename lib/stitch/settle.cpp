@@ -162,7 +162,9 @@ GarbageMaps settle_intersections(const SurfaceMesh& surface, const StitchOptions
       const PatchSurface& s = surface_on_input(patch);
       const Vec local = s.frame.to_local(p);
       double z = 0.0;
-      if (!surface.patches[patch].detail_fit || s.input_heights->height(local.x(), local.y(), z)) {
+      // (A hand-made SurfaceMesh may have no patch reports: no detail fit then.)
+      const bool detail = patch < surface.patches.size() && surface.patches[patch].detail_fit;
+      if (!detail || s.input_heights->height(local.x(), local.y(), z)) {
         target += s.project(p);
         continue;
       }
