@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include <iomanip>
+
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <array>
@@ -1164,8 +1166,13 @@ TEST(PipelineSlow, HeadsqShortEdgeCollapsesKept) {
   EXPECT_GT(s.n_collapses, s.n_collapses_undone);
   EXPECT_LT(with.mesh.n_faces(), without.mesh.n_faces());
   EXPECT_LT(s.n_small_angle_away_from_features, without.report.stitch.n_small_angle_away_from_features);
-  // (The smallest angle may sit where no merge reaches: never smaller, not always larger.)
-  EXPECT_GE(s.min_angle_away_from_features_deg, without.report.stitch.min_angle_away_from_features_deg);
+  // (The smallest angle may sit where no merge reaches: never smaller, not always larger. Since
+  // triangles at fin rim nodes count apart (session 13), both runs' smallest is the same
+  // triangle away from the merges, 11.5575 deg, whose nodes the sweeps after the collapse
+  // leave 5.6e-9 deg apart (rounding): equal within 1e-6 deg counts as not smaller.)
+  EXPECT_GE(s.min_angle_away_from_features_deg + 1e-6, without.report.stitch.min_angle_away_from_features_deg)
+      << std::setprecision(12) << s.min_angle_away_from_features_deg << " vs "
+      << without.report.stitch.min_angle_away_from_features_deg;
   EXPECT_GT(with.report.output.quality.alpha_mean, without.report.output.quality.alpha_mean);
   ASSERT_TRUE(with.report.output.topology.n_self_intersecting_pairs.has_value());
   EXPECT_EQ(*with.report.output.topology.n_self_intersecting_pairs, 0u);
