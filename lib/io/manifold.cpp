@@ -14,6 +14,7 @@
 
 #include <Eigen/Geometry>
 
+#include "nurbsfront/core/disjoint_sets.h"
 #include "nurbsfront/core/error.h"
 #include "nurbsfront/core/parallel.h"
 #include "nurbsfront/io/mesh_io.h"
@@ -30,23 +31,6 @@ struct EdgeUse {
   std::uint32_t face;
   std::uint8_t corner;
   bool ascending;
-};
-
-class UnionFind {
- public:
-  explicit UnionFind(std::size_t n) : parent_(n) { std::iota(parent_.begin(), parent_.end(), std::uint32_t{0}); }
-  std::uint32_t find(std::uint32_t x) {
-    while (parent_[x] != x) x = parent_[x] = parent_[parent_[x]];
-    return x;
-  }
-  void unite(std::uint32_t a, std::uint32_t b) {
-    a = find(a);
-    b = find(b);
-    if (a != b) parent_[std::max(a, b)] = std::min(a, b);  // the lowest index represents the class
-  }
-
- private:
-  std::vector<std::uint32_t> parent_;
 };
 
 }  // namespace
@@ -199,7 +183,7 @@ ManifoldRepair make_manifold(const TriangleSoup& soup) {
   // 4. Vertex fans: corners (3 f + k) of faces adjacent across an edge are joined at both
   // ends of the edge; each class of corners at one vertex is one fan. The fan with the
   // lowest corner keeps the vertex, every other fan gets a copy of the point.
-  UnionFind fans(3 * n_faces);
+  DisjointSets fans(3 * n_faces);
   for (std::uint32_t f = 0; f < n_faces; ++f) {
     const auto& t = soup.triangles[f];
     for (int k = 0; k < 3; ++k) {

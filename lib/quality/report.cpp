@@ -14,6 +14,7 @@
 
 #include <Eigen/Geometry>
 
+#include "nurbsfront/core/disjoint_sets.h"
 #include "nurbsfront/core/error.h"
 #include "nurbsfront/core/tolerances.h"
 #include "nurbsfront/quality/aabb_tree.h"
@@ -25,29 +26,6 @@ namespace {
 constexpr double kRadToDeg = 180.0 / std::numbers::pi;
 constexpr double kSmallAngleDeg = 30.0;       // DESIGN.md: share of triangles with min angle < 30 deg
 constexpr double kPercentileFraction = 0.01;  // alpha_p1
-
-// Union-find with path halving and union by index (deterministic roots: the smaller).
-class DisjointSets {
- public:
-  explicit DisjointSets(std::size_t n) : parent_(n) { std::iota(parent_.begin(), parent_.end(), 0u); }
-  std::uint32_t find(std::uint32_t x) {
-    while (parent_[x] != x) {
-      parent_[x] = parent_[parent_[x]];
-      x = parent_[x];
-    }
-    return x;
-  }
-  void unite(std::uint32_t a, std::uint32_t b) {
-    a = find(a);
-    b = find(b);
-    if (a == b) return;
-    if (a < b) std::swap(a, b);
-    parent_[a] = b;
-  }
-
- private:
-  std::vector<std::uint32_t> parent_;
-};
 
 bool repeats_index(const std::array<std::uint32_t, 3>& t) { return t[0] == t[1] || t[1] == t[2] || t[2] == t[0]; }
 

@@ -15,6 +15,7 @@
 
 #include <Eigen/Geometry>
 
+#include "nurbsfront/core/disjoint_sets.h"
 #include "nurbsfront/core/parallel.h"
 #include "nurbsfront/core/tolerances.h"
 #include "nurbsfront/surfmesh/surfmesh_internal.h"
@@ -219,28 +220,19 @@ class Optimiser {
       position[i] = s.serial.size();
     }
     // Groups: union-find over the edges between group vertices.
-    std::vector<int> parent(n);
-    std::iota(parent.begin(), parent.end(), 0);
-    auto find = [&parent](int x) {
-      while (parent[static_cast<std::size_t>(x)] != x) {
-        parent[static_cast<std::size_t>(x)] = parent[static_cast<std::size_t>(parent[static_cast<std::size_t>(x)])];
-        x = parent[static_cast<std::size_t>(x)];
-      }
-      return x;
-    };
+    DisjointSets sets(n);
     for (auto e : mesh_.edges()) {
       const auto h = mesh_.halfedge_handle(e, 0);
       const int a = mesh_.from_vertex_handle(h).idx(), b = mesh_.to_vertex_handle(h).idx();
       if (role[static_cast<std::size_t>(a)] != 2 || role[static_cast<std::size_t>(b)] != 2) continue;
-      const int ra = find(a), rb = find(b);
-      if (ra != rb) parent[static_cast<std::size_t>(std::max(ra, rb))] = std::min(ra, rb);
+      sets.unite(static_cast<std::uint32_t>(a), static_cast<std::uint32_t>(b));
     }
     // Group ids in order of their first vertex; then the vertices bucketed by group.
     std::vector<int> group(n, -1);
     std::size_t n_groups = 0;
     for (std::size_t i = 0; i < n; ++i) {
       if (role[i] != 2) continue;
-      const auto r = static_cast<std::size_t>(find(static_cast<int>(i)));
+      const auto r = static_cast<std::size_t>(sets.find(static_cast<std::uint32_t>(i)));
       if (group[r] < 0) group[r] = static_cast<int>(n_groups++);
       group[i] = group[r];
     }

@@ -13,6 +13,7 @@
 #include <optional>
 #include <string>
 
+#include "nurbsfront/core/disjoint_sets.h"
 #include "nurbsfront/core/error.h"
 #include "nurbsfront/core/soup_internal.h"
 #include "nurbsfront/core/stopwatch.h"
@@ -792,26 +793,13 @@ TriangleSoup stitch_detail::mesh_soup(const TriMesh& mesh) {
 std::vector<ComponentSignature> component_signatures(const TriMesh& mesh) {
   // Union-find over the vertices of every face (faces joined through shared vertices):
   // linear, no vertex-face circulation.
-  std::vector<int> parent(mesh.n_vertices());
-  std::iota(parent.begin(), parent.end(), 0);
-  auto find = [&parent](int x) {
-    while (parent[static_cast<std::size_t>(x)] != x) {
-      parent[static_cast<std::size_t>(x)] = parent[static_cast<std::size_t>(parent[static_cast<std::size_t>(x)])];
-      x = parent[static_cast<std::size_t>(x)];
-    }
-    return x;
-  };
+  DisjointSets sets(mesh.n_vertices());
   for (auto f : mesh.faces()) {
-    int root = -1;
-    for (auto v : mesh.fv_range(f)) {
-      const int r = find(v.idx());
-      if (root < 0) {
-        root = r;
-      } else if (r != root) {
-        parent[static_cast<std::size_t>(r)] = root;
-      }
-    }
+    const auto h = mesh.halfedge_handle(f);
+    const auto a = static_cast<std::uint32_t>(mesh.to_vertex_handle(h).idx());
+    for (auto v : mesh.fv_range(f)) sets.unite(a, static_cast<std::uint32_t>(v.idx()));
   }
+  auto find = [&sets](int x) { return static_cast<int>(sets.find(static_cast<std::uint32_t>(x))); };
   std::vector<ComponentSignature> components;
   std::vector<int> component_of_root(mesh.n_vertices(), -1);
   std::vector<int> face_component(mesh.n_faces(), -1);
