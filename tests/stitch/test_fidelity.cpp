@@ -112,7 +112,8 @@ std::vector<std::uint8_t> border_nodes(const SurfaceMesh& surface, const StitchR
   return out;
 }
 
-TEST(StitchFidelity, IncrementalSweepsGiveTheFullSweepsResult) {
+TEST(StitchFidelitySlow, IncrementalSweepsGiveTheFullSweepsResult) {
+  // (Slow: 1.5 s in RelWithDebInfo, 92 s under ASan; the CI runs it in the slow suite.)
   // The brain with the bound at 0.3 mean edges: several sweeps change the mesh. Measuring
   // again only near the last sweep's changes (and trying only the candidates there) makes
   // exactly the moves and splits of sweeps that measure and try everything.
