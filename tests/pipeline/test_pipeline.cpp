@@ -67,11 +67,12 @@ std::string errors_of(const RemeshReport& r) {
   return s;
 }
 
-// The properties of the issue's "Must show" that hold for every scene input.
-void expect_contract_and_quality(const RemeshResult& r, const SceneInput& in, long euler) {
-  const RemeshReport& rep = r.report;
-  EXPECT_TRUE(rep.ok()) << errors_of(rep);
-  const TopologyReport& t = rep.output.topology;
+// The output contract every remesh() test checks: no report error; closed, 2-manifold,
+// oriented like the input, the given Euler characteristic, no degenerate face and no
+// self-intersecting pair (counted).
+void expect_closed_clean(const RemeshResult& r, long euler) {
+  EXPECT_TRUE(r.report.ok()) << errors_of(r.report);
+  const TopologyReport& t = r.report.output.topology;
   EXPECT_TRUE(t.is_closed);
   EXPECT_TRUE(t.is_manifold);
   EXPECT_TRUE(t.is_consistently_oriented);
@@ -79,6 +80,12 @@ void expect_contract_and_quality(const RemeshResult& r, const SceneInput& in, lo
   EXPECT_EQ(t.n_degenerate_faces, 0u);
   ASSERT_TRUE(t.n_self_intersecting_pairs.has_value());
   EXPECT_EQ(*t.n_self_intersecting_pairs, 0u);
+}
+
+// The properties of the issue's "Must show" that hold for every scene input.
+void expect_contract_and_quality(const RemeshResult& r, const SceneInput& in, long euler) {
+  const RemeshReport& rep = r.report;
+  expect_closed_clean(r, euler);
   EXPECT_EQ(r.face_patch.size(), r.mesh.n_faces());
   EXPECT_EQ(rep.n_failed_patches, 0u);
   const QualityReport& q = rep.output.quality;
@@ -220,14 +227,8 @@ TEST(Pipeline, LevelSetDramCellMinAngleAwayFromFeatures) {
   RemeshOptions options = fast_options();
   options.compute_distances = false;  // not asserted here; most of the run's time
   const RemeshResult r = remesh(in.mesh, options);
-  EXPECT_TRUE(r.report.ok()) << errors_of(r.report);
-  const TopologyReport& t = r.report.output.topology;
-  EXPECT_TRUE(t.is_closed);
-  EXPECT_TRUE(t.is_manifold);
-  EXPECT_TRUE(t.is_consistently_oriented);
-  EXPECT_EQ(t.euler_characteristic, in.mesh.n_vertices() - in.mesh.n_edges() + in.mesh.n_faces());
-  ASSERT_TRUE(t.n_self_intersecting_pairs.has_value());
-  EXPECT_EQ(*t.n_self_intersecting_pairs, 0u);
+  expect_closed_clean(r, static_cast<long>(in.mesh.n_vertices()) - static_cast<long>(in.mesh.n_edges()) +
+                             static_cast<long>(in.mesh.n_faces()));
   EXPECT_GT(r.report.stitch.n_collapses, 0u);
   expect_min_angle_away_from_features(r);
   // A marching-cubes surface: no feature sizing, although its crease-bounded strips (voxel
@@ -597,13 +598,7 @@ TEST(Pipeline, GearPrismKeepsItsVolume) {
   // without the compensation). The test is of the compensation.
   options.stitch.obtuse_split_rounds = 0;
   const RemeshResult r = remesh(mesh, options);
-  EXPECT_TRUE(r.report.ok()) << errors_of(r.report);
-  const TopologyReport& t = r.report.output.topology;
-  EXPECT_TRUE(t.is_closed);
-  EXPECT_TRUE(t.is_manifold);
-  EXPECT_EQ(t.euler_characteristic, 2);
-  ASSERT_TRUE(t.n_self_intersecting_pairs.has_value());
-  EXPECT_EQ(*t.n_self_intersecting_pairs, 0u);
+  expect_closed_clean(r, 2);
   EXPECT_GT(r.report.stitch.n_volume_compensation_moves, 0u);
   const double with = std::abs(enclosed_volume(to_soup(r.mesh)) - exact) / exact;
   options.stitch.volume_compensation = 0.0;
@@ -629,13 +624,7 @@ TEST(Pipeline, CoarseTubeKeepsItsVolume) {
   for (const int with : {1, 0}) {
     options.stitch.volume_compensation = with ? 1.0 : 0.0;
     const RemeshResult r = remesh(mesh, options);
-    EXPECT_TRUE(r.report.ok()) << errors_of(r.report);
-    const TopologyReport& t = r.report.output.topology;
-    EXPECT_TRUE(t.is_closed);
-    EXPECT_TRUE(t.is_manifold);
-    EXPECT_EQ(t.euler_characteristic, 0);
-    ASSERT_TRUE(t.n_self_intersecting_pairs.has_value());
-    EXPECT_EQ(*t.n_self_intersecting_pairs, 0u);
+    expect_closed_clean(r, 0);
     change[with] = (enclosed_volume(to_soup(r.mesh)) - volume_in) / volume_in;
   }
   EXPECT_LT(std::abs(change[1]), 0.005) << "issue 5's bound";
@@ -655,12 +644,7 @@ TEST(Pipeline, PinionRootsKeepTheirVolume) {
   for (const double strength : {1.0, 0.0}) {
     options.stitch.volume_compensation = strength;
     const RemeshResult r = remesh(mesh, options);
-    EXPECT_TRUE(r.report.ok()) << errors_of(r.report);
-    const TopologyReport& t = r.report.output.topology;
-    EXPECT_TRUE(t.is_closed);
-    EXPECT_EQ(t.euler_characteristic, 0);
-    ASSERT_TRUE(t.n_self_intersecting_pairs.has_value());
-    EXPECT_EQ(*t.n_self_intersecting_pairs, 0u);
+    expect_closed_clean(r, 0);
     const double change = (enclosed_volume(to_soup(r.mesh)) - volume_in) / volume_in;
     if (strength > 0.0) {
       EXPECT_LT(std::abs(change), 0.005) << "issue 5's bound";

@@ -14,6 +14,7 @@
 #include <set>
 #include <string>
 #include <tuple>
+#include <utility>
 
 #include <Eigen/Geometry>
 
@@ -589,23 +590,27 @@ TEST(Stitch, ScheduledSmoothingGivesTheSerialSweep) {
   }
 }
 
+// The first edge of the assembly (in triangle order) whose two nodes are inner nodes of the
+// same patch, as (v, w); (-1, -1) if there is none.
+std::pair<int, int> inner_edge_of_one_patch(const SurfaceMesh& surface) {
+  for (const auto& t : surface.triangles) {
+    for (int k = 0; k < 3; ++k) {
+      const int a = t[k], b = t[(k + 1) % 3];
+      if (surface.node_kind[a] == NodeKind::Inner && surface.node_kind[b] == NodeKind::Inner &&
+          surface.node_owner[a] == surface.node_owner[b]) {
+        return {a, b};
+      }
+    }
+  }
+  return {-1, -1};
+}
+
 // Issue 5: a short edge no flip or smoothing removes (an inner node planted next to
 // another) is collapsed; the result keeps the contract and its worst triangle improves.
 TEST(Stitch, CollapsesAPlantedShortEdge) {
   TriangleSoup soup = test::icosphere(3);
   SurfaceMesh surface = cube_map_surface(soup);
-  // An inner node and an inner neighbour of the same patch.
-  int v = -1, w = -1;
-  for (const auto& t : surface.triangles) {
-    for (int k = 0; k < 3 && v < 0; ++k) {
-      const int a = t[k], b = t[(k + 1) % 3];
-      if (surface.node_kind[a] == NodeKind::Inner && surface.node_kind[b] == NodeKind::Inner &&
-          surface.node_owner[a] == surface.node_owner[b]) {
-        v = a;
-        w = b;
-      }
-    }
-  }
+  const auto [v, w] = inner_edge_of_one_patch(surface);  // an inner node, an inner neighbour
   ASSERT_GE(v, 0);
   const double edge = (surface.nodes[v] - surface.nodes[w]).norm();
   surface.nodes[v] = (surface.nodes[w] + 0.03 * (surface.nodes[v] - surface.nodes[w])).normalized();
@@ -655,17 +660,7 @@ StitchResult stitch_with_angle_repair(const SurfaceMesh& surface, const Triangle
 TEST(Stitch, AngleRepairCollapsesAShortEdgeAwayFromFeatures) {
   TriangleSoup soup = test::icosphere(3);
   SurfaceMesh surface = cube_map_surface(soup);
-  int v = -1, w = -1;
-  for (const auto& t : surface.triangles) {
-    for (int k = 0; k < 3 && v < 0; ++k) {
-      const int a = t[k], b = t[(k + 1) % 3];
-      if (surface.node_kind[a] == NodeKind::Inner && surface.node_kind[b] == NodeKind::Inner &&
-          surface.node_owner[a] == surface.node_owner[b]) {
-        v = a;
-        w = b;
-      }
-    }
-  }
+  const auto [v, w] = inner_edge_of_one_patch(surface);
   ASSERT_GE(v, 0);
   surface.nodes[v] = (surface.nodes[w] + 0.03 * (surface.nodes[v] - surface.nodes[w])).normalized();
   soup.points[v] = surface.nodes[v];
