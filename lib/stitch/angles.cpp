@@ -57,6 +57,11 @@ struct Shape {
   }
 };
 
+// Pushes of a node away from another sheet it crosses (lever (a), docs/stitch.md "Fin rims:
+// moves away from the other sheet"): the factors of the neighbours' mean height over the
+// crossed face by which a pushed node rises above the face's plane, tried in turn.
+constexpr std::array<double, 3> kPushFactors{1.0, 2.0, 4.0};
+
 class AngleRepair {
  public:
   AngleRepair(const SurfaceMesh& surface, const StitchOptions& options, const std::vector<std::uint8_t>& is_feature,
@@ -617,6 +622,53 @@ class AngleRepair {
 
 }  // namespace
 
+// Lever (a) of docs/stitch.md "Fin rims: moves away from the other sheet" (stitch_internal.h).
+Vec push_away(const TriMesh& mesh, TriMesh::VertexHandle v, TriMesh::FaceHandle g, double factor, double max_offset,
+              double min_double_area, double min_normal_dot, double sin_bound) {
+  const Vec none = Vec::Constant(std::numeric_limits<double>::quiet_NaN());
+  std::array<Vec, 3> x;
+  int k = 0;
+  for (auto u : mesh.fv_range(g)) x[static_cast<std::size_t>(k++)] = point(mesh, u);
+  Vec normal_g = (x[1] - x[0]).cross(x[2] - x[0]);
+  if (!(normal_g.norm() > 0.0)) return none;
+  normal_g.normalize();
+  const Vec p = point(mesh, v);
+  Vec normal_v = Vec::Zero();
+  double height_sum = 0.0;
+  int n_ring = 0;
+  for (auto h : mesh.voh_range(v)) {
+    const Vec b = point(mesh, mesh.to_vertex_handle(h));
+    height_sum += normal_g.dot(b - x[0]);
+    ++n_ring;
+    if (!mesh.is_boundary(h)) normal_v += (b - p).cross(point(mesh, mesh.to_vertex_handle(mesh.next_halfedge_handle(h))) - p);
+  }
+  if (n_ring == 0 || !(std::abs(height_sum) > 0.0) || !(normal_v.norm() > 0.0)) return none;
+  const Vec up = height_sum > 0.0 ? normal_g : Vec(-normal_g);  // towards the ring's side
+  const double ring_height = std::abs(height_sum) / n_ring;
+  normal_v.normalize();
+  constexpr double kMinCosine = 0.5;
+  Vec direction = up.dot(normal_v) >= 0.0 ? normal_v : Vec(-normal_v);
+  if (up.dot(direction) < kMinCosine) direction = up;
+  const double height = up.dot(p - x[0]);
+  const double rise = std::max(height, 0.0) + factor * ring_height - height;
+  const double distance = rise / up.dot(direction);
+  if (!(distance > 0.0) || !(distance <= max_offset)) return none;
+  const Vec q = p + distance * direction;
+  Shape before, after;
+  for (auto h : mesh.voh_range(v)) {
+    if (mesh.is_boundary(h)) continue;
+    const Vec b = point(mesh, mesh.to_vertex_handle(h));
+    const Vec c = point(mesh, mesh.to_vertex_handle(mesh.next_halfedge_handle(h)));
+    const Vec n_old = (b - p).cross(c - p), n_new = (b - q).cross(c - q);
+    const double l_old = n_old.norm(), l_new = n_new.norm();
+    if (l_new <= min_double_area || (l_old > 0.0 && n_new.dot(n_old) <= min_normal_dot * l_old * l_new)) return none;
+    before.add(p, b, c, sin_bound);
+    after.add(q, b, c, sin_bound);
+  }
+  if (after.n_small > before.n_small || after.n_obtuse > before.n_obtuse) return none;
+  return q;
+}
+
 bool make_angle_changes(StitchResult& result, std::span<const AngleChange> changes,
                         std::vector<TriMesh::VertexHandle>* touched) {
   TriMesh& mesh = result.mesh;
@@ -666,6 +718,12 @@ AngleRepairResult repair_small_angles(const SurfaceMesh& surface, const StitchOp
   AngleRepairResult out;
   if (options.angle_repair_rounds <= 0 || result.mesh.n_faces() == 0) return out;
   std::vector<std::uint8_t> frozen(is_feature.size(), 0);
+  const FinRimBound rim = fin_rim_bound(surface, options);
+  const double diagonal = bounding_box(result.mesh).diagonal();
+  const double min_double_area = 2.0 * tolerance::kDegenerateAreaRelative * diagonal * diagonal;
+  const double sin_bound = std::sin(kAwayFromFeaturesAngleBoundDeg * std::numbers::pi / 180.0);
+  const double max_offset =
+      kMaxCollapseOffsetEdges * (surface.input_mean_edge > 0.0 ? surface.input_mean_edge : mean_edge_length(result.mesh));
   // The mesh to go back to when a change crosses another triangle (only when the checks run).
   std::optional<StitchResult> before;
   for (int check = 0; check < kCheckRounds; ++check) {
@@ -683,6 +741,7 @@ AngleRepairResult repair_small_angles(const SurfaceMesh& surface, const StitchOp
     repair.collect_garbage();
     if (repair.n_flips_ + repair.n_collapses_ + repair.n_moves_ == 0) return out;
     std::vector<std::array<std::uint32_t, 2>> pairs;
+    std::size_t n_pushes = 0;
     if (options.check_self_intersections) {
       std::vector<std::uint8_t> is_changed(is_feature.size(), 0);
       for (const int g : repair.changed_nodes_) is_changed[static_cast<std::size_t>(g)] = 1;
@@ -696,11 +755,45 @@ AngleRepairResult repair_small_angles(const SurfaceMesh& surface, const StitchOp
         }
       }
       pairs = intersecting_pairs_of(mesh_soup(result.mesh), touched, options.n_threads);
+      // A change that crosses another sheet (a thin plate, a fin's two sides): its nodes move
+      // away from the sheet crossed (push_away) before the change is given up.
+      std::vector<std::uint32_t> pushed_faces;
+      for (const double factor : kPushFactors) {
+        if (pairs.empty()) break;
+        std::vector<std::pair<TriMesh::VertexHandle, Vec>> pushes;
+        for (const auto& pair : pairs) {
+          for (int side = 0; side < 2; ++side) {
+            const TriMesh::FaceHandle f(static_cast<int>(pair[static_cast<std::size_t>(side)]));
+            const TriMesh::FaceHandle g(static_cast<int>(pair[static_cast<std::size_t>(1 - side)]));
+            for (auto v : result.mesh.fv_range(f)) {
+              const int g_node = result.vertex_node[static_cast<std::size_t>(v.idx())];
+              if (is_changed[static_cast<std::size_t>(g_node)] == 0 || is_feature[static_cast<std::size_t>(g_node)] != 0 ||
+                  result.mesh.is_boundary(v) ||
+                  std::any_of(pushes.begin(), pushes.end(), [&](const auto& push) { return push.first == v; })) {
+                continue;
+              }
+              // Within the fin rim bound (a clamped place would skip push_away's shape tests).
+              const Vec q = push_away(result.mesh, v, g, factor, max_offset, min_double_area, options.min_normal_dot, sin_bound);
+              if (q.allFinite() && rim.allows(g_node, q)) pushes.emplace_back(v, q);
+            }
+          }
+        }
+        if (pushes.empty()) break;
+        for (const auto& [v, q] : pushes) {
+          result.mesh.set_point(v, to_openmesh(q));
+          for (auto f : result.mesh.vf_range(v)) pushed_faces.push_back(static_cast<std::uint32_t>(f.idx()));
+        }
+        n_pushes += pushes.size();
+        std::vector<std::uint32_t> faces = touched;
+        faces.insert(faces.end(), pushed_faces.begin(), pushed_faces.end());
+        pairs = intersecting_pairs_of(mesh_soup(result.mesh), faces, options.n_threads);
+      }
     }
     if (pairs.empty()) {
       out.n_flips = repair.n_flips_;
       out.n_collapses = repair.n_collapses_;
       out.n_moves = repair.n_moves_;
+      out.n_pushes = n_pushes;
       out.n_two_steps = repair.n_two_steps_;
       out.n_searches = repair.n_searches_;
       return out;

@@ -690,7 +690,7 @@ StitchResult stitch_impl(const SurfaceMesh& surface, const TriMesh* input, const
     const stitch_detail::AngleRepairResult angles = stitch_detail::repair_small_angles(surface, options, feature, result);
     report.n_angle_flips = angles.n_flips;
     report.n_angle_collapses = angles.n_collapses;
-    report.n_angle_moves = angles.n_moves;
+    report.n_angle_moves = angles.n_moves + angles.n_pushes;
     report.n_angle_two_steps = angles.n_two_steps;
     report.n_angle_searches = angles.n_searches;
     report.n_angle_repairs_undone = angles.n_undone;

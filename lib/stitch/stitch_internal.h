@@ -135,9 +135,24 @@ struct AngleChange {
 bool make_angle_changes(StitchResult& result, std::span<const AngleChange> changes,
                         std::vector<TriMesh::VertexHandle>* touched = nullptr);
 
+//! Where v goes to leave triangle g (of another sheet its triangles cross) behind: along v's
+//! ring normal (area-weighted; g's normal instead when the two are more than 60 deg apart), to
+//! the side of g's plane where the mean of v's ring neighbours lies, until v's height over that
+//! plane is max(its height, 0) + factor x the neighbours' mean height. NaN when the neighbours'
+//! mean lies on the plane, the move is longer than max_offset, or a triangle of v's then
+//! degenerates (twice its area at most min_double_area), turns its normal by more than
+//! acos(min_normal_dot), or more of them are below the angle whose sine is sin_bound or obtuse.
+//! The small-angle repair moves the nodes its changes made of a crossing pair so (factors 1, 2,
+//! 4; a fin rim node only within its bound) before it gives the changes up
+//! (repair_small_angles; the moves counted in StitchReport::n_angle_moves).
+Eigen::Vector3d push_away(const TriMesh& mesh, TriMesh::VertexHandle v, TriMesh::FaceHandle g, double factor,
+                          double max_offset, double min_double_area, double min_normal_dot, double sin_bound);
+
 //! What repair_small_angles() did.
 struct AngleRepairResult {
   std::size_t n_flips = 0, n_collapses = 0, n_moves = 0;
+  //! Nodes moved away from another sheet their changes crossed (not counted above).
+  std::size_t n_pushes = 0;
   std::size_t n_two_steps = 0;  //!< pairs of changes (each also counted above)
   std::size_t n_searches = 0;   //!< moves of the finer search (each also counted in n_moves)
   std::size_t n_undone = 0;  //!< changes given up because their triangles crossed others
@@ -154,7 +169,8 @@ struct AngleRepairResult {
 //! them below the bound (a collapse: fewer) and no more obtuse ones; where no single change
 //! is better, the best pair of changes there that is (docs/stitch.md "two-step changes"). When
 //! check_self_intersections, the faces around the changes are checked exactly; if some
-//! cross, the mesh goes back and the repair is made again with the nodes of the crossing
+//! cross, the nodes a change made on them move away from the faces they cross (push_away), and
+//! if some still cross, the mesh goes back and the repair is made again with the nodes of the crossing
 //! faces that a change made left alone (4 rounds). Collapses are garbage-collected (face_patch and vertex_node
 //! follow).
 AngleRepairResult repair_small_angles(const SurfaceMesh& surface, const StitchOptions& options,
