@@ -57,6 +57,11 @@ struct Settings {
   //! --detail: nurbsfront with adaptive sizing and the detail fit (docs/surfmesh.md "Detail
   //! fit"), rerun at the vertex count of the default run.
   bool detail = false;
+  //! --fidelity-distance F, --border-input-distance B (report mode): the nurbsfront rows with
+  //! StitchOptions::fidelity_distance_edges and BorderSmoothingOptions::max_input_distance
+  //! set (unset: the library's defaults).
+  std::optional<double> fidelity_distance;
+  std::optional<double> border_input_distance;
 };
 
 RemeshOptions remesh_options(unsigned threads, bool detail = false) {
@@ -67,6 +72,14 @@ RemeshOptions remesh_options(unsigned threads, bool detail = false) {
     options.surfmesh.sizing.adaptive = true;
     options.surfmesh.fit.detail_spacing_edges = 1.0;
   }
+  return options;
+}
+
+// The report's nurbsfront options: the defaults with the settings' overrides.
+RemeshOptions report_options(const Settings& s, bool detail) {
+  RemeshOptions options = remesh_options(s.threads, detail);
+  if (s.fidelity_distance) options.stitch.fidelity_distance_edges = *s.fidelity_distance;
+  if (s.border_input_distance) options.segment.border_smoothing.max_input_distance = *s.border_input_distance;
   return options;
 }
 
@@ -178,10 +191,10 @@ InputResult run_input(const CompareInput& in, const Settings& s) {
   try {
     watch.restart();
     cpu = process_cpu_seconds();
-    RemeshResult remeshed = remesh(input, remesh_options(s.threads));
+    RemeshResult remeshed = remesh(input, report_options(s, false));
     if (s.detail) {
       // The default run's vertex count, with adaptive sizing and the detail fit.
-      RemeshOptions options = remesh_options(s.threads, true);
+      RemeshOptions options = report_options(s, true);
       options.surfmesh.sizing.size = remeshed.report.target_size;
       remeshed = remesh_to_vertex_count(input, remeshed.mesh.n_vertices(), options);
     }
@@ -233,7 +246,7 @@ InputResult run_input(const CompareInput& in, const Settings& s) {
     if (result.rows[d].nurbsfront_row != 1) continue;
     const std::string method = ours + " (rerun at " + std::to_string(count) + ")";
     try {
-      RemeshOptions options = remesh_options(s.threads, s.detail);
+      RemeshOptions options = report_options(s, s.detail);
       options.surfmesh.sizing.size = first_size * std::sqrt(double(target) / double(count));
       watch.restart();
       cpu = process_cpu_seconds();
@@ -458,7 +471,10 @@ int run_report(const Settings& s) {
   }
   std::ostringstream header;
   header << "Measured " << date << " by `bench_compare --report" << (s.quick ? " --quick" : "")
-         << (s.filter.empty() ? "" : " --filter '" + s.filter + "'") << (s.detail ? " --detail" : "") << "` (nurbsfront threads: " << s.threads
+         << (s.filter.empty() ? "" : " --filter '" + s.filter + "'") << (s.detail ? " --detail" : "")
+         << (s.fidelity_distance ? " --fidelity-distance " + fmt("%g", *s.fidelity_distance) : "")
+         << (s.border_input_distance ? " --border-input-distance " + fmt("%g", *s.border_input_distance) : "")
+         << "` (nurbsfront threads: " << s.threads
          << "); load average (1, 5, 15 min) before: " << load_before << ", after: " << load_average() << " on "
          << sysconf(_SC_NPROCESSORS_ONLN) << " cores.";
   const std::string md = markdown(results, skipped, s, header.str());
@@ -559,11 +575,16 @@ int main(int argc, char** argv) {
     else if (a == "--threads") s.threads = static_cast<unsigned>(std::stoul(value("--threads")));
     else if (a == "--detail") s.detail = true;
     else if (a == "--roundness-angle") s.roundness_angle = std::stod(value("--roundness-angle"));
+    else if (a == "--fidelity-distance") s.fidelity_distance = std::stod(value("--fidelity-distance"));
+    else if (a == "--border-input-distance") s.border_input_distance = std::stod(value("--border-input-distance"));
     else if (a == "--help" || a == "-h") {
       std::cout << "bench_compare [--quick] [--filter REGEX] [--threads N] [--roundness-angle DEG] [--detail]\n"
+                   "              [--fidelity-distance F] [--border-input-distance B]\n"
                    "              [--report [--md FILE] [--json FILE] [--write-dir DIR]] [benchmark flags]\n"
                    "Without --report: Google Benchmark timings (Remesh/, Decimate/, DecimateRoundness/ per input).\n"
-                   "--detail (with --report): nurbsfront with --adaptive --detail-fit 1 at the default run's vertex count.\n";
+                   "--detail (with --report): nurbsfront with --adaptive --detail-fit 1 at the default run's vertex count.\n"
+                   "--fidelity-distance F, --border-input-distance B (with --report): the nurbsfront rows with remesh's\n"
+                   "  options of those names (default: the library's).\n";
       return 0;
     } else rest.push_back(argv[i]);
   }

@@ -39,6 +39,8 @@ constexpr int kSampleSteps = 3;
 constexpr double kSplitNormalDot = 0.0;
 // A move is taken only if the candidate's own distance falls by this share at least.
 constexpr double kMinGain = 0.05;
+// Steps of the first sweep's walk from the last sample's face towards a sample.
+constexpr int kWalkSteps = 8;
 
 double alpha_of(const Vec& a, const Vec& b, const Vec& c) {
   const double l2 = (b - a).squaredNorm() + (c - b).squaredNorm() + (a - c).squaredNorm();
@@ -57,7 +59,8 @@ class FidelityMover {
   FidelityMover(const TriMesh& input, const StitchOptions& options, double bound, double cell, const FinRimBound& rim,
                 bool incremental, StitchResult& result, std::vector<std::uint8_t>& is_feature,
                 std::vector<std::uint8_t> fixed)
-      : options_(options), bound_(bound), rim_(rim), incremental_(incremental), mesh_(result.mesh), result_(result),
+      : options_(options), bound_(bound), rim_(rim), incremental_(incremental), cheap_first_(incremental),
+        mesh_(result.mesh), result_(result),
         is_feature_(is_feature), fixed_(std::move(fixed)), input_soup_(to_soup(input)) {
     std::vector<std::uint32_t> all(input_soup_.triangles.size());
     std::iota(all.begin(), all.end(), 0U);
@@ -98,10 +101,11 @@ class FidelityMover {
     // Output nodes off the input: their closest input point (kept for unchanged vertices).
     vertex_distance_.resize(n_v, 0.0);
     vertex_target_.resize(n_v, Vec::Zero());
+    std::uint32_t input_hint = UINT32_MAX;
     for (std::size_t i = 0; i < n_v; ++i) {
       if (changed[i] == 0 || fixed_[i] != 0) continue;
       const Vec p = point(mesh_, TriMesh::VertexHandle(static_cast<int>(i)));
-      vertex_target_[i] = closest_input(p);
+      vertex_target_[i] = closest_input(p, input_hint);
       vertex_distance_[i] = (p - vertex_target_[i]).norm();
     }
     // dirty: the corners of the faces that changed or whose listed samples did.
@@ -118,9 +122,25 @@ class FidelityMover {
     near_distance_.resize(n_in, 0.0);
     std::vector<std::uint8_t> requery(n_in, full ? 1 : 0);
     if (!full) mark_near_changed_faces(out, face_changed, requery);
+    // The first sweep of incremental sweeps: a sample whose walk from the last sample's face
+    // (Morton order) ends on a face within the bound is within it (an upper bound: the
+    // sample is no candidate, whatever its exact distance); only the others are searched in
+    // the tree. The walk's face and distance stand for the nearest ones.
+    const bool walk_first = cheap_first_ && full;
     std::uint32_t hint = UINT32_MAX;
     for (const std::uint32_t i : probe_order_) {
       if (requery[i] == 0) continue;
+      if (walk_first && hint != UINT32_MAX) {
+        const auto w = walk_to(out, probes_[i], hint);
+        hint = w.face;
+        if (std::sqrt(w.squared_distance) <= bound_) {
+          near_face_[i] = w.face;
+          near_distance_[i] = std::sqrt(w.squared_distance);
+          ++n_walked_;
+          continue;
+        }
+      }
+      ++n_searched_;
       const auto c = out_tree.closest(probes_[i], hint);
       hint = c.face;
       const double d = std::sqrt(c.squared_distance);
@@ -150,6 +170,7 @@ class FidelityMover {
       Vec probe;  // the point whose distance the move must shrink (input or output side)
       bool input_side;
       std::uint32_t face = UINT32_MAX;  // input side: the nearest output face
+      std::uint32_t sample = UINT32_MAX;  // input side: the sample
     };
     std::vector<Candidate> candidates;
     for (std::size_t i = 0; i < n_v; ++i) {
@@ -172,7 +193,14 @@ class FidelityMover {
         const double d = (out.points[k] - q).squaredNorm();
         if (best < 0 || d < best_d) best = static_cast<int>(k), best_d = d;
       }
-      candidates.push_back({near_distance_[i], best, u, u, true, near_face_[i]});
+      candidates.push_back({near_distance_[i], best, u, u, true, near_face_[i], i});
+    }
+    if (record_only_) {
+      for (const Candidate& c : candidates) {
+        if (c.input_side) recorded_samples_.push_back({c.sample, c.distance});
+        else recorded_vertices_.push_back({static_cast<std::uint32_t>(c.vertex), c.distance});
+      }
+      return 0;
     }
     // Input samples by nearest output face (the local checks).
     face_start_.assign(out.triangles.size() + 1, 0);
@@ -221,6 +249,28 @@ class FidelityMover {
   }
 
  private:
+  // From face f, steps to the edge neighbour nearer to u while there is one (at most
+  // kWalkSteps): a face of the output and u's squared distance to it (an upper bound of
+  // u's distance to the output; computed as AabbTree::closest does).
+  quality_detail::AabbTree::Closest walk_to(const TriangleSoup& out, const Vec& u, std::uint32_t f) const {
+    auto to_face = [&](std::uint32_t g) {
+      const auto& t = out.triangles[g];
+      return (quality_detail::closest_point_on_triangle(u, out.points[t[0]], out.points[t[1]], out.points[t[2]]) - u)
+          .squaredNorm();
+    };
+    quality_detail::AabbTree::Closest best{to_face(f), f};
+    for (int step = 0; step < kWalkSteps; ++step) {
+      const std::uint32_t from = best.face;
+      for (auto g : mesh_.ff_range(TriMesh::FaceHandle(static_cast<int>(from)))) {
+        const auto gi = static_cast<std::uint32_t>(g.idx());
+        const double d = to_face(gi);
+        if (d < best.squared_distance || (d == best.squared_distance && gi < best.face)) best = {d, gi};
+      }
+      if (best.face == from) break;
+    }
+    return best;
+  }
+
   // The input samples in a uniform grid of cubic cells (kept for every sweep: the samples
   // do not move).
   void build_probe_grid(double cell) {
@@ -260,10 +310,14 @@ class FidelityMover {
   // (face_changed, its corners where they are now) may be as near to as their nearest one.
   void mark_near_changed_faces(const TriangleSoup& out, const std::vector<std::uint8_t>& face_changed,
                                std::vector<std::uint8_t>& requery) const {
-    double reach = 0.0;
-    for (std::size_t i = 0; i < probes_.size(); ++i) {
+    // Per sample its own radius: the grid is scanned within one cell of a changed face's
+    // box for the samples nearer than that to the output; the farther ones (few) are tested
+    // against every changed face (one far sample would make every face scan a large box).
+    const double reach = grid_cell_;
+    std::vector<std::uint32_t> far;
+    for (std::uint32_t i = 0; i < probes_.size(); ++i) {
       if (face_changed[near_face_[i]] != 0) requery[i] = 1;
-      reach = std::max(reach, near_distance_[i]);
+      if (near_distance_[i] > reach) far.push_back(i);
     }
     for (std::size_t f = 0; f < face_changed.size(); ++f) {
       if (face_changed[f] == 0) continue;
@@ -275,6 +329,7 @@ class FidelityMover {
         const double s = (u - u.cwiseMax(lo).cwiseMin(hi)).squaredNorm();
         if (s <= near_distance_[i] * near_distance_[i]) requery[i] = 1;
       };
+      for (const std::uint32_t i : far) test(i);
       const auto a = cell_of(lo - Vec::Constant(reach)), b = cell_of(hi + Vec::Constant(reach));
       const std::int64_t n_cells = (b[0] - a[0] + 1) * (b[1] - a[1] + 1) * (b[2] - a[2] + 1);
       if (n_cells > static_cast<std::int64_t>(grid_keys_.size())) {
@@ -305,24 +360,37 @@ class FidelityMover {
     return out;
   }
 
-  Vec closest_input(const Vec& p) const {
-    const auto c = input_tree_->closest(p, UINT32_MAX);
+  // p's closest input point; hint as for input_distance().
+  Vec closest_input(const Vec& p, std::uint32_t& hint) const {
+    const auto c = input_tree_->closest(p, hint);
+    hint = c.face;
     const auto& t = input_soup_.triangles[c.face];
     return quality_detail::closest_point_on_triangle(p, input_soup_.points[t[0]], input_soup_.points[t[1]],
                                                      input_soup_.points[t[2]]);
   }
 
-  double input_distance(const Vec& p) const { return std::sqrt(input_tree_->closest(p, UINT32_MAX).squared_distance); }
+  // Distance of p to the input; hint: an input face near p (UINT32_MAX: none), set to p's
+  // nearest face (coherent queries start there: the same answer, sooner).
+  double input_distance(const Vec& p, std::uint32_t& hint) const {
+    const auto c = input_tree_->closest(p, hint);
+    hint = c.face;
+    return std::sqrt(c.squared_distance);
+  }
+  double input_distance(const Vec& p) const {
+    std::uint32_t hint = UINT32_MAX;
+    return input_distance(p, hint);
+  }
 
   // Largest distance to the input of the ring's samples with the vertex at q.
   double ring_to_input(const Ring& ring, const Vec& q) const {
     double worst = 0.0;
+    std::uint32_t hint = UINT32_MAX;
     for (std::size_t k = 0; k < ring.faces.size(); ++k) {
       const auto p = corners_at(ring, k, q);
       for (int i = 0; i <= kSampleSteps; ++i) {
         for (int j = 0; i + j <= kSampleSteps; ++j) {
           const double s = double(i) / kSampleSteps, t = double(j) / kSampleSteps;
-          worst = std::max(worst, input_distance((1.0 - s - t) * p[0] + s * p[1] + t * p[2]));
+          worst = std::max(worst, input_distance((1.0 - s - t) * p[0] + s * p[1] + t * p[2], hint));
         }
       }
     }
@@ -591,10 +659,11 @@ class FidelityMover {
 
   double triangle_to_input(const std::array<Vec, 3>& p) const {
     double worst = 0.0;
+    std::uint32_t hint = UINT32_MAX;
     for (int i = 0; i <= kSampleSteps; ++i) {
       for (int j = 0; i + j <= kSampleSteps; ++j) {
         const double s = double(i) / kSampleSteps, t = double(j) / kSampleSteps;
-        worst = std::max(worst, input_distance((1.0 - s - t) * p[0] + s * p[1] + t * p[2]));
+        worst = std::max(worst, input_distance((1.0 - s - t) * p[0] + s * p[1] + t * p[2], hint));
       }
     }
     return worst;
@@ -602,12 +671,18 @@ class FidelityMover {
 
  public:
   std::size_t n_splits_ = 0;
+  // Input samples measured by the first sweep's walk alone, and searched in the tree.
+  std::size_t n_walked_ = 0, n_searched_ = 0;
+  // When set, a sweep only records its candidates (fidelity_candidates()).
+  bool record_only_ = false;
+  std::vector<std::pair<std::uint32_t, double>> recorded_samples_, recorded_vertices_;
 
  private:
   const StitchOptions& options_;
   double bound_;
   const FinRimBound& rim_;
   bool incremental_;
+  bool cheap_first_;
   bool first_sweep_ = true;
   // Vertices moved or made in this sweep (measured again in the next one).
   std::vector<int> changed_vertices_;
@@ -636,6 +711,26 @@ class FidelityMover {
 };
 
 }  // namespace
+
+FidelityCandidates fidelity_candidates(const TriMesh& input, const StitchOptions& options,
+                                       std::vector<std::uint8_t> is_feature, double reference_edge, StitchResult result,
+                                       bool walk) {
+  FidelityCandidates out;
+  const double bound = options.fidelity_distance_edges * reference_edge;
+  if (!(bound > 0.0) || input.n_faces() == 0 || result.mesh.n_faces() == 0) return out;
+  const FinRimBound rim;
+  FidelityMover mover(input, options, bound, reference_edge, rim, walk, result, is_feature,
+                      fixed_vertices(result.mesh, result.vertex_node, is_feature));
+  mover.record_only_ = true;
+  (void)mover.sweep();
+  out.samples = std::move(mover.recorded_samples_);
+  out.vertices = std::move(mover.recorded_vertices_);
+  std::sort(out.samples.begin(), out.samples.end());
+  std::sort(out.vertices.begin(), out.vertices.end());
+  out.n_walked = mover.n_walked_;
+  out.n_searched = mover.n_searched_;
+  return out;
+}
 
 FidelityResult move_toward_input(const TriMesh& input, const StitchOptions& options,
                                  std::vector<std::uint8_t>& is_feature, double reference_edge, const FinRimBound& rim,

@@ -699,8 +699,13 @@ StitchResult stitch_impl(const SurfaceMesh& surface, const TriMesh* input, const
   // Not on a label image's marching-cubes staircase (0/1 cells, occupancy scenes): its
   // truth is the smooth surface the fits follow, not the staircase (docs/stitch.md,
   // "Fidelity moves: where they apply").
+  // The test is mesh_surface()'s answer when it made it (a pass over the input's edges).
+  auto label_staircase = [&surface, input] {
+    return surface.input_label_staircase ? *surface.input_label_staircase
+                                         : surfmesh_detail::label_image_staircase(surfmesh_detail::lattice_edge_shares(*input));
+  };
   if (options.fidelity_distance_edges > 0.0 && input != nullptr && pairs.empty() && mesh.n_faces() > 0 &&
-      !surfmesh_detail::label_image_staircase(surfmesh_detail::lattice_edge_shares(*input))) {
+      !label_staircase()) {
     const stitch_detail::FidelityResult fidelity = stitch_detail::move_toward_input(
         *input, options, feature, surface.input_mean_edge, stitch_detail::fin_rim_bound(surface, options), result);
     report.n_fidelity_moves = fidelity.n_moved;

@@ -322,13 +322,33 @@ struct FidelityResult {
 //! grow. A moved vertex and its neighbours wait for the next sweep. A fin rim node (rim)
 //! moves only within its bound. When check_self_intersections, moves on triangles that
 //! cross others are put back (four rounds, then all of them). Nothing for a bound of 0 or an
-//! empty input. incremental: after the first sweep only the vertices and input samples near
-//! the last sweep's changes are measured again and only the candidates whose checks read a
-//! changed place are tried (the same result as false, which measures and tries everything
-//! in every sweep).
+//! empty input. incremental: the first sweep searches an input sample in the output's tree
+//! only when a walk over the output's faces from the last sample's face (Morton order) does
+//! not end on a face within the bound (the same candidates as a full search; the walk's face
+//! stands for the nearest one in the checks); after the first sweep only the vertices and
+//! input samples near the last sweep's changes are measured again and only the candidates
+//! whose checks read a changed place are tried. false measures and tries everything in
+//! every sweep.
 FidelityResult move_toward_input(const TriMesh& input, const StitchOptions& options,
                                  std::vector<std::uint8_t>& is_feature, double reference_edge, const FinRimBound& rim,
                                  StitchResult& result, bool incremental = true);
+
+//! The first sweep's candidates of move_toward_input() (tests and measurements).
+struct FidelityCandidates {
+  //! Input samples (index: the input's vertices, then per face its centroid and edge
+  //! midpoints) and output vertices farther than the bound, with their distances, by index.
+  std::vector<std::pair<std::uint32_t, double>> samples, vertices;
+  std::size_t n_walked = 0;    //!< samples the walk alone showed within the bound
+  std::size_t n_searched = 0;  //!< samples searched in the output's tree
+};
+
+//! The candidates move_toward_input()'s first sweep would try, without moving anything:
+//! walk = true is its incremental way (a sample is searched in the output's tree only when a
+//! walk over the output from the last sample's face does not end within the bound), false
+//! searches every sample.
+FidelityCandidates fidelity_candidates(const TriMesh& input, const StitchOptions& options,
+                                       std::vector<std::uint8_t> is_feature, double reference_edge, StitchResult result,
+                                       bool walk);
 
 //! The old index of every kept element after collect_garbage() (vertices, faces).
 struct GarbageMaps {

@@ -274,11 +274,10 @@ SurfaceMesh surfmesh_detail::mesh_surface(const TriMesh& input, const Segmentati
   const bool feature_sizing_gate = options.sizing.feature_size > 0.0 && !options.sizing.feature_size_everywhere;
   const bool detail_fit = options.fit.detail_spacing_edges > 0.0;
   const bool fin_rims = options.fin_rim_width > 0.0;
-  const LatticeShares lattice = shares != nullptr ? *shares
-                                : detail_fit || feature_sizing_gate || fin_rims || options.fit.flat_face_edges > 0.0 ||
-                                          options.small_patch_node_offset_edges > 0.0
-                                    ? lattice_edge_shares(input)
-                                    : LatticeShares{};
+  const bool lattice_tested = shares != nullptr || detail_fit || feature_sizing_gate || fin_rims ||
+                              options.fit.flat_face_edges > 0.0 || options.small_patch_node_offset_edges > 0.0;
+  const LatticeShares lattice = shares != nullptr ? *shares : lattice_tested ? lattice_edge_shares(input) : LatticeShares{};
+  if (lattice_tested) out.input_label_staircase = label_image_staircase(lattice);
   const bool marching_cubes = marching_cubes_lattice(lattice);
   SurfMeshOptions fit_options = options;
   if (marching_cubes) fit_options.fit.flat_face_edges = 0.0;

@@ -18,6 +18,7 @@
 #include <functional>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -388,6 +389,10 @@ struct SurfaceMesh {
   //! input is taken for a label image's marching-cubes staircase (docs/surfmesh.md "Detail
   //! fit: where it runs").
   bool detail_fit_skipped = false;
+  //! Whether the input is taken for a label image's marching-cubes staircase
+  //! (surfmesh_detail::label_image_staircase), when mesh_surface() tested it (empty: not
+  //! tested); the stitch's fidelity moves read it instead of testing the input again.
+  std::optional<bool> input_label_staircase;
 };
 
 //! Splits the patches whose fitted surface does not represent their input: every patch is

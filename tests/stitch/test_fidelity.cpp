@@ -187,6 +187,32 @@ TEST(StitchFidelitySlow, BoundedNodesStayWithinTheirBound) {
   EXPECT_GT(n_beyond_unbounded, 0u);
 }
 
+TEST(StitchFidelity, WalkingFirstSweepSelectsTheFullSearchsCandidates) {
+  // The brain, bounds of 0.3 and 0.5 mean edges: the first sweep that searches a sample in
+  // the output's tree only when its walk over the output ends farther than the bound picks
+  // exactly the candidates (samples and vertices, with their distances) of the sweep that
+  // searches every sample, and the walk alone settles most samples.
+  const TriMesh input = read_mesh(test::test_data("io/brainImageSmooth.vtk"));
+  const SurfaceMesh surface = mesh_surface(input, segment(input));
+  StitchOptions options;
+  const StitchResult plain = stitch(surface, input, options);
+  ASSERT_TRUE(plain.report.ok());
+  const std::size_t n_samples = input.n_vertices() + 4 * input.n_faces();
+  for (const double bound : {0.3, 0.5}) {
+    options.fidelity_distance_edges = bound;
+    const std::vector<std::uint8_t> feature = border_nodes(surface, plain);
+    const auto full = stitch_detail::fidelity_candidates(input, options, feature, surface.input_mean_edge, plain, false);
+    const auto walk = stitch_detail::fidelity_candidates(input, options, feature, surface.input_mean_edge, plain, true);
+    EXPECT_GT(full.samples.size(), 10u) << bound;
+    EXPECT_EQ(full.n_searched, n_samples);
+    EXPECT_EQ(walk.n_walked + walk.n_searched, n_samples);
+    EXPECT_GT(walk.n_walked, n_samples * 9 / 10) << bound;
+    EXPECT_EQ(walk.samples, full.samples) << bound;
+    EXPECT_EQ(walk.vertices, full.vertices) << bound;
+    for (const auto& [sample, distance] : full.samples) EXPECT_GT(distance, bound * surface.input_mean_edge);
+  }
+}
+
 TEST(StitchFidelity, LabelImageStaircaseIsLeftAsItWas) {
   // An occupancy (0/1) sphere's marching-cubes staircase: the moves would pull the output
   // onto the staircase, away from the smooth truth the band fits follow, so the stitch does
