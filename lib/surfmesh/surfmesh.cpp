@@ -143,6 +143,8 @@ void SizingOptions::validate() const {
   if (!(std::isfinite(feature_size) && feature_size >= 0.0))
     bad_option("sizing.feature_size must be finite and >= 0, got " + std::to_string(feature_size));
   if (!(std::isfinite(gradation) && gradation > 1.0)) bad_option("sizing.gradation must be > 1, got " + std::to_string(gradation));
+  if (!(std::isfinite(feature_gradation) && feature_gradation > 1.0))
+    bad_option("sizing.feature_gradation must be finite and > 1, got " + std::to_string(feature_gradation));
   if (!(border_lookahead >= 0.0 && border_lookahead <= 2.0))
     bad_option("sizing.border_lookahead must be in [0, 2], got " + std::to_string(border_lookahead));
 }
@@ -301,7 +303,7 @@ SurfaceMesh surfmesh_detail::mesh_surface(const TriMesh& input, const Segmentati
   // surfaces, not for a few thin parts.
   if (options.sizing.feature_size > 0.0 && (options.sizing.feature_size_everywhere || !marching_cubes)) {
     FeatureSizing feature = feature_sizing(input, segmentation, out.curve_is_feature, size_at, options.sizing.feature_size,
-                                           options.sizing.min_size_fraction * h, options.sizing.gradation,
+                                           options.sizing.min_size_fraction * h, options.sizing.feature_gradation,
                                            options.sizing.feature_size_everywhere ? 0.0 : kFeatureSizingMinAreaShare);
     if (feature.size_at) {
       out.feature_sizing_applied = true;

@@ -66,6 +66,14 @@ struct SizingOptions {
   //! Apply feature sizing (feature_size > 0) to every input, also marching-cubes surfaces and
   //! inputs where it limits less than 1% of the area. Default false.
   bool feature_size_everywhere = false;
+  //! Gradation of feature sizing's sizes along the input's edges: h_v <= h_w + (this - 1)
+  //! |x_v - x_w| (the `gradation` below stays for adaptive sizing and the fronts). A gentler
+  //! rise than 1.5 from the narrow crease-bounded patches into their wide neighbours: cheese's
+  //! hole walls (patches of 9-50 input faces) were squeezed at sizes rising 50% per unit
+  //! length into the block's faces; at 1.25 obtuse 3.55 -> 2.78%, volume +0.52 -> +0.42%, at
+  //! 6% more triangles, fewer obtuse triangles than a finer feature_size at the same count
+  //! (docs/surfmesh.md "Feature sizing: a gentler gradation"). Must be > 1. Default 1.25.
+  double feature_gradation = 1.25;
   //! Optional user sizing h(x) at world points (length units, finite, > 0); when set it
   //! replaces the uniform size (adaptive still applies on top).
   std::function<double(const Eigen::Vector3d&)> callback;

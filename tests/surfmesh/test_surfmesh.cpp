@@ -1097,6 +1097,87 @@ TEST(Surfmesh, FeatureSizingOnlyWhereItHelps) {
   EXPECT_FALSE(surfmesh_detail::feature_sizing(rotor, seg, features, base, 1.0, 0.2 * h, 1.5, 0.5).size_at);
 }
 
+// A cuboid split along the given grid lines per axis (x, y, z), two triangles per cell of
+// each face, outward oriented.
+TriMesh grid_cuboid(const std::array<std::vector<double>, 3>& lines) {
+  TriangleSoup soup;
+  for (int a = 0; a < 3; ++a)
+    for (const bool high : {false, true}) {
+      const int u = (a + 1) % 3, v = (a + 2) % 3;
+      const auto& lu = lines[static_cast<std::size_t>(u)];
+      const auto& lv = lines[static_cast<std::size_t>(v)];
+      const auto point = [&](std::size_t i, std::size_t j) {
+        Eigen::Vector3d x;
+        x[a] = high ? lines[static_cast<std::size_t>(a)].back() : lines[static_cast<std::size_t>(a)].front();
+        x[u] = lu[i];
+        x[v] = lv[j];
+        soup.points.push_back(x);
+        return static_cast<std::uint32_t>(soup.points.size() - 1);
+      };
+      for (std::size_t i = 0; i + 1 < lu.size(); ++i)
+        for (std::size_t j = 0; j + 1 < lv.size(); ++j) {
+          const std::uint32_t p00 = point(i, j), p10 = point(i + 1, j), p11 = point(i + 1, j + 1), p01 = point(i, j + 1);
+          if (high) {
+            soup.triangles.push_back({p00, p10, p11});
+            soup.triangles.push_back({p00, p11, p01});
+          } else {
+            soup.triangles.push_back({p00, p11, p10});
+            soup.triangles.push_back({p00, p01, p11});
+          }
+        }
+    }
+  return prepare_mesh(soup).mesh;
+}
+
+// Feature sizing's gradation (SizingOptions::feature_gradation), on a hand-computed case: a
+// plate 1 x 1 x 0.1 whose four sides are strips 0.1 wide between 90-deg creases (area 0.1,
+// perimeter 2.2: width 2 area / perimeter = 1/11) and whose top and bottom (width 0.5) are
+// wider than the uniform size 0.3. The sides' vertices (the rims too) get 1/11; a vertex of
+// the top at distance d from the nearest rim vertex along the grid's edges gets
+// min(0.3, 1/11 + (g - 1) d). The grid lines are irregular (no lattice).
+TEST(Surfmesh, FeatureSizesGrowFromNarrowFacesAtTheirGradation) {
+  const std::vector<double> xy{0.0, 0.09, 0.21, 0.3, 0.42, 0.5, 0.61, 0.7, 0.79, 0.9, 1.0};
+  const TriMesh plate = grid_cuboid({xy, xy, std::vector<double>{0.0, 0.1}});
+  const Segmentation seg = segment(plate);
+  ASSERT_EQ(seg.patches.size(), 6u);
+  const std::vector<std::uint8_t> features = surfmesh_detail::feature_curves(plate, seg, 80.0);
+  const double h = 0.3;
+  const surfmesh_detail::SizeAt base = [h](const Eigen::Vector3d&) { return h; };
+  const double strip = 1.0 / 11.0;
+  for (const double g : {1.25, 1.5}) {
+    const auto sizing = surfmesh_detail::feature_sizing(plate, seg, features, base, 1.0, 0.2 * h, g,
+                                                        surfmesh_detail::kFeatureSizingMinAreaShare);
+    ASSERT_TRUE(sizing.size_at);
+    EXPECT_NEAR(sizing.smallest, strip, 1e-12);
+    EXPECT_NEAR(sizing.size_at(Eigen::Vector3d(0.5, 0.0, 0.1)), strip, 1e-12);   // on a rim
+    EXPECT_NEAR(sizing.size_at(Eigen::Vector3d(0.0, 0.42, 0.05)), strip, 1e-12);  // inside a side strip
+    EXPECT_NEAR(sizing.size_at(Eigen::Vector3d(0.5, 0.09, 0.1)), strip + (g - 1.0) * 0.09, 1e-12);
+    EXPECT_NEAR(sizing.size_at(Eigen::Vector3d(0.42, 0.21, 0.0)), strip + (g - 1.0) * 0.21, 1e-12);
+    EXPECT_NEAR(sizing.size_at(Eigen::Vector3d(0.5, 0.5, 0.1)), std::min(h, strip + (g - 1.0) * 0.5), 1e-12);
+  }
+  // mesh_surface grades feature sizing's sizes with the option (not `gradation`): the gentler
+  // rise puts more nodes on the plate's top and bottom.
+  std::size_t n_nodes[2] = {0, 0};
+  for (int i = 0; i < 2; ++i) {
+    SurfMeshOptions o;
+    o.sizing.size = h;
+    o.sizing.feature_gradation = i == 0 ? 1.25 : 1.5;
+    o.threads = 1;
+    const SurfaceMesh surface = mesh_surface(plate, seg, o);
+    EXPECT_TRUE(surface.feature_sizing_applied);
+    n_nodes[i] = surface.nodes.size();
+  }
+  EXPECT_GT(n_nodes[0], n_nodes[1]);
+  // The option is validated: a gradation must let sizes grow.
+  SurfMeshOptions options;
+  options.sizing.feature_gradation = 1.0;
+  EXPECT_THROW(options.validate(), InvalidInput);
+  options.sizing.feature_gradation = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THROW(options.validate(), InvalidInput);
+  options.sizing.feature_gradation = 1.25;
+  EXPECT_NO_THROW(options.validate());
+}
+
 TEST(Surfmesh, HolePointInsideClockwiseLoop) {
   // An L-shaped clockwise loop: the point must be strictly inside.
   const std::vector<Eigen::Vector2d> loop{{0, 0}, {0, 2}, {2, 2}, {2, 1}, {1, 1}, {1, 0}};

@@ -49,6 +49,7 @@ struct RemeshArgs {
   double feature_size = SizingOptions{}.feature_size;
   bool feature_size_everywhere = false;
   double border_lookahead = SizingOptions{}.border_lookahead;
+  double feature_gradation = SizingOptions{}.feature_gradation;
   std::optional<int> crossing_repair_rounds;
   std::optional<double> narrow_merge;
   std::optional<int> tiny_merge;
@@ -123,6 +124,7 @@ void run_remesh(RemeshArgs& args) {
   options.surfmesh.sizing.feature_size = args.feature_size;
   options.surfmesh.sizing.feature_size_everywhere = args.feature_size_everywhere;
   options.surfmesh.sizing.border_lookahead = args.border_lookahead;
+  options.surfmesh.sizing.feature_gradation = args.feature_gradation;
   if (args.crossing_repair_rounds) options.crossing_repair_rounds = *args.crossing_repair_rounds;
   if (args.narrow_merge) options.narrow_patch_merge = *args.narrow_merge;
   if (args.tiny_merge) options.tiny_patch_faces = *args.tiny_merge;
@@ -261,6 +263,9 @@ void add_remesh_command(CLI::App& app) {
                   "docs/surfmesh.md \"Feature sizing\")");
   cmd->add_flag("--feature-size-everywhere", args->feature_size_everywhere,
                 "Feature sizing also on marching-cubes surfaces and where it limits under 1% of the area");
+  cmd->add_option("--feature-gradation", args->feature_gradation,
+                  "Feature sizing's sizes grow by at most this - 1 per unit length away from the narrow patches "
+                  "(> 1; default 1.25; docs/surfmesh.md \"Feature sizing: a gentler gradation\")");
   cmd->add_option("--border-lookahead", args->border_lookahead,
                   "Where the sizes vary (feature or adaptive sizing), discretise the borders with the smallest size "
                   "within this fraction of the size around each point (default 0.35; 0 = the size on the border; "
