@@ -10,6 +10,7 @@
 #include <numeric>
 #include <optional>
 #include <string>
+#include <system_error>
 #include <thread>
 
 #include <Eigen/Geometry>
@@ -150,20 +151,11 @@ struct EdgeEntry {
   std::uint32_t forward;  // 1 if the face traverses lo -> hi
 };
 
-TopologyReport compute_topology(const TriangleSoup& soup, std::vector<EdgeEntry>& edges,
-                                std::vector<double>& edge_lengths) {
-  TopologyReport r;
+// The topology's counts that read each face alone: degenerate faces and duplicate faces
+// (the same three vertex ids in any order), into r.
+void count_degenerate_and_duplicate_faces(const TriangleSoup& soup, TopologyReport& r) {
   const std::size_t n_points = soup.points.size();
   const std::size_t n_faces = soup.triangles.size();
-  r.n_faces = n_faces;
-
-  std::vector<char> referenced(n_points, 0);
-  for (const auto& t : soup.triangles) {
-    for (auto v : t) referenced[v] = 1;
-  }
-  r.n_vertices = static_cast<std::size_t>(std::count(referenced.begin(), referenced.end(), 1));
-  r.n_unreferenced_points = n_points - r.n_vertices;
-
   // Degenerate faces.
   const double diagonal = bounding_box(soup).diagonal();
   const double area_floor = tolerance::kDegenerateAreaRelative * diagonal * diagonal;
@@ -177,18 +169,33 @@ TopologyReport compute_topology(const TriangleSoup& soup, std::vector<EdgeEntry>
   }
 
   // Duplicate faces: the same three vertex ids in any order.
-  {
-    std::vector<std::pair<std::array<std::uint32_t, 3>, std::uint32_t>> keys(n_faces);
-    for (std::size_t f = 0; f < n_faces; ++f) {
-      auto key = soup.triangles[f];
-      std::sort(key.begin(), key.end());
-      keys[f] = {key, static_cast<std::uint32_t>(f)};
-    }
-    quality_detail::bucket_sort(keys, n_points, [](const auto& key) { return key.first[0]; }, std::less<>());
-    for (std::size_t i = 1; i < keys.size(); ++i) {
-      if (keys[i].first == keys[i - 1].first) ++r.n_duplicate_faces;
-    }
+  std::vector<std::pair<std::array<std::uint32_t, 3>, std::uint32_t>> keys(n_faces);
+  for (std::size_t f = 0; f < n_faces; ++f) {
+    auto key = soup.triangles[f];
+    std::sort(key.begin(), key.end());
+    keys[f] = {key, static_cast<std::uint32_t>(f)};
   }
+  quality_detail::bucket_sort(keys, n_points, [](const auto& key) { return key.first[0]; }, std::less<>());
+  for (std::size_t i = 1; i < keys.size(); ++i) {
+    if (keys[i].first == keys[i - 1].first) ++r.n_duplicate_faces;
+  }
+}
+
+// The topology but for count_degenerate_and_duplicate_faces()'s counts (left 0): the caller
+// adds them.
+TopologyReport compute_topology(const TriangleSoup& soup, std::vector<EdgeEntry>& edges,
+                                std::vector<double>& edge_lengths) {
+  TopologyReport r;
+  const std::size_t n_points = soup.points.size();
+  const std::size_t n_faces = soup.triangles.size();
+  r.n_faces = n_faces;
+
+  std::vector<char> referenced(n_points, 0);
+  for (const auto& t : soup.triangles) {
+    for (auto v : t) referenced[v] = 1;
+  }
+  r.n_vertices = static_cast<std::size_t>(std::count(referenced.begin(), referenced.end(), 1));
+  r.n_unreferenced_points = n_points - r.n_vertices;
 
   // Edges of the faces that do not repeat an index.
   edges.clear();
@@ -335,7 +342,9 @@ bool may_change_angle_extremes(const Eigen::Vector3d& a, const Eigen::Vector3d& 
   return !(cos_largest > cos_max_bound + kMargin);
 }
 
-QualityReport compute_quality(const TriangleSoup& soup, const std::vector<double>& edge_lengths) {
+// The quality figures of the triangles (alpha, angles, obtuse and small-angle shares); the
+// edge-length ones are left to add_edge_quality().
+QualityReport compute_triangle_quality(const TriangleSoup& soup) {
   QualityReport q;
   const std::size_t n = soup.triangles.size();
   constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
@@ -378,6 +387,14 @@ QualityReport compute_quality(const TriangleSoup& soup, const std::vector<double
   q.max_angle_deg = max_angle;
   q.obtuse_fraction = static_cast<double>(n_obtuse) / static_cast<double>(n);
   q.small_angle_fraction = static_cast<double>(n_small) / static_cast<double>(n);
+  return q;
+}
+
+// compute_triangle_quality()'s q completed with the edge-length figures (nothing for a soup
+// without triangles: all NaN already).
+void add_edge_quality(const TriangleSoup& soup, const std::vector<double>& edge_lengths, QualityReport& q) {
+  constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+  if (soup.triangles.empty()) return;
   if (edge_lengths.empty()) {
     q.edge_length_mean = q.edge_length_min = q.edge_length_max = q.edge_length_stddev = kNaN;
   } else {
@@ -394,7 +411,6 @@ QualityReport compute_quality(const TriangleSoup& soup, const std::vector<double
     for (double l : edge_lengths) var += (l - q.edge_length_mean) * (l - q.edge_length_mean);
     q.edge_length_stddev = std::sqrt(var / static_cast<double>(edge_lengths.size()));
   }
-  return q;
 }
 
 }  // namespace
@@ -429,11 +445,50 @@ MeshReport report_with(const TriangleSoup& soup, const ReportOptions& options, s
     });
   }
   try {
+    // The counts that read each face alone (degenerate and duplicate faces) and the
+    // triangles' quality figures; with a thread to spare (two or more threads and no
+    // self-intersection count, three or more with it) on another thread while this one
+    // computes the edges' topology. The same figures either way.
+    TopologyReport face_counts;
+    QualityReport quality;
+    auto face_part = [&] {
+      count_degenerate_and_duplicate_faces(soup, face_counts);
+      quality = compute_triangle_quality(soup);
+    };
+    std::exception_ptr face_error;
+    std::thread face_thread;
+    if (options.n_threads >= (options.self_intersections ? 3U : 2U)) {
+      try {
+        face_thread = std::thread([&] {
+          try {
+            face_part();
+          } catch (...) {
+            face_error = std::current_exception();
+          }
+        });
+      } catch (const std::system_error&) {
+        // No thread to be had: this one makes the face part below.
+      }
+    }
     std::vector<EdgeEntry> edges;
     std::vector<double> edge_lengths;
-    report.topology = compute_topology(soup, edges, edge_lengths);
+    try {
+      report.topology = compute_topology(soup, edges, edge_lengths);
+    } catch (...) {
+      if (face_thread.joinable()) face_thread.join();
+      throw;
+    }
     edges = {};
-    report.quality = compute_quality(soup, edge_lengths);
+    if (face_thread.joinable()) {
+      face_thread.join();
+      if (face_error) std::rethrow_exception(face_error);
+    } else {
+      face_part();
+    }
+    report.topology.n_degenerate_faces = face_counts.n_degenerate_faces;
+    report.topology.n_duplicate_faces = face_counts.n_duplicate_faces;
+    add_edge_quality(soup, edge_lengths, quality);
+    report.quality = quality;
     report_progress(options.progress, "topology", 1.0);
     if (options.self_intersections) report_progress(options.progress, "self-intersections", 0.0);
   } catch (...) {

@@ -87,22 +87,15 @@ class AngleRepair {
   AngleRepair(const AngleRepair&) = delete;
   AngleRepair& operator=(const AngleRepair&) = delete;
 
-  // Whether some triangle has no feature node and an angle below the bound.
-  bool any_small() const {
-    double s = 0.0;
-    for (auto f : mesh_.faces()) {
-      if (is_small_away(f, s)) return true;
-    }
-    return false;
+  // The triangles below the bound with no feature node (not deleted), (sine, face index) in
+  // face order: the whole-mesh scan, on options_.n_threads threads (select_in_order).
+  std::vector<std::pair<double, int>> small_faces() const {
+    return small_away_faces(mesh_, result_.vertex_node, is_feature_, sin_bound_, options_.n_threads);
   }
 
-  // One sweep over the triangles below the bound, worst first. Returns the changes made.
-  std::size_t sweep() {
-    std::vector<std::pair<double, int>> bad;
-    for (auto f : mesh_.faces()) {
-      double s = 0.0;
-      if (is_small_away(f, s)) bad.emplace_back(s, f.idx());
-    }
+  // One sweep over the triangles below the bound (bad: small_faces() of the mesh now),
+  // worst first. Returns the changes made.
+  std::size_t sweep(std::vector<std::pair<double, int>> bad) {
     std::sort(bad.begin(), bad.end());
     std::size_t n_changes = 0;
     for (const auto& [unused, index] : bad) {
@@ -669,6 +662,30 @@ Vec push_away(const TriMesh& mesh, TriMesh::VertexHandle v, TriMesh::FaceHandle 
   return q;
 }
 
+std::vector<std::pair<double, int>> small_away_faces(const TriMesh& mesh, const std::vector<int>& vertex_node,
+                                                     const std::vector<std::uint8_t>& is_feature, double sin_bound,
+                                                     unsigned n_threads, std::size_t chunk) {
+  const bool has_status = mesh.has_face_status();
+  return select_in_order<std::pair<double, int>>(
+      mesh.n_faces(), n_threads, chunk, [&](std::size_t i, std::pair<double, int>& out) {
+        const TriMesh::FaceHandle f(static_cast<int>(i));
+        if (has_status && mesh.status(f).deleted()) return false;
+        // The corners as the face-vertex circulator gives them (the sine's rounding depends
+        // on their order).
+        std::array<Vec, 3> p;
+        auto h = mesh.halfedge_handle(f);
+        for (std::size_t k = 0; k < 3; ++k, h = mesh.next_halfedge_handle(h)) {
+          const auto v = mesh.to_vertex_handle(h);
+          if (is_feature[static_cast<std::size_t>(vertex_node[static_cast<std::size_t>(v.idx())])] != 0) return false;
+          p[k] = point(mesh, v);
+        }
+        const double s = smallest_angle_sine(p[0], p[1], p[2]);
+        if (!(s < sin_bound)) return false;
+        out = {s, f.idx()};
+        return true;
+      });
+}
+
 bool make_angle_changes(StitchResult& result, std::span<const AngleChange> changes,
                         std::vector<TriMesh::VertexHandle>* touched) {
   TriMesh& mesh = result.mesh;
@@ -726,9 +743,15 @@ AngleRepairResult repair_small_angles(const SurfaceMesh& surface, const StitchOp
       kMaxCollapseOffsetEdges * (surface.input_mean_edge > 0.0 ? surface.input_mean_edge : mean_edge_length(result.mesh));
   // The mesh to go back to when a change crosses another triangle (only when the checks run).
   std::optional<StitchResult> before;
+  // The first sweep's triangles: every check round starts from the same mesh (the crossing
+  // check puts it back as it was), so they are scanned once.
+  std::vector<std::pair<double, int>> first_bad;
   for (int check = 0; check < kCheckRounds; ++check) {
     AngleRepair repair(surface, options, is_feature, frozen, result);
-    if (check == 0 && !repair.any_small()) return out;
+    if (check == 0) {
+      first_bad = repair.small_faces();
+      if (first_bad.empty()) return out;
+    }
     if (!before && options.check_self_intersections) {
       before.emplace();
       before->mesh = result.mesh;
@@ -736,7 +759,7 @@ AngleRepairResult repair_small_angles(const SurfaceMesh& surface, const StitchOp
       before->vertex_node = result.vertex_node;
     }
     for (int round = 0; round < options.angle_repair_rounds; ++round) {
-      if (repair.sweep() == 0) break;
+      if (repair.sweep(round == 0 ? first_bad : repair.small_faces()) == 0) break;
     }
     repair.collect_garbage();
     if (repair.n_flips_ + repair.n_collapses_ + repair.n_moves_ == 0) return out;

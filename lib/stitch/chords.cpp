@@ -32,22 +32,27 @@ std::vector<std::uint8_t> fixed_vertices(const TriMesh& mesh, const std::vector<
 }
 
 std::size_t compensate_chords(TriMesh& mesh, const std::vector<int>& vertex_node, const std::vector<std::uint8_t>& is_feature,
-                              double strength, double reference_edge) {
+                              double strength, double reference_edge, unsigned n_threads) {
   if (!(strength > 0.0) || mesh.n_faces() == 0) return 0;
   const std::size_t nv = mesh.n_vertices();
   std::vector<Eigen::Vector3d> point = vertex_points(mesh);
   const std::vector<std::uint8_t> fixed = fixed_vertices(mesh, vertex_node, is_feature);
-  // Area-weighted vertex normals (the sum of the incident triangles' area vectors).
+  // Area-weighted vertex normals (the sum of the incident triangles' area vectors). Each
+  // face's corners and area vector on n_threads threads; the sums in face order here.
+  constexpr std::size_t kFaceChunk = 8192;
   std::vector<Eigen::Vector3d> normal(nv, Eigen::Vector3d::Zero());
   std::vector<std::array<int, 3>> corners(mesh.n_faces());
   std::vector<Eigen::Vector3d> area_vector(mesh.n_faces());
-  for (auto f : mesh.faces()) {
-    auto& c = corners[static_cast<std::size_t>(f.idx())];
-    int k = 0;
-    for (auto v : mesh.fv_range(f)) c[static_cast<std::size_t>(k++)] = v.idx();
-    const Eigen::Vector3d n = (point[c[1]] - point[c[0]]).cross(point[c[2]] - point[c[0]]);
-    area_vector[static_cast<std::size_t>(f.idx())] = n;
-    for (const int v : c) normal[static_cast<std::size_t>(v)] += n;
+  parallel::for_chunks(corners.size(), n_threads, kFaceChunk, [&](std::size_t begin, std::size_t end, unsigned) {
+    for (std::size_t fi = begin; fi < end; ++fi) {
+      auto& c = corners[fi];
+      auto h = mesh.halfedge_handle(TriMesh::FaceHandle(static_cast<int>(fi)));
+      for (std::size_t k = 0; k < 3; ++k, h = mesh.next_halfedge_handle(h)) c[k] = mesh.to_vertex_handle(h).idx();
+      area_vector[fi] = (point[c[1]] - point[c[0]]).cross(point[c[2]] - point[c[0]]);
+    }
+  });
+  for (std::size_t fi = 0; fi < corners.size(); ++fi) {
+    for (const int v : corners[fi]) normal[static_cast<std::size_t>(v)] += area_vector[fi];
   }
   for (auto& n : normal) {
     const double l = n.norm();
@@ -61,22 +66,41 @@ std::size_t compensate_chords(TriMesh& mesh, const std::vector<int>& vertex_node
   // triangle's own add nothing.
   constexpr double kMaxTurnDeg = 30.0;
   const double min_dot = std::cos(kMaxTurnDeg * std::numbers::pi / 180.0);
+  // Per face (on n_threads threads): twice its area, its gap, the sum of its squared edges
+  // and whether it counts; spread onto the corners in face order below.
+  struct FaceGap {
+    double twice_area = 0.0, gap = 0.0, sum_sq = 0.0;
+    bool counts = false;
+  };
+  std::vector<FaceGap> face_gap(corners.size());
+  parallel::for_chunks(corners.size(), n_threads, kFaceChunk, [&](std::size_t begin, std::size_t end, unsigned) {
+    for (std::size_t f = begin; f < end; ++f) {
+      const auto& c = corners[f];
+      FaceGap& g = face_gap[f];
+      g.twice_area = area_vector[f].norm();
+      if (!(g.twice_area > 0.0)) continue;
+      const Eigen::Vector3d n = area_vector[f] / g.twice_area;
+      bool counts = true;
+      double gap = 0.0, sum_sq = 0.0;
+      for (int k = 0; k < 3; ++k) {
+        const auto i = static_cast<std::size_t>(c[k]), j = static_cast<std::size_t>(c[(k + 1) % 3]);
+        counts = counts && fixed[i] == 0 && normal[i].dot(n) >= min_dot;
+        gap += (normal[j] - normal[i]).dot(point[j] - point[i]);
+        sum_sq += (point[j] - point[i]).squaredNorm();
+      }
+      // The input's own chords (edges of reference_edge) are not compensated.
+      g.gap = gap * (std::max(0.0, 1.0 - 3.0 * reference_edge * reference_edge / sum_sq) / 24.0);
+      g.sum_sq = sum_sq;
+      g.counts = counts;
+    }
+  });
   std::vector<double> weighted_gap(nv, 0.0), area(nv, 0.0), edge_sq(nv, 0.0);
   for (std::size_t f = 0; f < corners.size(); ++f) {
     const auto& c = corners[f];
-    const double twice_area = area_vector[f].norm();
+    const double twice_area = face_gap[f].twice_area;
     if (!(twice_area > 0.0)) continue;
-    const Eigen::Vector3d n = area_vector[f] / twice_area;
-    bool counts = true;
-    double gap = 0.0, sum_sq = 0.0;
-    for (int k = 0; k < 3; ++k) {
-      const auto i = static_cast<std::size_t>(c[k]), j = static_cast<std::size_t>(c[(k + 1) % 3]);
-      counts = counts && fixed[i] == 0 && normal[i].dot(n) >= min_dot;
-      gap += (normal[j] - normal[i]).dot(point[j] - point[i]);
-      sum_sq += (point[j] - point[i]).squaredNorm();
-    }
-    // The input's own chords (edges of reference_edge) are not compensated.
-    gap *= std::max(0.0, 1.0 - 3.0 * reference_edge * reference_edge / sum_sq) / 24.0;
+    const double gap = face_gap[f].gap, sum_sq = face_gap[f].sum_sq;
+    const bool counts = face_gap[f].counts;
     for (const int v : c) {
       const auto i = static_cast<std::size_t>(v);
       area[i] += twice_area;

@@ -426,19 +426,29 @@ class Optimiser {
                               point(mesh_, mesh_.to_vertex_handle(mesh_.next_halfedge_handle(h))));
   }
 
-  // is_obtuse() of every face, in face order.
+  // is_obtuse() of every face, in face order (0 for a deleted face): the faces on
+  // options_.n_threads threads, each writing its own entry.
   std::vector<std::uint8_t> obtuse_faces() const {
+    constexpr std::size_t kFaceChunk = 8192;
     std::vector<std::uint8_t> obtuse(mesh_.n_faces(), 0);
-    for (auto f : mesh_.faces()) obtuse[static_cast<std::size_t>(f.idx())] = is_obtuse(f) ? 1 : 0;
+    const bool has_status = mesh_.has_face_status();
+    parallel::for_chunks(obtuse.size(), options_.n_threads, kFaceChunk, [&](std::size_t begin, std::size_t end, unsigned) {
+      for (std::size_t i = begin; i < end; ++i) {
+        const TriMesh::FaceHandle f(static_cast<int>(i));
+        if (has_status && mesh_.status(f).deleted()) continue;
+        obtuse[i] = is_obtuse(f) ? 1 : 0;
+      }
+    });
     return obtuse;
   }
 
   // 1 for every vertex of an obtuse face, in vertex order.
   std::vector<std::uint8_t> obtuse_face_vertices() const {
+    const std::vector<std::uint8_t> obtuse = obtuse_faces();
     std::vector<std::uint8_t> marked(mesh_.n_vertices(), 0);
-    for (auto f : mesh_.faces()) {
-      if (!is_obtuse(f)) continue;
-      for (auto v : mesh_.fv_range(f)) marked[static_cast<std::size_t>(v.idx())] = 1;
+    for (std::size_t i = 0; i < obtuse.size(); ++i) {
+      if (obtuse[i] == 0) continue;
+      for (auto v : mesh_.fv_range(TriMesh::FaceHandle(static_cast<int>(i)))) marked[static_cast<std::size_t>(v.idx())] = 1;
     }
     return marked;
   }

@@ -616,7 +616,8 @@ StitchResult stitch_impl(const SurfaceMesh& surface, const TriMesh* input, const
     assembled_patch = result.face_patch;
     stitch_detail::optimise(surface, options, feature, result, report);
     report.n_chord_compensation_moves = stitch_detail::compensate_chords(mesh, result.vertex_node, feature,
-                                                                         options.chord_compensation, surface.input_mean_edge);
+                                                                         options.chord_compensation, surface.input_mean_edge,
+                                                                         options.n_threads);
     // compensate_volume()'s gate, when taken on the helper thread (get() ends the future).
     const bool gate_known = input_on_lattice.valid();
     const bool gated = gate_known && input_on_lattice.get();

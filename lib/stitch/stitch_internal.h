@@ -12,6 +12,7 @@
 
 #include <Eigen/Geometry>
 
+#include "nurbsfront/core/parallel.h"
 #include "nurbsfront/stitch/stitch.h"
 
 namespace nurbsfront::stitch_detail {
@@ -75,13 +76,46 @@ void replace_pairs(std::vector<std::array<std::uint32_t, 2>>& pairs, IsChanged i
   pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
 }
 
+//! The values keep(i, value) sets for the indices i in [0, n) where it returns true, in index
+//! order: keep is called once per index on up to n_threads threads (parallel::for_chunks,
+//! chunks of `chunk` indices), each chunk's values kept in order and the chunks joined in
+//! order, so the list is the serial loop's at every thread count. keep only reads shared
+//! state. For the whole-mesh scans of the stitch's serial stages (their candidate lists).
+template <class T, class Keep>
+std::vector<T> select_in_order(std::size_t n, unsigned n_threads, std::size_t chunk, const Keep& keep) {
+  std::vector<T> out;
+  if (n_threads <= 1 || n <= chunk) {
+    T value{};
+    for (std::size_t i = 0; i < n; ++i) {
+      if (keep(i, value)) out.push_back(value);
+    }
+    return out;
+  }
+  std::vector<std::vector<T>> parts((n + chunk - 1) / chunk);
+  parallel::for_chunks(n, n_threads, chunk, [&](std::size_t begin, std::size_t end, unsigned) {
+    std::vector<T>& part = parts[begin / chunk];
+    T value{};
+    for (std::size_t i = begin; i < end; ++i) {
+      if (keep(i, value)) part.push_back(value);
+    }
+  });
+  std::size_t total = 0;
+  for (const auto& part : parts) total += part.size();
+  out.reserve(total);
+  for (const auto& part : parts) out.insert(out.end(), part.begin(), part.end());
+  return out;
+}
+
 //! The sine of the smallest interior angle of triangle (a, b, c): twice the area over the
 //! product of the two longest edges (the smallest angle is at most 60 deg, so the sine orders
 //! it); 0 for a degenerate triangle.
 inline double smallest_angle_sine(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
-  std::array<double, 3> l2{(b - a).squaredNorm(), (c - b).squaredNorm(), (a - c).squaredNorm()};
-  std::sort(l2.begin(), l2.end());
-  const double product = std::sqrt(l2[1] * l2[2]);
+  const double x = (b - a).squaredNorm(), y = (c - b).squaredNorm(), z = (a - c).squaredNorm();
+  // The middle and the largest of the three (what sorting them gives, without the sort's
+  // call: the same values, so the same sine bit for bit).
+  const double largest = std::max(std::max(x, y), z);
+  const double middle = std::max(std::min(x, y), std::min(std::max(x, y), z));
+  const double product = std::sqrt(middle * largest);
   return product > 0.0 ? (b - a).cross(c - a).norm() / product : 0.0;
 }
 
@@ -126,6 +160,15 @@ struct AngleChange {
   TriMesh::VertexHandle from, to;
   Eigen::Vector3d q = Eigen::Vector3d::Zero();
 };
+
+//! The faces of mesh (deleted ones left out) with no feature node (is_feature, per node;
+//! vertex_node maps vertices to nodes) whose smallest_angle_sine (corners in the
+//! face-vertex circulator's order) is below sin_bound, as (sine, face index) in face order;
+//! the scan on n_threads threads (select_in_order, `chunk` faces a task), the same list at
+//! every count. The small-angle repair's candidates.
+std::vector<std::pair<double, int>> small_away_faces(const TriMesh& mesh, const std::vector<int>& vertex_node,
+                                                     const std::vector<std::uint8_t>& is_feature, double sin_bound,
+                                                     unsigned n_threads, std::size_t chunk = 8192);
 
 //! Makes `changes` on result.mesh in order, all or none: when an edge of one is gone or
 //! OpenMesh refuses it (is_flip_ok, is_collapse_ok), the changes made before it are undone
@@ -179,9 +222,10 @@ AngleRepairResult repair_small_angles(const SurfaceMesh& surface, const StitchOp
 //! StitchOptions::chord_compensation: moves the nodes that are no feature node (is_feature,
 //! per node; vertex_node maps vertices to nodes) nor on the boundary along their normals so
 //! that the triangles are on average on the surface through their corners, less the chords
-//! an edge of length reference_edge has (0: none). Returns the number of nodes moved.
+//! an edge of length reference_edge has (0: none). Returns the number of nodes moved. The
+//! per-face terms on n_threads threads, their sums in face order (the same moves at every count).
 std::size_t compensate_chords(TriMesh& mesh, const std::vector<int>& vertex_node, const std::vector<std::uint8_t>& is_feature,
-                              double strength, double reference_edge);
+                              double strength, double reference_edge, unsigned n_threads = 1);
 
 //! to_soup(mesh), the same points and triangles (each from its face's halfedge, as the
 //! face-vertex circulator goes), read from the halfedges directly instead of through

@@ -178,6 +178,43 @@ TEST(QualityTopology, DegenerateFaces) {
   EXPECT_EQ(*r.topology.n_self_intersecting_pairs, 0u);
 }
 
+// The face counts and the triangles' quality figures run on another thread with 2+ threads
+// (3+ with the self-intersection count): the same report at every thread count, and the
+// planted defects counted (2 degenerate faces, 1 duplicate) either way.
+TEST(QualityTopology, ReportSameAtEveryThreadCount) {
+  TriangleSoup s = test::torus(16, 8);
+  const auto n = static_cast<std::uint32_t>(s.points.size());
+  s.points.push_back(V(0.25, 0.5, 1.0));
+  s.points.push_back(V(0.5, 0.5, 1.0));
+  s.points.push_back(V(0.75, 0.5, 1.0));
+  s.triangles.push_back({n, n + 1, n + 2});  // collinear: zero area
+  s.triangles.push_back({n, n, n + 1});      // repeated index
+  s.triangles.push_back(s.triangles[3]);     // duplicate
+  for (const bool intersections : {false, true}) {
+    ReportOptions options;
+    options.self_intersections = intersections;
+    options.n_threads = 1;
+    const MeshReport serial = mesh_report(s, options);
+    EXPECT_EQ(serial.topology.n_degenerate_faces, 2u);
+    EXPECT_EQ(serial.topology.n_duplicate_faces, 1u);
+    EXPECT_EQ(serial.topology.n_faces, 16u * 8u * 2u + 3u);
+    EXPECT_GT(serial.quality.edge_length_mean, 0.0);
+    EXPECT_EQ(serial.quality.alpha_min, 0.0);
+    for (const unsigned threads : {2U, 3U, 4U}) {
+      options.n_threads = threads;
+      const MeshReport r = mesh_report(s, options);
+      EXPECT_EQ(to_json(r), to_json(serial)) << threads << " threads, intersections " << intersections;
+      // Bit for bit where the JSON rounds (10 digits).
+      EXPECT_EQ(r.quality.alpha_mean, serial.quality.alpha_mean);
+      EXPECT_EQ(r.quality.min_angle_deg, serial.quality.min_angle_deg);
+      EXPECT_EQ(r.quality.max_angle_deg, serial.quality.max_angle_deg);
+      EXPECT_EQ(r.quality.edge_length_stddev, serial.quality.edge_length_stddev);
+      EXPECT_EQ(r.topology.n_degenerate_faces, 2u);
+      EXPECT_EQ(r.topology.n_duplicate_faces, 1u);
+    }
+  }
+}
+
 TEST(QualityTopology, EmptySoupAndBadInput) {
   const MeshReport r = mesh_report(TriangleSoup{});
   EXPECT_EQ(r.topology.n_faces, 0u);
