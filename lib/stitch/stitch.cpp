@@ -578,12 +578,12 @@ StitchResult stitch_impl(const SurfaceMesh& surface, const TriMesh* input, const
   if (input != nullptr && options.n_threads >= 2) {
     input_components = std::async(std::launch::async, [input] { return component_signatures(*input); });
   }
-  // The volume compensation's marching-cubes gate (a pass over the input's edges: 0.13 G
+  // The volume compensation's label-image gate (a pass over the input's edges: 0.13 G
   // instructions on the liver), likewise; compensate_volume() then skips it (it still needs the
   // input for its enclosed-volume check).
   std::future<bool> input_on_lattice;
   if (input != nullptr && options.n_threads >= 2 && options.volume_compensation > 0.0 && !surface.triangles.empty()) {
-    input_on_lattice = std::async(std::launch::async, [input] { return surfmesh_detail::vertices_on_lattice_edges(*input); });
+    input_on_lattice = std::async(std::launch::async, [input] { return surfmesh_detail::on_label_image_staircase(*input); });
   }
 
   // 1. Assembly by id.
@@ -626,7 +626,7 @@ StitchResult stitch_impl(const SurfaceMesh& surface, const TriMesh* input, const
                                                  options.volume_compensation, gate_known);
     // The compensation's moves come after the obtuse repair and can leave triangles obtuse
     // that the splits cannot take apart (rotor: 39 obtuse with it, 37 without): the repair once
-    // more. Not where the compensation is gated off (marching-cubes surfaces).
+    // more. Not where the compensation is gated off (label-image staircases).
     if (options.obtuse_repair_rounds > 0 && report.n_volume_compensation_moves > 0) {
       const auto repaired = stitch_detail::repair_obtuse_once(surface, options, feature, result);
       report.n_flips += repaired[0];
@@ -700,7 +700,7 @@ StitchResult stitch_impl(const SurfaceMesh& surface, const TriMesh* input, const
   // truth is the smooth surface the fits follow, not the staircase (docs/stitch.md,
   // "Fidelity moves: where they apply").
   if (options.fidelity_distance_edges > 0.0 && input != nullptr && pairs.empty() && mesh.n_faces() > 0 &&
-      !surfmesh_detail::label_image_staircase(surfmesh_detail::lattice_edge_shares(*input))) {
+      !surfmesh_detail::on_label_image_staircase(*input)) {
     const stitch_detail::FidelityResult fidelity = stitch_detail::move_toward_input(
         *input, options, feature, surface.input_mean_edge, stitch_detail::fin_rim_bound(surface, options), result);
     report.n_fidelity_moves = fidelity.n_moved;
