@@ -216,11 +216,12 @@ RemeshResult remesh(const TriMesh& input, const RemeshOptions& options) {
   splitter.reset();
   // The shares when computed above (mesh_surface does not compute them again).
   const surfmesh_detail::LatticeShares* shares = lattice ? &*lattice : nullptr;
-  // The stitch's volume compensation makes no move on a marching-cubes input (its own gate,
-  // the same lattice-edge test as here: a pass over the input's edges, 0.13 G instructions on
-  // the liver): with the answer known, it is switched off instead of tested again. Only where
-  // the stitch optimises anyway (volume compensation alone would start its optimisation).
-  if (lattice && surfmesh_detail::marching_cubes_lattice(*lattice) &&
+  // The stitch's volume compensation makes no move on a label image's staircase (its own
+  // gate, the same test as here, surfmesh_detail::label_image_staircase: a pass over the
+  // input's edges, 0.13 G instructions on the liver): with the answer known, it is switched
+  // off instead of tested again. Only where the stitch optimises anyway (volume compensation
+  // alone would start its optimisation).
+  if (lattice && surfmesh_detail::label_image_staircase(*lattice) &&
       (stitch_options.optimisation_passes > 0 || stitch_options.obtuse_repair_rounds > 0 ||
        stitch_options.chord_compensation > 0.0))
     stitch_options.volume_compensation = 0.0;

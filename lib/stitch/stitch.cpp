@@ -578,12 +578,13 @@ StitchResult stitch_impl(const SurfaceMesh& surface, const TriMesh* input, const
   if (input != nullptr && options.n_threads >= 2) {
     input_components = std::async(std::launch::async, [input] { return component_signatures(*input); });
   }
-  // The volume compensation's marching-cubes gate (a pass over the input's edges: 0.13 G
-  // instructions on the liver), likewise; compensate_volume() then skips it (it still needs the
-  // input for its enclosed-volume check).
+  // The volume compensation's label-image gate (a pass over the input's edges: 0.13 G
+  // instructions on the liver), likewise, unless mesh_surface() has the answer; compensate_volume()
+  // then skips it (it still needs the input for its enclosed-volume check).
   std::future<bool> input_on_lattice;
-  if (input != nullptr && options.n_threads >= 2 && options.volume_compensation > 0.0 && !surface.triangles.empty()) {
-    input_on_lattice = std::async(std::launch::async, [input] { return surfmesh_detail::vertices_on_lattice_edges(*input); });
+  if (input != nullptr && options.n_threads >= 2 && options.volume_compensation > 0.0 && !surface.triangles.empty() &&
+      !surface.input_label_staircase) {
+    input_on_lattice = std::async(std::launch::async, [input] { return surfmesh_detail::on_label_image_staircase(*input); });
   }
 
   // 1. Assembly by id.
@@ -618,16 +619,18 @@ StitchResult stitch_impl(const SurfaceMesh& surface, const TriMesh* input, const
     report.n_chord_compensation_moves = stitch_detail::compensate_chords(mesh, result.vertex_node, feature,
                                                                          options.chord_compensation, surface.input_mean_edge,
                                                                          options.n_threads);
-    // compensate_volume()'s gate, when taken on the helper thread (get() ends the future).
-    const bool gate_known = input_on_lattice.valid();
-    const bool gated = gate_known && input_on_lattice.get();
+    // compensate_volume()'s gate, when mesh_surface() made it or it was taken on the helper
+    // thread (get() ends the future).
+    const bool gate_known = surface.input_label_staircase.has_value() || input_on_lattice.valid();
+    const bool gated = surface.input_label_staircase ? *surface.input_label_staircase
+                                                     : input_on_lattice.valid() && input_on_lattice.get();
     report.n_volume_compensation_moves =
         gated ? 0
               : stitch_detail::compensate_volume(surface, input, mesh, result.face_patch, result.vertex_node, feature,
                                                  options.volume_compensation, gate_known);
     // The compensation's moves come after the obtuse repair and can leave triangles obtuse
     // that the splits cannot take apart (rotor: 39 obtuse with it, 37 without): the repair once
-    // more. Not where the compensation is gated off (marching-cubes surfaces).
+    // more. Not where the compensation is gated off (label-image staircases).
     if (options.obtuse_repair_rounds > 0 && report.n_volume_compensation_moves > 0) {
       const auto repaired = stitch_detail::repair_obtuse_once(surface, options, feature, result);
       report.n_flips += repaired[0];

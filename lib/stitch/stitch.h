@@ -92,9 +92,10 @@ struct StitchOptions {
   //! touches, leaves no more of them below the bound and no more obtuse ones (else the best
   //! such pair of changes, the first not better by itself); changes whose
   //! triangles cross others are given up. Only when the mesh has no crossing left.
-  //! docs/stitch.md "Small angles left after the optimisation". Default 4 (the sweeps stop
-  //! early when one changes nothing; the liver needs 3).
-  int angle_repair_rounds = 4;
+  //! docs/stitch.md "Small angles left after the optimisation". Default 12 (the sweeps stop
+  //! early when one changes nothing; the liver needs 3, headsq@1150 10: a node's moves a
+  //! quarter of the way to an apex lift its triangle a little each sweep).
+  int angle_repair_rounds = 12;
   //! Triangles whose smallest angle (deg) is below this get their shortest edge collapsed
   //! before the optimisation, when the merge is allowed and improves the worst triangle
   //! around it (feature nodes never moved, and removed only into a feature corner less

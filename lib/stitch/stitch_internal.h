@@ -303,14 +303,15 @@ double mean_over_triangle(F&& f, const Eigen::Vector3d& a, const Eigen::Vector3d
 //! nodes, by area); each such node moves along its normal to take its share back, times
 //! strength, at most 0.1 of its root-mean-square edge (the volume beyond that handed to its
 //! free neighbours by area, four rounds), half that or not at all where the
-//! move would add an obtuse triangle around it or an angle below min(the old smallest,
-//! kAwayFromFeaturesAngleBoundDeg). Nothing when input (may be null) is taken for a
-//! marching-cubes surface (its vertices on lattice edges; lattice_gate_done: the caller has
-//! tested that already, and input is still used for the enclosed-volume check). Returns the
-//! number of nodes moved.
+//! move would add an obtuse triangle around it or take one of its triangles' smallest angle
+//! below min(that triangle's old one, kAwayFromFeaturesAngleBoundDeg). Nothing when input
+//! (may be null) is a label image's staircase (surfmesh_detail::on_label_image_staircase;
+//! label_gate_done: the caller has tested that already, and input is still used for the
+//! enclosed-volume check). With a closed input and mesh, the moves are undone when they do
+//! not bring the enclosed volume nearer the input's. Returns the number of nodes moved.
 std::size_t compensate_volume(const SurfaceMesh& surface, const TriMesh* input, TriMesh& mesh,
                               const std::vector<int>& face_patch, const std::vector<int>& vertex_node,
-                              const std::vector<std::uint8_t>& is_feature, double strength, bool lattice_gate_done = false);
+                              const std::vector<std::uint8_t>& is_feature, double strength, bool label_gate_done = false);
 
 //! alpha of every face, in face order.
 std::vector<double> face_alphas(const TriMesh& mesh);

@@ -243,6 +243,8 @@ bool vertices_on_lattice_edges(const TriMesh& mesh) { return marching_cubes_latt
 
 bool label_image_staircase(const LatticeShares& shares) { return shares.at_edge_midpoints >= 0.5; }
 
+bool on_label_image_staircase(const TriMesh& mesh) { return label_image_staircase(lattice_edge_shares(mesh)); }
+
 FeatureSizing feature_sizing(const TriMesh& mesh, const Segmentation& segmentation,
                              const std::vector<std::uint8_t>& curve_is_feature, const SizeAt& base, double factor,
                              double min_size, double gradation, double min_area_share) {

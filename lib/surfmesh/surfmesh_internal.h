@@ -280,6 +280,9 @@ struct LatticeShares {
 //! True when the input looks like the marching-cubes surface of a label image (staircases):
 //! lattice_edge_shares(mesh).at_edge_midpoints >= 0.5.
 [[nodiscard]] bool label_image_staircase(const LatticeShares& shares);
+//! label_image_staircase(lattice_edge_shares(mesh)): the gate of the stitch's volume
+//! compensation and fidelity moves (and of remesh()'s shortcut that switches the former off).
+[[nodiscard]] bool on_label_image_staircase(const TriMesh& mesh);
 
 //! True when the input looks like a marching-cubes surface: lattice_edge_vertex_share >= 0.5.
 //! Measured (2026-11-26; docs/surfmesh.md "The marching-cubes gate"): 1 on the scenes (level

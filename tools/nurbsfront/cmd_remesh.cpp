@@ -303,7 +303,7 @@ void add_remesh_command(CLI::App& app) {
                   "0 = off; docs/stitch.md \"Obtuse splits\")");
   cmd->add_option("--angle-repair-rounds", args->angle_repair_rounds,
                   "Sweeps of the stitch's small-angle repair (flips and collapses at the triangles below 25 deg away "
-                  "from features; default 4; 0 = off; docs/stitch.md \"Small angles left after the optimisation\")");
+                  "from features; default 12; 0 = off; docs/stitch.md \"Small angles left after the optimisation\")");
   cmd->add_option("--fidelity-distance", args->fidelity_distance,
                   "The stitch's fidelity moves: vertices move onto the input where the output is farther from it "
                   "than this many input mean edges (0 = off; docs/stitch.md \"Fidelity moves\")");
