@@ -34,6 +34,49 @@ double mean_edge_length(const TriMesh& mesh) {
   return count == 0 ? 0.0 : sum / static_cast<double>(count);
 }
 
+double core_detail::mean_edge_length(const TriMesh& mesh, const unsigned n_threads) {
+  if (n_threads < 2) return nurbsfront::mean_edge_length(mesh);
+  constexpr std::size_t kChunk = 32768;
+  // The box: per chunk of vertices, then combined (minima and maxima are exact).
+  const std::size_t n_vertices = mesh.n_vertices();
+  const bool vertex_status = mesh.has_vertex_status();
+  std::vector<BoundingBox> boxes(n_vertices / kChunk + 1);
+  parallel::for_chunks(n_vertices, n_threads, kChunk, [&](std::size_t begin, std::size_t end, unsigned) {
+    BoundingBox& box = boxes[begin / kChunk];
+    for (std::size_t i = begin; i < end; ++i) {
+      const TriMesh::VertexHandle v(static_cast<int>(i));
+      if (vertex_status && mesh.status(v).deleted()) continue;
+      box.extend(to_eigen(mesh.point(v)));
+    }
+  });
+  BoundingBox box;
+  for (const BoundingBox& part : boxes) {
+    if (part.is_empty()) continue;
+    box.extend(part.min);
+    box.extend(part.max);
+  }
+  const double zero = tolerance::kZeroLengthRelative * box.diagonal();
+  // Every edge's length on the threads (NaN for a deleted edge), summed in edge order.
+  const std::size_t n_edges = mesh.n_edges();
+  const bool edge_status = mesh.has_edge_status();
+  std::vector<double> length(n_edges);
+  parallel::for_chunks(n_edges, n_threads, kChunk, [&](std::size_t begin, std::size_t end, unsigned) {
+    for (std::size_t i = begin; i < end; ++i) {
+      const TriMesh::EdgeHandle e(static_cast<int>(i));
+      length[i] = edge_status && mesh.status(e).deleted() ? std::numeric_limits<double>::quiet_NaN()
+                                                           : mesh.calc_edge_length(e);
+    }
+  });
+  double sum = 0.0;
+  std::size_t count = 0;
+  for (const double l : length) {
+    if (!(l > zero)) continue;
+    sum += l;
+    ++count;
+  }
+  return count == 0 ? 0.0 : sum / static_cast<double>(count);
+}
+
 BoundingBox bounding_box(const TriMesh& mesh) {
   BoundingBox box;
   for (auto v : mesh.vertices()) box.extend(to_eigen(mesh.point(v)));

@@ -17,4 +17,9 @@ void to_trimesh_checked(const TriangleSoup& soup, TriMesh& mesh);
 //! \throw InvalidInput for non-finite coordinates of a soup the check accepts.
 ManifoldCheck check_and_build(const TriangleSoup& soup, TriMesh& mesh, unsigned n_threads);
 
+//! mean_edge_length(mesh) with the box and the edge lengths computed on n_threads threads
+//! (the lengths are summed in edge order on the calling thread): the same value, bit for
+//! bit, for any thread count (for finite points; remesh() checks them first).
+[[nodiscard]] double mean_edge_length(const TriMesh& mesh, unsigned n_threads);
+
 }  // namespace nurbsfront::core_detail

@@ -12,6 +12,7 @@
 #include <Eigen/Geometry>
 
 #include "nurbsfront/core/error.h"
+#include "nurbsfront/core/parallel.h"
 #include "nurbsfront/io/mesh_io.h"
 
 namespace nurbsfront {
@@ -19,12 +20,15 @@ namespace {
 
 using Triangle = std::array<std::uint32_t, 3>;
 constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
+constexpr std::size_t kNoIndex = std::numeric_limits<std::size_t>::max();
 //! Grid cell edge in units of the weld tolerance. Larger cells mean fewer neighbour cells
 //! to look into (a point is near a face along an axis with probability 2 / 8) but longer
 //! chains per cell when points are denser than the tolerance.
 constexpr double kCellsPerTolerance = 8.0;
 //! Relative widening of the near-a-face band, against rounding in p / cell.
 constexpr double kNearFaceMargin = 1e-6;
+//! Points or triangles per task of clean()'s parallel passes.
+constexpr std::size_t kCleanChunk = 16384;
 
 struct CellKey {
   std::int64_t x, y, z;
@@ -73,7 +77,7 @@ class PointTable {
 //! Points are processed in order; each is merged into the lowest-index representative
 //! within tol, found in the own grid cell (edge kCellsPerTolerance * tol) and the
 //! neighbours across faces p is within tol of.
-std::vector<std::uint32_t> weld(const std::vector<Eigen::Vector3d>& points, double tol) {
+std::vector<std::uint32_t> weld(const std::vector<Eigen::Vector3d>& points, double tol, unsigned threads) {
   const std::size_t n = points.size();
   std::vector<std::uint32_t> rep(n);
   PointTable table(n);
@@ -100,25 +104,36 @@ std::vector<std::uint32_t> weld(const std::vector<Eigen::Vector3d>& points, doub
                    static_cast<std::int64_t>(std::floor(p.y() * inv_cell)),
                    static_cast<std::int64_t>(std::floor(p.z() * inv_cell))};
   };
+  // Every point's cell and sides first (on `threads` threads: a function of the point
+  // alone), so the serial pass below compares stored keys instead of recomputing them.
+  // A point within tol lies in the own cell or, along an axis where p is within tol of a
+  // cell face, in the neighbour across that face (side -1 or 1 along that axis).
+  std::vector<CellKey> cell(n);
+  std::vector<std::array<std::int8_t, 3>> side(n);
+  parallel::for_chunks(n, threads, kCleanChunk, [&](std::size_t begin, std::size_t end, unsigned) {
+    for (std::size_t i = begin; i < end; ++i) {
+      const Eigen::Vector3d& p = points[i];
+      const CellKey own = cell_of(p);
+      cell[i] = own;
+      for (int a = 0; a < 3; ++a) {
+        const double frac = p[a] * inv_cell - static_cast<double>(a == 0 ? own.x : a == 1 ? own.y : own.z);
+        side[i][a] = static_cast<std::int8_t>(frac < near_face ? -1 : frac > 1.0 - near_face ? 1 : 0);
+      }
+    }
+  });
   // Each occupied slot holds the newest representative of a cell; older ones of the
   // same cell follow through next[] (kNone ends the chain).
   std::vector<std::uint32_t> next(n, kNone);
   for (std::size_t i = 0; i < n; ++i) {
     const Eigen::Vector3d& p = points[i];
-    const CellKey own = cell_of(p);
-    // A point within tol lies in the own cell or, along an axis where p is within tol of
-    // a cell face, in the neighbour across that face.
-    std::array<std::int64_t, 3> side{};
-    for (int a = 0; a < 3; ++a) {
-      const double frac = p[a] * inv_cell - static_cast<double>(a == 0 ? own.x : a == 1 ? own.y : own.z);
-      side[a] = frac < near_face ? -1 : frac > 1.0 - near_face ? 1 : 0;
-    }
+    const CellKey own = cell[i];
+    const std::array<std::int8_t, 3> near = side[i];
     std::uint32_t best = kNone;
     for (int m = 0; m < 8; ++m) {
-      if (((m & 1) && side[0] == 0) || ((m & 2) && side[1] == 0) || ((m & 4) && side[2] == 0)) continue;
-      const CellKey key{own.x + ((m & 1) ? side[0] : 0), own.y + ((m & 2) ? side[1] : 0),
-                        own.z + ((m & 4) ? side[2] : 0)};
-      const std::uint32_t head = table.find(hash_key(key), [&](std::uint32_t j) { return cell_of(points[j]) == key; });
+      if (((m & 1) && near[0] == 0) || ((m & 2) && near[1] == 0) || ((m & 4) && near[2] == 0)) continue;
+      const CellKey key{own.x + ((m & 1) ? near[0] : 0), own.y + ((m & 2) ? near[1] : 0),
+                        own.z + ((m & 4) ? near[2] : 0)};
+      const std::uint32_t head = table.find(hash_key(key), [&](std::uint32_t j) { return cell[j] == key; });
       for (std::uint32_t j = head; j != kNone; j = next[j]) {
         if (j < best && (points[j] - p).squaredNorm() <= tol2) best = j;
       }
@@ -127,7 +142,7 @@ std::vector<std::uint32_t> weld(const std::vector<Eigen::Vector3d>& points, doub
       rep[i] = best;
     } else {
       rep[i] = static_cast<std::uint32_t>(i);
-      std::uint32_t& slot = table.find(hash_key(own), [&](std::uint32_t j) { return cell_of(points[j]) == own; });
+      std::uint32_t& slot = table.find(hash_key(own), [&](std::uint32_t j) { return cell[j] == own; });
       next[i] = slot;  // kNone for a new cell
       slot = static_cast<std::uint32_t>(i);
     }
@@ -147,12 +162,30 @@ void CleanOptions::validate() const {
 
 CleanResult clean(const TriangleSoup& soup, const CleanOptions& options) {
   options.validate();
+  const unsigned threads = parallel::thread_count(options.threads);
   const std::size_t n = soup.points.size();
+  const std::size_t n_triangles = soup.triangles.size();
   if (n >= kNone) throw InvalidInput("clean: more than 2^32-2 points");
-  for (std::size_t i = 0; i < n; ++i) {
-    if (!soup.points[i].allFinite()) throw InvalidInput("clean: point " + std::to_string(i) + " is not finite");
-  }
-  for (std::size_t f = 0; f < soup.triangles.size(); ++f) {
+  // The first bad point and the first bad triangle (the same errors for any thread count:
+  // each chunk finds its first, the smallest is reported).
+  std::vector<std::size_t> first_bad(2 * (n / kCleanChunk + n_triangles / kCleanChunk + 2), kNoIndex);
+  parallel::for_chunks(n, threads, kCleanChunk, [&](std::size_t begin, std::size_t end, unsigned) {
+    for (std::size_t i = begin; i < end && first_bad[begin / kCleanChunk] == kNoIndex; ++i)
+      if (!soup.points[i].allFinite()) first_bad[begin / kCleanChunk] = i;
+  });
+  const std::size_t n_point_chunks = n / kCleanChunk + 1;
+  for (std::size_t c = 0; c < n_point_chunks; ++c)
+    if (first_bad[c] != kNoIndex) throw InvalidInput("clean: point " + std::to_string(first_bad[c]) + " is not finite");
+  std::size_t* const first_bad_triangle = first_bad.data() + n_point_chunks;
+  parallel::for_chunks(n_triangles, threads, kCleanChunk, [&](std::size_t begin, std::size_t end, unsigned) {
+    for (std::size_t f = begin; f < end && first_bad_triangle[begin / kCleanChunk] == kNoIndex; ++f) {
+      const Triangle& t = soup.triangles[f];
+      if (t[0] >= n || t[1] >= n || t[2] >= n) first_bad_triangle[begin / kCleanChunk] = f;
+    }
+  });
+  for (std::size_t c = 0; c <= n_triangles / kCleanChunk; ++c) {
+    const std::size_t f = first_bad_triangle[c];
+    if (f == kNoIndex) continue;
     for (const std::uint32_t v : soup.triangles[f]) {
       if (v >= n) throw InvalidInput("clean: triangle " + std::to_string(f) + " has out-of-range index " + std::to_string(v));
     }
@@ -162,34 +195,53 @@ CleanResult clean(const TriangleSoup& soup, const CleanOptions& options) {
 
   // 1. weld
   const double tol = options.weld_tolerance_relative * bounding_box(soup).diagonal();
-  const std::vector<std::uint32_t> rep = weld(soup.points, tol);
+  const std::vector<std::uint32_t> rep = weld(soup.points, tol, threads);
   for (std::size_t i = 0; i < n; ++i) report.n_welded_vertices += rep[i] != i ? 1 : 0;
 
-  // 2. remap faces, drop collapsed ones
+  // 2. remap faces, drop collapsed ones. Each triangle's remapped corners and kind (kept,
+  // collapsed, collinear) on `threads` threads, then the kept ones in order.
+  constexpr std::uint8_t kKept = 0, kCollapsed = 1, kCollinear = 2;
+  std::vector<Triangle> remapped(n_triangles);
+  std::vector<std::uint8_t> kind(n_triangles);
+  parallel::for_chunks(n_triangles, threads, kCleanChunk, [&](std::size_t begin, std::size_t end, unsigned) {
+    for (std::size_t f = begin; f < end; ++f) {
+      const Triangle& t = soup.triangles[f];
+      const Triangle r{rep[t[0]], rep[t[1]], rep[t[2]]};
+      remapped[f] = r;
+      if (r[0] == r[1] || r[1] == r[2] || r[2] == r[0]) {
+        kind[f] = kCollapsed;
+        continue;
+      }
+      const Eigen::Vector3d& a = soup.points[r[0]];
+      const Eigen::Vector3d normal = (soup.points[r[1]] - a).cross(soup.points[r[2]] - a);
+      kind[f] = normal.squaredNorm() == 0.0 ? kCollinear : kKept;
+    }
+  });
   std::vector<Triangle> faces;
-  faces.reserve(soup.triangles.size());
-  for (const Triangle& t : soup.triangles) {
-    const Triangle r{rep[t[0]], rep[t[1]], rep[t[2]]};
-    const bool collapsed = r[0] == r[1] || r[1] == r[2] || r[2] == r[0];
-    if (collapsed && options.drop_degenerate) {
+  faces.reserve(n_triangles);
+  for (std::size_t f = 0; f < n_triangles; ++f) {
+    if (kind[f] == kCollapsed && options.drop_degenerate) {
       ++report.n_degenerate_faces;
       continue;
     }
-    if (!collapsed) {
-      const Eigen::Vector3d& a = soup.points[r[0]];
-      const Eigen::Vector3d normal = (soup.points[r[1]] - a).cross(soup.points[r[2]] - a);
-      if (normal.squaredNorm() == 0.0) ++report.n_collinear_faces;
-    }
-    faces.push_back(r);
+    report.n_collinear_faces += kind[f] == kCollinear ? 1 : 0;
+    faces.push_back(remapped[f]);
   }
+  remapped = {};
+  kind = {};
 
   // 3. duplicates: same vertex set in any order; the first occurrence is kept (hashed)
   if (options.drop_duplicate_faces && faces.size() > 1) {
     std::vector<Triangle> sorted(faces.size());
-    for (std::size_t f = 0; f < faces.size(); ++f) {
-      sorted[f] = faces[f];
-      std::sort(sorted[f].begin(), sorted[f].end());
-    }
+    parallel::for_chunks(faces.size(), threads, kCleanChunk, [&](std::size_t begin, std::size_t end, unsigned) {
+      for (std::size_t f = begin; f < end; ++f) {
+        Triangle t = faces[f];
+        if (t[0] > t[1]) std::swap(t[0], t[1]);
+        if (t[1] > t[2]) std::swap(t[1], t[2]);
+        if (t[0] > t[1]) std::swap(t[0], t[1]);
+        sorted[f] = t;
+      }
+    });
     PointTable seen(faces.size());
     std::size_t out = 0;
     for (std::size_t f = 0; f < faces.size(); ++f) {
@@ -224,9 +276,11 @@ CleanResult clean(const TriangleSoup& soup, const CleanOptions& options) {
     }
   }
   result.soup.triangles.resize(faces.size());
-  for (std::size_t f = 0; f < faces.size(); ++f) {
-    for (int k = 0; k < 3; ++k) result.soup.triangles[f][k] = new_index[faces[f][k]];
-  }
+  parallel::for_chunks(faces.size(), threads, kCleanChunk, [&](std::size_t begin, std::size_t end, unsigned) {
+    for (std::size_t f = begin; f < end; ++f) {
+      for (int k = 0; k < 3; ++k) result.soup.triangles[f][k] = new_index[faces[f][k]];
+    }
+  });
   return result;
 }
 

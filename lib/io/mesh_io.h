@@ -58,9 +58,11 @@ struct CleanOptions {
   bool drop_duplicate_faces = true;
   //! Drop points no triangle references, renumbering the others. Default true.
   bool drop_unreferenced = true;
-  //! Threads for building the halfedge mesh in read_mesh() and prepare_mesh() (with 2+ the
-  //! manifold check runs beside the build); 0 = all hardware threads. The mesh does not
-  //! depend on it (>= 0). Default 1.
+  //! Threads for clean()'s per-point and per-triangle passes (the weld's grid cells, the
+  //! remapping, the sorted triples; the hash tables are filled in order on one thread) and
+  //! for building the halfedge mesh in read_mesh() and prepare_mesh() (with 2+ the manifold
+  //! check runs beside the build); 0 = all hardware threads. The result does not depend on
+  //! it (>= 0). Default 1.
   int threads = 1;
   //! \throw InvalidInput if weld_tolerance_relative is negative, not finite or >= 1, or
   //! threads is negative.

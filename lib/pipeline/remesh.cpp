@@ -3,14 +3,18 @@
 #include "nurbsfront/pipeline/remesh.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdint>
+#include <numeric>
 #include <optional>
 #include <string>
 #include <utility>
 
 #include "nurbsfront/core/error.h"
+#include "nurbsfront/core/parallel.h"
 #include "nurbsfront/core/soup.h"
+#include "nurbsfront/core/soup_internal.h"
 #include "nurbsfront/core/stopwatch.h"
 #include "nurbsfront/quality/report.h"
 #include "nurbsfront/segment/segment_internal.h"
@@ -63,33 +67,52 @@ std::size_t merge_tiny_patches(segment_detail::Splitter& splitter, const TriMesh
   return n_before - segmentation.patches.size();
 }
 
-// Input checks before any work: what segment() and mesh_surface() assume.
-void check_input(const TriMesh& input) {
+// Input checks before any work: what segment() and mesh_surface() assume. The counts are
+// made on `threads` threads (per chunk, then added up: the same counts for any count).
+void check_input(const TriMesh& input, const unsigned threads) {
   if (input.n_faces() == 0) throw InvalidInput("remesh: the input mesh has no faces");
+  constexpr std::size_t kChunk = 32768;
   if (input.has_vertex_status() && input.has_face_status()) {
-    for (auto v : input.all_vertices()) {
-      if (input.status(v).deleted()) throw InvalidInput("remesh: the input mesh has deleted elements (call garbage_collection())");
-    }
-    for (auto f : input.all_faces()) {
-      if (input.status(f).deleted()) throw InvalidInput("remesh: the input mesh has deleted elements (call garbage_collection())");
-    }
+    std::atomic<bool> deleted{false};
+    parallel::for_chunks(input.n_vertices(), threads, kChunk, [&](std::size_t begin, std::size_t end, unsigned) {
+      for (std::size_t i = begin; i < end; ++i)
+        if (input.status(TriMesh::VertexHandle(static_cast<int>(i))).deleted()) deleted = true;
+    });
+    parallel::for_chunks(input.n_faces(), threads, kChunk, [&](std::size_t begin, std::size_t end, unsigned) {
+      for (std::size_t i = begin; i < end; ++i)
+        if (input.status(TriMesh::FaceHandle(static_cast<int>(i))).deleted()) deleted = true;
+    });
+    if (deleted) throw InvalidInput("remesh: the input mesh has deleted elements (call garbage_collection())");
   }
   // OpenMesh's is_manifold(v) (an outgoing boundary halfedge other than v's own halfedge,
   // which its circulator visits first) in one pass over the halfedges instead of a
-  // circulation around every vertex.
+  // circulation around every vertex: each chunk lists the vertices it finds (rarely any),
+  // a vertex found several times counts once.
+  std::vector<std::vector<int>> found(input.n_halfedges() / kChunk + 1);
+  parallel::for_chunks(input.n_halfedges(), threads, kChunk, [&](std::size_t begin, std::size_t end, unsigned) {
+    for (std::size_t i = begin; i < end; ++i) {
+      const TriMesh::HalfedgeHandle h(static_cast<int>(i));
+      if (!input.is_boundary(h)) continue;
+      const auto v = input.from_vertex_handle(h);
+      if (input.halfedge_handle(v) != h) found[begin / kChunk].push_back(v.idx());
+    }
+  });
   std::vector<std::uint8_t> is_non_manifold(input.n_vertices(), 0);
-  for (auto h : input.halfedges()) {
-    if (!input.is_boundary(h)) continue;
-    const auto v = input.from_vertex_handle(h);
-    if (input.halfedge_handle(v) != h) is_non_manifold[static_cast<std::size_t>(v.idx())] = 1;
+  std::size_t n_non_manifold = 0;
+  for (const auto& part : found) {
+    for (const int v : part) {
+      n_non_manifold += is_non_manifold[static_cast<std::size_t>(v)] == 0 ? 1 : 0;
+      is_non_manifold[static_cast<std::size_t>(v)] = 1;
+    }
   }
-  std::size_t n_non_finite = 0, n_non_manifold = 0;
-  for (auto v : input.vertices()) {
-    if (!to_eigen(input.point(v)).allFinite()) ++n_non_finite;
-    if (is_non_manifold[static_cast<std::size_t>(v.idx())] != 0) ++n_non_manifold;
-  }
-  if (n_non_finite > 0) {
-    throw InvalidInput("remesh: the input mesh has " + std::to_string(n_non_finite) +
+  std::vector<std::size_t> n_non_finite(input.n_vertices() / kChunk + 1, 0);
+  parallel::for_chunks(input.n_vertices(), threads, kChunk, [&](std::size_t begin, std::size_t end, unsigned) {
+    for (std::size_t i = begin; i < end; ++i)
+      n_non_finite[begin / kChunk] += to_eigen(input.point(TriMesh::VertexHandle(static_cast<int>(i)))).allFinite() ? 0 : 1;
+  });
+  const std::size_t n_non_finite_total = std::accumulate(n_non_finite.begin(), n_non_finite.end(), std::size_t{0});
+  if (n_non_finite_total > 0) {
+    throw InvalidInput("remesh: the input mesh has " + std::to_string(n_non_finite_total) +
                        " vertices with non-finite (NaN or infinite) coordinates");
   }
   if (n_non_manifold > 0) {
@@ -98,16 +121,19 @@ void check_input(const TriMesh& input) {
   }
   // A triangle of exactly zero area has no normal: segmentation cannot place it and the
   // output silently loses the region around it (issue 6). io's prepare_mesh() flips them away.
-  std::size_t n_zero_area = 0;
-  for (auto f : input.faces()) {
-    const auto h = input.halfedge_handle(f);
-    const auto& a = input.point(input.from_vertex_handle(h));
-    const auto& b = input.point(input.to_vertex_handle(h));
-    const auto& c = input.point(input.to_vertex_handle(input.next_halfedge_handle(h)));
-    n_zero_area += ((b - a) % (c - a)).sqrnorm() == 0.0 ? 1 : 0;
-  }
-  if (n_zero_area > 0) {
-    throw InvalidInput("remesh: the input mesh has " + std::to_string(n_zero_area) +
+  std::vector<std::size_t> n_zero_area(input.n_faces() / kChunk + 1, 0);
+  parallel::for_chunks(input.n_faces(), threads, kChunk, [&](std::size_t begin, std::size_t end, unsigned) {
+    for (std::size_t i = begin; i < end; ++i) {
+      const auto h = input.halfedge_handle(TriMesh::FaceHandle(static_cast<int>(i)));
+      const auto& a = input.point(input.from_vertex_handle(h));
+      const auto& b = input.point(input.to_vertex_handle(h));
+      const auto& c = input.point(input.to_vertex_handle(input.next_halfedge_handle(h)));
+      n_zero_area[begin / kChunk] += ((b - a) % (c - a)).sqrnorm() == 0.0 ? 1 : 0;
+    }
+  });
+  const std::size_t n_zero_area_total = std::accumulate(n_zero_area.begin(), n_zero_area.end(), std::size_t{0});
+  if (n_zero_area_total > 0) {
+    throw InvalidInput("remesh: the input mesh has " + std::to_string(n_zero_area_total) +
                        " triangles of zero area (three collinear corners); io's prepare_mesh() removes them "
                        "by edge flips (the nurbsfront tool does so on reading)");
   }
@@ -141,7 +167,9 @@ ProgressCallback chained(const ProgressCallback& top, const ProgressCallback& ow
 
 RemeshResult remesh(const TriMesh& input, const RemeshOptions& options) {
   options.validate();
-  check_input(input);
+  // The input pass's threads: the segmentation's (its first stage).
+  const unsigned input_threads = parallel::thread_count(options.segment.threads);
+  check_input(input, input_threads);
   Stopwatch total;
   RemeshResult result;
   RemeshReport& report = result.report;
@@ -158,7 +186,7 @@ RemeshResult remesh(const TriMesh& input, const RemeshOptions& options) {
 
   Stopwatch watch;
   // mean_edge_length(input), once for segment() and surfmesh (a pass over every edge).
-  const double mean_edge = mean_edge_length(input);
+  const double mean_edge = core_detail::mean_edge_length(input, input_threads);
   // The input's lattice shares (the marching-cubes gate), computed when first needed.
   std::optional<surfmesh_detail::LatticeShares> lattice;
   auto input_lattice = [&]() -> const surfmesh_detail::LatticeShares& {

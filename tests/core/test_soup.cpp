@@ -10,6 +10,7 @@
 #include "fixtures/shapes.h"
 #include "nurbsfront/core/error.h"
 #include "nurbsfront/core/soup.h"
+#include "nurbsfront/core/soup_internal.h"
 
 namespace nurbsfront {
 namespace {
@@ -226,6 +227,30 @@ TEST(Soup, DirectBuildMatchesAddFace) {
     ++n_compared;
   }
   EXPECT_GT(n_compared, 40);
+}
+
+TEST(Soup, MeanEdgeLengthIsTheSameForAnyThreadCount) {
+  // A 160 x 160 grid (77 120 edges, more than two chunks of 32 768): the mean of its edges
+  // (n_axis of length h, n_diagonal of length h sqrt(2)), bit for bit the same on 1, 2 and
+  // 3 threads, also with deleted edges (a face deleted, not collected) and on a closed mesh.
+  const int n = 160;
+  const double h = 1.0 / n;
+  TriMesh grid = to_trimesh(test::grid_patch(n, n));
+  const double n_axis = 2.0 * n * (n + 1), n_diagonal = static_cast<double>(n) * n;
+  ASSERT_EQ(static_cast<double>(grid.n_edges()), n_axis + n_diagonal);
+  const double serial = mean_edge_length(grid);
+  EXPECT_NEAR(serial, (n_axis * h + n_diagonal * h * std::sqrt(2.0)) / (n_axis + n_diagonal), 1e-12);
+  for (const unsigned threads : {1u, 2u, 3u}) EXPECT_EQ(core_detail::mean_edge_length(grid, threads), serial) << threads;
+  grid.request_face_status();
+  grid.request_edge_status();
+  grid.request_vertex_status();
+  grid.delete_face(TriMesh::FaceHandle(0), true);  // the corner square: 3 edges and a vertex go
+  grid.delete_face(TriMesh::FaceHandle(1), true);
+  const double after = mean_edge_length(grid);
+  EXPECT_NE(after, serial);
+  for (const unsigned threads : {2u, 3u}) EXPECT_EQ(core_detail::mean_edge_length(grid, threads), after) << threads;
+  const TriMesh sphere = to_trimesh(test::icosphere(6));
+  for (const unsigned threads : {2u, 3u}) EXPECT_EQ(core_detail::mean_edge_length(sphere, threads), mean_edge_length(sphere)) << threads;
 }
 
 TEST(Soup, BoundingBoxDiagonal) {

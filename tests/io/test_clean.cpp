@@ -163,6 +163,93 @@ TEST(Clean, GridHashWeldMatchesBruteForce) {
   for (std::size_t k = 0; k < reps.size(); ++k) EXPECT_EQ(r.soup.points[k], s.points[reps[k]]);
 }
 
+//! A grid of n x n squares of side 1/128 (every coordinate exact in binary) as a raw soup with everything clean() removes:
+//! each square's second triangle has its own copies of its points (welded), every 7th
+//! square repeats its first triangle reversed (a duplicate), every 11th has an extra
+//! triangle naming one point twice after welding (collapsed), every 13th one with three
+//! collinear corners (kept and counted), and points no triangle uses (unreferenced).
+TriangleSoup dirty_grid(int n) {
+  TriangleSoup s;
+  const double h = 1.0 / 128.0;
+  auto add = [&](double x, double y) {
+    s.points.emplace_back(x, y, 0.25 * y * y);  // z by y alone: points of one y are collinear
+    return static_cast<std::uint32_t>(s.points.size() - 1);
+  };
+  for (int j = 0; j < n; ++j) {
+    for (int i = 0; i < n; ++i) {
+      const double x = i * h, y = j * h;
+      const std::uint32_t a = add(x, y), b = add(x + h, y), c = add(x + h, y + h);
+      s.triangles.push_back({a, b, c});
+      const std::uint32_t a2 = add(x, y), c2 = add(x + h, y + h), d = add(x, y + h);
+      s.triangles.push_back({a2, c2, d});
+      const int k = j * n + i;
+      if (k % 7 == 0) s.triangles.push_back({c, b, a});
+      if (k % 11 == 0) s.triangles.push_back({a, a2, b});
+      if (k % 13 == 0) s.triangles.push_back({a, add(x + 0.5 * h, y), b});
+      if (k % 17 == 0) (void)add(x + 0.5 * h, y + 0.5 * h);
+    }
+  }
+  return s;
+}
+
+TEST(Clean, SameResultForAnyThreadCount) {
+  // More points and triangles than one parallel chunk (16384): each count and every index
+  // of the result is the same for 1, 2 and 3 threads, and the counts are the grid's.
+  const int n = 90;
+  const TriangleSoup s = dirty_grid(n);
+  ASSERT_GT(s.points.size(), 2u * 16384u);
+  CleanOptions one;
+  one.threads = 1;
+  const CleanResult serial = clean(s, one);
+  const std::size_t squares = static_cast<std::size_t>(n) * n;
+  EXPECT_EQ(serial.soup.points.size(), static_cast<std::size_t>((n + 1) * (n + 1)) + (squares + 12) / 13);
+  EXPECT_EQ(serial.report.n_duplicate_faces, (squares + 6) / 7);
+  EXPECT_EQ(serial.report.n_degenerate_faces, (squares + 10) / 11);
+  EXPECT_EQ(serial.report.n_collinear_faces, (squares + 12) / 13);
+  EXPECT_EQ(serial.report.n_unreferenced_vertices, (squares + 16) / 17);
+  EXPECT_EQ(serial.soup.triangles.size(), 2 * squares + (squares + 12) / 13);
+  for (const int threads : {2, 3}) {
+    CleanOptions options;
+    options.threads = threads;
+    const CleanResult parallel = clean(s, options);
+    EXPECT_EQ(parallel.soup.points, serial.soup.points) << threads;
+    EXPECT_EQ(parallel.soup.triangles, serial.soup.triangles) << threads;
+    EXPECT_EQ(parallel.report.n_welded_vertices, serial.report.n_welded_vertices);
+    EXPECT_EQ(parallel.report.n_degenerate_faces, serial.report.n_degenerate_faces);
+    EXPECT_EQ(parallel.report.n_duplicate_faces, serial.report.n_duplicate_faces);
+    EXPECT_EQ(parallel.report.n_unreferenced_vertices, serial.report.n_unreferenced_vertices);
+    EXPECT_EQ(parallel.report.n_collinear_faces, serial.report.n_collinear_faces);
+  }
+}
+
+TEST(Clean, FirstBadElementIsReportedForAnyThreadCount) {
+  // Bad elements in two chunks: the error names the first one whatever the thread count.
+  TriangleSoup s = dirty_grid(90);
+  s.points[40000].y() = std::numeric_limits<double>::quiet_NaN();
+  s.points[20000].x() = std::numeric_limits<double>::infinity();
+  s.triangles[18000][1] = 999999999;
+  s.triangles[3000][2] = 888888888;
+  for (const int threads : {1, 2, 3}) {
+    CleanOptions options;
+    options.threads = threads;
+    try {
+      (void)clean(s, options);
+      ADD_FAILURE() << "no error";
+    } catch (const InvalidInput& e) {
+      EXPECT_STREQ(e.what(), "clean: point 20000 is not finite") << threads;
+    }
+    TriangleSoup finite = s;
+    finite.points[40000].y() = 0.0;
+    finite.points[20000].x() = 0.0;
+    try {
+      (void)clean(finite, options);
+      ADD_FAILURE() << "no error";
+    } catch (const InvalidInput& e) {
+      EXPECT_STREQ(e.what(), "clean: triangle 3000 has out-of-range index 888888888") << threads;
+    }
+  }
+}
+
 TEST(Clean, RejectsBadInputAndOptions) {
   CleanOptions bad;
   bad.weld_tolerance_relative = -1.0;

@@ -325,6 +325,17 @@ TEST(Pipeline, BadInputIsNamed) {
   bowtie.add_face(o, a, b);
   bowtie.add_face(o, c, d);
   expect_invalid(bowtie, "non-manifold");
+  // The input checks count on the run's threads: the same counts for any thread count.
+  for (const unsigned threads : {1u, 3u}) {
+    RemeshOptions options;
+    options.set_threads(threads);
+    try {
+      (void)remesh(bowtie, options);
+      ADD_FAILURE() << "no exception";
+    } catch (const InvalidInput& e) {
+      EXPECT_STREQ(e.what(), "remesh: the input mesh has 1 non-manifold vertices (several face fans meet at one vertex)");
+    }
+  }
   // A triangle of exactly zero area has no normal (issue 6: it used to lose half the cube).
   expect_invalid(to_trimesh(test::needle_cube()), "zero area");
   SceneInput in = scene_input("sphere", 12, SampleMode::LevelSet);
