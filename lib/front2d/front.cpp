@@ -121,7 +121,12 @@ class Sizing {
     }
   }
 
-  [[nodiscard]] double operator()(const Vec& x) const {
+  // The uniform case inline: the front asks for sizes at every step (and 1024 times per
+  // mesh for its size estimate).
+  [[nodiscard]] double operator()(const Vec& x) const { return f_.kind == SizingField::Kind::Uniform ? h_ : varying(x); }
+
+ private:
+  [[nodiscard]] double varying(const Vec& x) const {
     switch (f_.kind) {
       case SizingField::Kind::Uniform:
         return h_;
@@ -155,7 +160,6 @@ class Sizing {
     return h_;
   }
 
- private:
   [[nodiscard]] std::size_t idx(int i, int j) const { return static_cast<std::size_t>(j * (n_ + 1) + i); }
   void relax(int i, int j, double step, double diag_step, int dir) {
     double& v = grid_[idx(i, j)];
@@ -952,6 +956,12 @@ class Optimiser {
     std::sort(todo.begin(), todo.end());
     todo.erase(std::unique(todo.begin(), todo.end()), todo.end());
     const Incidence inc = incidence();
+    // The compass directions, computed once (the same numbers as per move).
+    std::array<Vec, 8> compass;
+    for (int d = 0; d < 8; ++d) {
+      const double ang = d * std::numbers::pi / 4.0;
+      compass[static_cast<std::size_t>(d)] = Vec(std::cos(ang), std::sin(ang));
+    }
     std::size_t moved = 0;
     for (int vtx : todo) {
       const auto vi = static_cast<std::size_t>(vtx);
@@ -960,18 +970,35 @@ class Optimiser {
       // +inf if a triangle is not positively oriented.
       int n_good = -1;  // good triangles of the star at the start (keep_good)
       // A candidate is kept only if its star beats `bound`: the evaluation stops as soon as
-      // one triangle's cosine reaches it (the candidate is rejected either way).
+      // one triangle's cosine reaches it (the candidate is rejected either way). The
+      // triangle that decided the last evaluation (its worst, or the one that stopped it)
+      // goes first: it most often stops the next one at once. A kept candidate's star is
+      // evaluated in full, and its maximum (and good count) do not depend on the order,
+      // so the moves are the same bit for bit.
+      int lead = b0;
       auto star = [&](double bound) {
         double worst = -1.0;
         int good = 0;
-        for (int k = b0; k < b1; ++k) {
+        int worst_k = lead;
+        for (int i = b0; i < b1; ++i) {
+          const int k = i == b0 ? lead : (i == lead ? b0 : i);
           const auto& t = T_[static_cast<std::size_t>(inc.tri[static_cast<std::size_t>(k)])];
-          if (orient2d(pt(t[0]), pt(t[1]), pt(t[2])) <= 0) return std::numeric_limits<double>::infinity();
+          if (orient2d(pt(t[0]), pt(t[1]), pt(t[2])) <= 0) {
+            lead = k;
+            return std::numeric_limits<double>::infinity();
+          }
           const double mc = max_cos(t);
-          worst = std::max(worst, mc);
-          if (worst >= bound) return worst;
+          if (mc > worst) {
+            worst = mc;
+            worst_k = k;
+          }
+          if (worst >= bound) {
+            lead = k;
+            return worst;
+          }
           good += mc <= target;
         }
+        lead = worst_k;
         if (keep_good && good < n_good) return std::numeric_limits<double>::infinity();
         if (n_good < 0) n_good = good;
         return worst;
@@ -1002,8 +1029,7 @@ class Optimiser {
             t_new = t_cur + (d == 0 ? step : -step) / seg_len;
             move(vtx, sa + t_new * sd);
           } else {
-            const double ang = d * std::numbers::pi / 4.0;
-            move(vtx, old + step * Vec(std::cos(ang), std::sin(ang)));
+            move(vtx, old + step * compass[static_cast<std::size_t>(d)]);
           }
           const double q = star(best);
           if (q < best) {

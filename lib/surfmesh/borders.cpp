@@ -420,9 +420,6 @@ std::vector<int> extra_outer_loop_curves(const Segmentation& seg, const BorderNo
   return curves_over_patches(seg.patches.size(), threads, [&](std::size_t p, std::vector<int>& out) {
     const PatchBorder border = patch_border(seg, static_cast<int>(p), borders);
     const std::vector<Eigen::Vector2d> xy = plane_points(seg.patches[p].axis, border, borders);
-    std::map<std::pair<int, int>, int> edge_curve;
-    for (std::size_t e = 0; e < border.edges.size(); ++e)
-      edge_curve[{border.edges[e][0], border.edges[e][1]}] = border.edge_curve[e];
     std::vector<std::vector<int>> ccw;
     std::size_t largest = 0;
     double largest_area = 0.0;
@@ -443,6 +440,10 @@ std::vector<int> extra_outer_loop_curves(const Segmentation& seg, const BorderNo
       }
       ccw.push_back(loop);
     }
+    if (ccw.size() < 2) return;  // one outer loop (almost every patch): no curve to name
+    std::map<std::pair<int, int>, int> edge_curve;
+    for (std::size_t e = 0; e < border.edges.size(); ++e)
+      edge_curve[{border.edges[e][0], border.edges[e][1]}] = border.edge_curve[e];
     for (std::size_t k = 0; k < ccw.size(); ++k) {
       if (k == largest) continue;
       for (std::size_t i = 0; i < ccw[k].size(); ++i) {

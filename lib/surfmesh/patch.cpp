@@ -11,6 +11,7 @@
 #include <limits>
 #include <memory>
 #include <numbers>
+#include <span>
 #include <stdexcept>
 #include <string>
 #include <unordered_set>
@@ -190,8 +191,19 @@ std::vector<int> overlap_vertices(const TriMesh& mesh, const Segmentation& seg, 
 // edges), the next edge is the first outgoing one clockwise from the incoming edge's
 // reverse: it bounds the domain sector on the left of the incoming edge.
 std::vector<std::vector<int>> trace_loops(const std::vector<Eigen::Vector2d>& xy, const std::vector<std::array<int, 2>>& edges) {
-  std::vector<std::vector<int>> outgoing(xy.size());
-  for (std::size_t e = 0; e < edges.size(); ++e) outgoing[static_cast<std::size_t>(edges[e][0])].push_back(static_cast<int>(e));
+  // The edges leaving each node, in edge order (compressed rows: no allocation per node).
+  std::vector<int> out_start(xy.size() + 1, 0), out_edges(edges.size());
+  for (const auto& edge : edges) ++out_start[static_cast<std::size_t>(edge[0]) + 1];
+  for (std::size_t i = 0; i < xy.size(); ++i) out_start[i + 1] += out_start[i];
+  {
+    std::vector<int> fill(out_start.begin(), out_start.end() - 1);
+    for (std::size_t e = 0; e < edges.size(); ++e)
+      out_edges[static_cast<std::size_t>(fill[static_cast<std::size_t>(edges[e][0])]++)] = static_cast<int>(e);
+  }
+  const auto outgoing = [&](int v) {
+    return std::span<const int>(out_edges.data() + out_start[static_cast<std::size_t>(v)],
+                                static_cast<std::size_t>(out_start[static_cast<std::size_t>(v) + 1] - out_start[static_cast<std::size_t>(v)]));
+  };
   std::vector<bool> used(edges.size(), false);
   std::vector<std::vector<int>> loops;
   for (std::size_t start = 0; start < edges.size(); ++start) {
@@ -202,11 +214,17 @@ std::vector<std::vector<int>> trace_loops(const std::vector<Eigen::Vector2d>& xy
       used[static_cast<std::size_t>(e)] = true;
       const auto [u, v] = edges[static_cast<std::size_t>(e)];
       loop.push_back(u);
+      // One edge leaves v (most nodes): it is the next one if unused, without the angles.
+      const std::span<const int> out_v = outgoing(v);
+      if (out_v.size() == 1) {
+        e = used[static_cast<std::size_t>(out_v.front())] ? -1 : out_v.front();
+        continue;
+      }
       const Eigen::Vector2d back = xy[static_cast<std::size_t>(u)] - xy[static_cast<std::size_t>(v)];
       const double a0 = std::atan2(back.y(), back.x());
       int best = -1;
       double best_sweep = 0.0;
-      for (const int cand : outgoing[static_cast<std::size_t>(v)]) {
+      for (const int cand : out_v) {
         if (used[static_cast<std::size_t>(cand)]) continue;
         const Eigen::Vector2d d = xy[static_cast<std::size_t>(edges[static_cast<std::size_t>(cand)][1])] - xy[static_cast<std::size_t>(v)];
         double sweep = a0 - std::atan2(d.y(), d.x());

@@ -564,6 +564,26 @@ TEST(Surfmesh, CrossingCurvesFoundInThePatchPlane) {
   EXPECT_EQ(surfmesh_detail::crossing_curves(seg, folded), std::vector<int>{middle});
 }
 
+TEST(Surfmesh, TraceLoopsTurnsClockwiseAtATouchingNode) {
+  // Two unit squares touching at node 0: A = 0 1 2 3 (x, y >= 0), B = 0 5 6 4 (x, y <= 0),
+  // both counter-clockwise. Node 0 has two outgoing edges; arriving there from 3 (the first
+  // edges are A's), the first one clockwise from the way back (north) is 0 -> 1 (east, a
+  // quarter turn) before 0 -> 5 (west, three quarters): A closes alone, then B is traced
+  // from its first edge. Every other node has one outgoing edge (taken without angles).
+  const std::vector<Eigen::Vector2d> xy = {{0, 0}, {1, 0}, {1, 1}, {0, 1}, {0, -1}, {-1, 0}, {-1, -1}};
+  const std::vector<std::array<int, 2>> edges = {{1, 2}, {2, 3}, {3, 0}, {0, 5}, {5, 6}, {6, 4}, {4, 0}, {0, 1}};
+  EXPECT_EQ(surfmesh_detail::trace_loops(xy, edges), (std::vector<std::vector<int>>{{1, 2, 3, 0}, {0, 5, 6, 4}}));
+  // B's edges first, arriving at 0 from 4: clockwise from the way back (south) comes 0 -> 5
+  // (west, a quarter turn) before 0 -> 1 (east, three quarters): B closes alone.
+  const std::vector<std::array<int, 2>> b_first = {{5, 6}, {6, 4}, {4, 0}, {0, 5}, {0, 1}, {1, 2}, {2, 3}, {3, 0}};
+  EXPECT_EQ(surfmesh_detail::trace_loops(xy, b_first), (std::vector<std::vector<int>>{{5, 6, 4, 0}, {0, 1, 2, 3}}));
+  // One loop given in shuffled edge order: traced from the first edge on.
+  const std::vector<std::array<int, 2>> shuffled = {{2, 3}, {0, 1}, {3, 0}, {1, 2}};
+  EXPECT_EQ(surfmesh_detail::trace_loops(xy, shuffled), (std::vector<std::vector<int>>{{2, 3, 0, 1}}));
+  // An open chain ends where no unused edge leaves.
+  EXPECT_EQ(surfmesh_detail::trace_loops(xy, {{1, 2}, {2, 3}}), (std::vector<std::vector<int>>{{1, 2}}));
+}
+
 TEST(Surfmesh, FlippedHoleLoopFound) {
   // A one-face patch inside a flat grid: a closed 3-vertex hole loop of patch 0. Resampled
   // into a few nodes, such a loop (a steep sliver in the patch plane) turned the other way
