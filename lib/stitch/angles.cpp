@@ -781,9 +781,20 @@ AngleRepairResult repair_small_angles(const SurfaceMesh& surface, const StitchOp
       // A change that crosses another sheet (a thin plate, a fin's two sides): its nodes move
       // away from the sheet crossed (push_away) before the change is given up.
       std::vector<std::uint32_t> pushed_faces;
+      // Where each pushed node was before its first push: every factor's push is measured
+      // from there (the factors are 1, 2, 4 of the ring's height, not their sum), so a node
+      // ends within max_offset of where the repair left it.
+      std::vector<std::pair<TriMesh::VertexHandle, Vec>> origin;
+      auto origin_of = [&origin](TriMesh::VertexHandle v) {
+        const auto it = std::find_if(origin.begin(), origin.end(), [v](const auto& o) { return o.first == v; });
+        return it == origin.end() ? nullptr : &it->second;
+      };
       for (const double factor : kPushFactors) {
         if (pairs.empty()) break;
         std::vector<std::pair<TriMesh::VertexHandle, Vec>> pushes;
+        auto in_pushes = [&pushes](TriMesh::VertexHandle u) {
+          return std::any_of(pushes.begin(), pushes.end(), [u](const auto& push) { return push.first == u; });
+        };
         for (const auto& pair : pairs) {
           for (int side = 0; side < 2; ++side) {
             const TriMesh::FaceHandle f(static_cast<int>(pair[static_cast<std::size_t>(side)]));
@@ -791,22 +802,32 @@ AngleRepairResult repair_small_angles(const SurfaceMesh& surface, const StitchOp
             for (auto v : result.mesh.fv_range(f)) {
               const int g_node = result.vertex_node[static_cast<std::size_t>(v.idx())];
               if (is_changed[static_cast<std::size_t>(g_node)] == 0 || is_feature[static_cast<std::size_t>(g_node)] != 0 ||
-                  result.mesh.is_boundary(v) ||
-                  std::any_of(pushes.begin(), pushes.end(), [&](const auto& push) { return push.first == v; })) {
+                  result.mesh.is_boundary(v) || in_pushes(v)) {
                 continue;
               }
+              // No two neighbours in one round: push_away tests a node's ring with its
+              // neighbours where they are.
+              bool neighbour_pushed = false;
+              for (auto u : result.mesh.vv_range(v)) neighbour_pushed = neighbour_pushed || in_pushes(u);
+              if (neighbour_pushed) continue;
+              // From the node's place before its first push.
+              const Vec now = point(result.mesh, v);
+              const Vec* from = origin_of(v);
+              if (from != nullptr) result.mesh.set_point(v, to_openmesh(*from));
               // Within the fin rim bound (a clamped place would skip push_away's shape tests).
               const Vec q = push_away(result.mesh, v, g, factor, max_offset, min_double_area, options.min_normal_dot, sin_bound);
+              if (from != nullptr) result.mesh.set_point(v, to_openmesh(now));
               if (q.allFinite() && rim.allows(g_node, q)) pushes.emplace_back(v, q);
             }
           }
         }
         if (pushes.empty()) break;
         for (const auto& [v, q] : pushes) {
+          if (origin_of(v) == nullptr) origin.emplace_back(v, point(result.mesh, v));
           result.mesh.set_point(v, to_openmesh(q));
           for (auto f : result.mesh.vf_range(v)) pushed_faces.push_back(static_cast<std::uint32_t>(f.idx()));
         }
-        n_pushes += pushes.size();
+        n_pushes = origin.size();
         std::vector<std::uint32_t> faces = touched;
         faces.insert(faces.end(), pushed_faces.begin(), pushed_faces.end());
         pairs = intersecting_pairs_of(mesh_soup(result.mesh), faces, options.n_threads);
