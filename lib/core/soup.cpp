@@ -35,7 +35,8 @@ double mean_edge_length(const TriMesh& mesh) {
 }
 
 double core_detail::mean_edge_length(const TriMesh& mesh, const unsigned n_threads) {
-  if (n_threads < 2) return nurbsfront::mean_edge_length(mesh);
+  // One code path for every thread count (a serial shortcut's separately inlined length
+  // could round differently where the compiler contracts to FMA).
   constexpr std::size_t kChunk = 32768;
   // The box: per chunk of vertices, then combined (minima and maxima are exact).
   const std::size_t n_vertices = mesh.n_vertices();

@@ -43,10 +43,17 @@ std::size_t compensate_chords(TriMesh& mesh, const std::vector<int>& vertex_node
   std::vector<Eigen::Vector3d> normal(nv, Eigen::Vector3d::Zero());
   std::vector<std::array<int, 3>> corners(mesh.n_faces());
   std::vector<Eigen::Vector3d> area_vector(mesh.n_faces());
+  const bool face_status = mesh.has_face_status();
   parallel::for_chunks(corners.size(), n_threads, kFaceChunk, [&](std::size_t begin, std::size_t end, unsigned) {
     for (std::size_t fi = begin; fi < end; ++fi) {
       auto& c = corners[fi];
-      auto h = mesh.halfedge_handle(TriMesh::FaceHandle(static_cast<int>(fi)));
+      const TriMesh::FaceHandle face(static_cast<int>(fi));
+      if (face_status && mesh.status(face).deleted()) {  // adds nothing (zero area) below
+        c = {0, 0, 0};
+        area_vector[fi].setZero();
+        continue;
+      }
+      auto h = mesh.halfedge_handle(face);
       for (std::size_t k = 0; k < 3; ++k, h = mesh.next_halfedge_handle(h)) c[k] = mesh.to_vertex_handle(h).idx();
       area_vector[fi] = (point[c[1]] - point[c[0]]).cross(point[c[2]] - point[c[0]]);
     }
