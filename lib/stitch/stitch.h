@@ -313,7 +313,9 @@ struct StitchResult {
 [[nodiscard]] StitchResult stitch(const SurfaceMesh& surface, const StitchOptions& options = {});
 
 //! As above, and compares the result's topology with the input's (closed iff the input is,
-//! same components with the same Euler characteristics).
+//! same components with the same Euler characteristics). `input` must be the mesh
+//! mesh_surface() made `surface` from: the volume compensation's and the fidelity moves'
+//! label-image gate read `surface.input_label_staircase` when it is set, not `input`.
 [[nodiscard]] StitchResult stitch(const SurfaceMesh& surface, const TriMesh& input,
                                   const StitchOptions& options = {});
 
