@@ -1044,24 +1044,25 @@ TEST(Surfmesh, BevelledBoxEdgesAreFeatures) {
   EXPECT_GE(n_edges_found, 3);
 }
 
-// A closed box [lines.front(), lines.back()]^3 whose faces are split into triangles along
-// the grid lines at `lines` on every axis (outward oriented).
-TriMesh grid_box(const std::vector<double>& lines) {
+// A cuboid split along the given grid lines per axis (x, y, z), two triangles per cell of
+// each face, outward oriented.
+TriMesh grid_cuboid(const std::array<std::vector<double>, 3>& lines) {
   TriangleSoup soup;
-  const auto n = lines.size();
   for (int a = 0; a < 3; ++a)
     for (const bool high : {false, true}) {
       const int u = (a + 1) % 3, v = (a + 2) % 3;
+      const auto& lu = lines[static_cast<std::size_t>(u)];
+      const auto& lv = lines[static_cast<std::size_t>(v)];
       const auto point = [&](std::size_t i, std::size_t j) {
         Eigen::Vector3d x;
-        x[a] = high ? lines.back() : lines.front();
-        x[u] = lines[i];
-        x[v] = lines[j];
+        x[a] = high ? lines[static_cast<std::size_t>(a)].back() : lines[static_cast<std::size_t>(a)].front();
+        x[u] = lu[i];
+        x[v] = lv[j];
         soup.points.push_back(x);
         return static_cast<std::uint32_t>(soup.points.size() - 1);
       };
-      for (std::size_t i = 0; i + 1 < n; ++i)
-        for (std::size_t j = 0; j + 1 < n; ++j) {
+      for (std::size_t i = 0; i + 1 < lu.size(); ++i)
+        for (std::size_t j = 0; j + 1 < lv.size(); ++j) {
           const std::uint32_t p00 = point(i, j), p10 = point(i + 1, j), p11 = point(i + 1, j + 1), p01 = point(i, j + 1);
           if (high) {
             soup.triangles.push_back({p00, p10, p11});
@@ -1074,6 +1075,10 @@ TriMesh grid_box(const std::vector<double>& lines) {
     }
   return prepare_mesh(soup).mesh;
 }
+
+// A closed box [lines.front(), lines.back()]^3 whose faces are split into triangles along
+// the grid lines at `lines` on every axis (outward oriented).
+TriMesh grid_box(const std::vector<double>& lines) { return grid_cuboid({lines, lines, lines}); }
 
 // Feature sizing applies only where it helps (SizingOptions::feature_size): a marching-cubes
 // surface (every vertex on a lattice edge, edges spanning one cell) is recognised and left
@@ -1115,38 +1120,6 @@ TEST(Surfmesh, FeatureSizingOnlyWhereItHelps) {
   EXPECT_LT(gated.smallest, h);
   EXPECT_GE(gated.smallest, 0.2 * h);
   EXPECT_FALSE(surfmesh_detail::feature_sizing(rotor, seg, features, base, 1.0, 0.2 * h, 1.5, 0.5).size_at);
-}
-
-// A cuboid split along the given grid lines per axis (x, y, z), two triangles per cell of
-// each face, outward oriented.
-TriMesh grid_cuboid(const std::array<std::vector<double>, 3>& lines) {
-  TriangleSoup soup;
-  for (int a = 0; a < 3; ++a)
-    for (const bool high : {false, true}) {
-      const int u = (a + 1) % 3, v = (a + 2) % 3;
-      const auto& lu = lines[static_cast<std::size_t>(u)];
-      const auto& lv = lines[static_cast<std::size_t>(v)];
-      const auto point = [&](std::size_t i, std::size_t j) {
-        Eigen::Vector3d x;
-        x[a] = high ? lines[static_cast<std::size_t>(a)].back() : lines[static_cast<std::size_t>(a)].front();
-        x[u] = lu[i];
-        x[v] = lv[j];
-        soup.points.push_back(x);
-        return static_cast<std::uint32_t>(soup.points.size() - 1);
-      };
-      for (std::size_t i = 0; i + 1 < lu.size(); ++i)
-        for (std::size_t j = 0; j + 1 < lv.size(); ++j) {
-          const std::uint32_t p00 = point(i, j), p10 = point(i + 1, j), p11 = point(i + 1, j + 1), p01 = point(i, j + 1);
-          if (high) {
-            soup.triangles.push_back({p00, p10, p11});
-            soup.triangles.push_back({p00, p11, p01});
-          } else {
-            soup.triangles.push_back({p00, p11, p10});
-            soup.triangles.push_back({p00, p01, p11});
-          }
-        }
-    }
-  return prepare_mesh(soup).mesh;
 }
 
 // Feature sizing's gradation (SizingOptions::feature_gradation), on a hand-computed case: a
