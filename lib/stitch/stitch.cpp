@@ -586,6 +586,16 @@ StitchResult stitch_impl(const SurfaceMesh& surface, const TriMesh* input, const
       !surface.input_label_staircase) {
     input_on_lattice = std::async(std::launch::async, [input] { return surfmesh_detail::on_label_image_staircase(*input); });
   }
+  // Whether the input is a label image's staircase (the volume compensation's and the fidelity
+  // moves' gate): mesh_surface()'s answer, else the helper thread's, else tested here once.
+  std::optional<bool> label_staircase = surface.input_label_staircase;
+  auto is_label_staircase = [&]() {
+    if (!label_staircase) {
+      label_staircase =
+          input_on_lattice.valid() ? input_on_lattice.get() : surfmesh_detail::on_label_image_staircase(*input);
+    }
+    return *label_staircase;
+  };
 
   // 1. Assembly by id.
   assemble(surface.nodes, surface.triangles, surface.triangle_patch, options.n_threads, result, report);
@@ -619,15 +629,12 @@ StitchResult stitch_impl(const SurfaceMesh& surface, const TriMesh* input, const
     report.n_chord_compensation_moves = stitch_detail::compensate_chords(mesh, result.vertex_node, feature,
                                                                          options.chord_compensation, surface.input_mean_edge,
                                                                          options.n_threads);
-    // compensate_volume()'s gate, when mesh_surface() made it or it was taken on the helper
-    // thread (get() ends the future).
-    const bool gate_known = surface.input_label_staircase.has_value() || input_on_lattice.valid();
-    const bool gated = surface.input_label_staircase ? *surface.input_label_staircase
-                                                     : input_on_lattice.valid() && input_on_lattice.get();
+    // compensate_volume()'s label-image gate, taken here (it is told so).
+    const bool gated = input != nullptr && options.volume_compensation > 0.0 && mesh.n_faces() > 0 && is_label_staircase();
     report.n_volume_compensation_moves =
         gated ? 0
               : stitch_detail::compensate_volume(surface, input, mesh, result.face_patch, result.vertex_node, feature,
-                                                 options.volume_compensation, gate_known);
+                                                 options.volume_compensation, true);
     // The compensation's moves come after the obtuse repair and can leave triangles obtuse
     // that the splits cannot take apart (rotor: 39 obtuse with it, 37 without): the repair once
     // more. Not where the compensation is gated off (label-image staircases).
@@ -703,13 +710,8 @@ StitchResult stitch_impl(const SurfaceMesh& surface, const TriMesh* input, const
   // Not on a label image's marching-cubes staircase (0/1 cells, occupancy scenes): its
   // truth is the smooth surface the fits follow, not the staircase (docs/stitch.md,
   // "Fidelity moves: where they apply").
-  // The test is mesh_surface()'s answer when it made it (a pass over the input's edges).
-  auto label_staircase = [&surface, input] {
-    return surface.input_label_staircase ? *surface.input_label_staircase
-                                         : surfmesh_detail::label_image_staircase(surfmesh_detail::lattice_edge_shares(*input));
-  };
   if (options.fidelity_distance_edges > 0.0 && input != nullptr && pairs.empty() && mesh.n_faces() > 0 &&
-      !label_staircase()) {
+      !is_label_staircase()) {
     const stitch_detail::FidelityResult fidelity = stitch_detail::move_toward_input(
         *input, options, feature, surface.input_mean_edge, stitch_detail::fin_rim_bound(surface, options), result);
     report.n_fidelity_moves = fidelity.n_moved;
