@@ -161,14 +161,20 @@ TEST(QualityTopology, FlippedFace) {
   EXPECT_FALSE(t.volume.has_value());
 }
 
-TEST(QualityTopology, DegenerateFaces) {
-  TriangleSoup s = test::grid_patch(2, 2);
+// Appends two degenerate faces on three new points: a collinear (zero-area) triangle and one
+// with a repeated index.
+void add_two_degenerate_faces(TriangleSoup& s) {
   const auto n = static_cast<std::uint32_t>(s.points.size());
   s.points.push_back(V(0.25, 0.5, 1.0));
   s.points.push_back(V(0.5, 0.5, 1.0));
   s.points.push_back(V(0.75, 0.5, 1.0));
   s.triangles.push_back({n, n + 1, n + 2});  // collinear: zero area
   s.triangles.push_back({n, n, n + 1});      // repeated index
+}
+
+TEST(QualityTopology, DegenerateFaces) {
+  TriangleSoup s = test::grid_patch(2, 2);
+  add_two_degenerate_faces(s);
   s.points.push_back(V(7, 7, 7));            // unreferenced
   const MeshReport r = mesh_report(s);
   EXPECT_EQ(r.topology.n_degenerate_faces, 2u);
@@ -183,12 +189,7 @@ TEST(QualityTopology, DegenerateFaces) {
 // planted defects counted (2 degenerate faces, 1 duplicate) either way.
 TEST(QualityTopology, ReportSameAtEveryThreadCount) {
   TriangleSoup s = test::torus(16, 8);
-  const auto n = static_cast<std::uint32_t>(s.points.size());
-  s.points.push_back(V(0.25, 0.5, 1.0));
-  s.points.push_back(V(0.5, 0.5, 1.0));
-  s.points.push_back(V(0.75, 0.5, 1.0));
-  s.triangles.push_back({n, n + 1, n + 2});  // collinear: zero area
-  s.triangles.push_back({n, n, n + 1});      // repeated index
+  add_two_degenerate_faces(s);
   s.triangles.push_back(s.triangles[3]);     // duplicate
   for (const bool intersections : {false, true}) {
     ReportOptions options;
