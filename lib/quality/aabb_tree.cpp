@@ -8,6 +8,7 @@
 
 #include <Eigen/Geometry>
 
+#include "nurbsfront/core/parallel.h"
 #include "nurbsfront/quality/internal.h"
 
 namespace nurbsfront::quality_detail {
@@ -16,6 +17,10 @@ namespace {
 constexpr std::uint32_t kLeafSize = 4;
 constexpr std::uint32_t kNoFace = std::numeric_limits<std::uint32_t>::max();
 constexpr int kMaxDepth = 128;  // 63 Morton bits + log2 of a run of equal codes, with margin
+// Faces per chunk of the constructor's per-face loops on several threads.
+constexpr std::size_t kFaceChunk = 16384;
+// Fewer faces than this: the root's two subtrees are built on one thread.
+constexpr std::size_t kParallelBuildFaces = 4096;
 
 // Spreads the low 21 bits of x so that two zero bits follow each bit (for Morton codes).
 std::uint64_t spread_bits(std::uint64_t x) {
@@ -57,33 +62,68 @@ Box3f merge(const Box3f& a, const Box3f& b) {
   return r;
 }
 
+// Where build() splits faces [begin, end) (end - begin > kLeafSize): the middle when all
+// codes are equal, else after the last position whose code shares more leading bits with
+// the first code than the last code does.
+std::uint32_t split_position(std::uint32_t begin, std::uint32_t end, const std::vector<std::uint64_t>& codes) {
+  const std::uint64_t first = codes[begin], last = codes[end - 1];
+  if (first == last) return begin + (end - begin) / 2;
+  const int common = std::countl_zero(first ^ last);
+  std::uint32_t lo = begin, hi = end - 1;  // codes[lo] shares more, codes[hi] does not
+  while (hi - lo > 1) {
+    const std::uint32_t m = lo + (hi - lo) / 2;
+    if (std::countl_zero(first ^ codes[m]) > common) {
+      lo = m;
+    } else {
+      hi = m;
+    }
+  }
+  return hi;
+}
+
 }  // namespace
 
-AabbTree::AabbTree(const TriangleSoup& soup, std::vector<std::uint32_t> faces) : soup_(&soup) {
+AabbTree::AabbTree(const TriangleSoup& soup, std::vector<std::uint32_t> faces, unsigned n_threads) : soup_(&soup) {
   if (faces.empty()) return;
   const std::size_t n = faces.size();
+  n_threads = std::max(n_threads, 1U);
+  // Per-face loops in chunks on n_threads threads (each index writes its own entries).
+  auto for_faces = [n, n_threads](const auto& body) {
+    parallel::for_chunks(n, n_threads, kFaceChunk, [&body](std::size_t begin, std::size_t end, unsigned) {
+      for (std::size_t i = begin; i < end; ++i) body(i);
+    });
+  };
   // Faces sorted along a Morton (Z-order) curve of their centroids; each range is split
   // where the codes of its first and last face first differ (a linear BVH, Karras 2012),
   // so sibling boxes follow octree cells.
-  BoundingBox centroid_box;
   std::vector<Eigen::Vector3d> centroids(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    const auto& t = soup.triangles[faces[i]];
-    centroids[i] = (soup.points[t[0]] + soup.points[t[1]] + soup.points[t[2]]) / 3.0;
-    centroid_box.extend(centroids[i]);
+  const std::size_t n_chunks = (n + kFaceChunk - 1) / kFaceChunk;
+  std::vector<BoundingBox> chunk_boxes(n_chunks);  // min and max: the same box in any order
+  parallel::for_chunks(n, n_threads, kFaceChunk, [&](std::size_t begin, std::size_t end, unsigned) {
+    for (std::size_t i = begin; i < end; ++i) {
+      const auto& t = soup.triangles[faces[i]];
+      centroids[i] = (soup.points[t[0]] + soup.points[t[1]] + soup.points[t[2]]) / 3.0;
+      // One call may cover several chunks (one thread: all of them).
+      chunk_boxes[i / kFaceChunk].extend(centroids[i]);
+    }
+  });
+  BoundingBox centroid_box;
+  for (const auto& b : chunk_boxes) {
+    centroid_box.min = centroid_box.min.cwiseMin(b.min);
+    centroid_box.max = centroid_box.max.cwiseMax(b.max);
   }
   const Eigen::Vector3d extent = (centroid_box.max - centroid_box.min).cwiseMax(std::numeric_limits<double>::min());
   std::vector<std::uint64_t> codes(n);
   std::vector<std::uint32_t> order(n);
-  for (std::size_t i = 0; i < n; ++i) {
+  for_faces([&](std::size_t i) {
     codes[i] = morton_code(centroids[i], centroid_box.min, extent);
     order[i] = static_cast<std::uint32_t>(i);
-  }
+  });
   centroids = {};
   radix_sort(codes, order);
   faces_.resize(n);
   boxes_.resize(n);
-  for (std::size_t i = 0; i < n; ++i) {
+  for_faces([&](std::size_t i) {
     faces_[i] = faces[order[i]];
     const auto& t = soup.triangles[faces_[i]];
     const Eigen::Vector3d& a = soup.points[t[0]];
@@ -94,48 +134,79 @@ AabbTree::AabbTree(const TriangleSoup& soup, std::vector<std::uint32_t> faces) :
       boxes_[i].lo[k] = float_below(lo[k]);
       boxes_[i].hi[k] = float_above(hi[k]);
     }
+  });
+  if (n_threads >= 2 && n >= kParallelBuildFaces) {
+    build_halves(codes);
+  } else {
+    nodes_.reserve(2 * n);  // a binary tree with at most n leaves
+    parent_.reserve(2 * n);
+    nodes_.emplace_back();
+    parent_.push_back(0);
+    build(nodes_, parent_, 0, 0, static_cast<std::uint32_t>(n), codes);
   }
-  nodes_.reserve(2 * n);  // a binary tree with at most n leaves
-  parent_.reserve(2 * n);
+  // Each face is in one leaf: the leaves' entries are written by one chunk each.
   leaf_of_.assign(soup.triangles.size(), kNoFace);
-  nodes_.emplace_back();
-  parent_.push_back(0);
-  build(0, 0, static_cast<std::uint32_t>(n), codes);
+  parallel::for_chunks(nodes_.size(), n_threads, kFaceChunk, [this](std::size_t begin, std::size_t end, unsigned) {
+    for (std::size_t k = begin; k < end; ++k) {
+      const Node& node = nodes_[k];
+      if (!node.is_leaf()) continue;
+      for (std::uint32_t i = node.begin(); i < node.end(); ++i) leaf_of_[faces_[i]] = static_cast<std::uint32_t>(k);
+    }
+  });
 }
 
-void AabbTree::build(std::uint32_t node, std::uint32_t begin, std::uint32_t end, const std::vector<std::uint64_t>& codes) {
+void AabbTree::build(std::vector<Node>& nodes, std::vector<std::uint32_t>& parent, std::uint32_t node, std::uint32_t begin,
+                     std::uint32_t end, const std::vector<std::uint64_t>& codes) const {
   if (end - begin <= kLeafSize) {
     Box3f box = boxes_[begin];
     for (std::uint32_t i = begin + 1; i < end; ++i) box = merge(box, boxes_[i]);
-    nodes_[node] = Node{box, begin, end - begin};
-    for (std::uint32_t i = begin; i < end; ++i) leaf_of_[faces_[i]] = node;
+    nodes[node] = Node{box, begin, end - begin};
     return;
   }
-  std::uint32_t mid = begin + (end - begin) / 2;
-  const std::uint64_t first = codes[begin], last = codes[end - 1];
-  if (first != last) {
-    // Last position whose code shares more leading bits with `first` than `last` does.
-    const int common = std::countl_zero(first ^ last);
-    std::uint32_t lo = begin, hi = end - 1;  // codes[lo] shares more, codes[hi] does not
-    while (hi - lo > 1) {
-      const std::uint32_t m = lo + (hi - lo) / 2;
-      if (std::countl_zero(first ^ codes[m]) > common) {
-        lo = m;
-      } else {
-        hi = m;
-      }
+  const std::uint32_t mid = split_position(begin, end, codes);
+  const auto left = static_cast<std::uint32_t>(nodes.size());
+  nodes[node].index = left;
+  nodes.emplace_back();
+  nodes.emplace_back();
+  parent.push_back(node);
+  parent.push_back(node);
+  build(nodes, parent, left, begin, mid, codes);
+  build(nodes, parent, left + 1, mid, end, codes);
+  nodes[node].box = merge(nodes[left].box, nodes[left + 1].box);
+}
+
+void AabbTree::build_halves(const std::vector<std::uint64_t>& codes) {
+  const auto n = static_cast<std::uint32_t>(faces_.size());
+  const std::uint32_t mid = split_position(0, n, codes);
+  const std::uint32_t range[2][2] = {{0, mid}, {mid, n}};
+  // Each half's subtree with its root (a child of the tree's root) at local index 0.
+  std::vector<Node> local[2];
+  std::vector<std::uint32_t> local_parent[2];
+  parallel::for_chunks(2, 2, 1, [&](std::size_t k, std::size_t, unsigned) {
+    local[k].reserve(2 * static_cast<std::size_t>(range[k][1] - range[k][0]));
+    local[k].emplace_back();
+    local_parent[k].reserve(local[k].capacity());
+    local_parent[k].push_back(0);
+    build(local[k], local_parent[k], 0, range[k][0], range[k][1], codes);
+  });
+  // build() on one thread puts the root's children at 1 and 2, then the left child's
+  // descendants from 3, then the right child's: local index i > 0 of half k goes to
+  // i + shift[k], local index 0 to 1 + k.
+  const std::size_t shift[2] = {2, local[0].size() + 1};
+  nodes_.resize(1 + local[0].size() + local[1].size());
+  parent_.assign(nodes_.size(), 0);
+  nodes_[0].index = 1;
+  parallel::for_chunks(2, 2, 1, [&](std::size_t k, std::size_t, unsigned) {
+    auto global = [&](std::uint32_t i) { return static_cast<std::uint32_t>(i == 0 ? 1 + k : i + shift[k]); };
+    for (std::size_t i = 0; i < local[k].size(); ++i) {
+      Node node = local[k][i];
+      if (!node.is_leaf()) node.index = global(node.index);
+      const std::uint32_t g = global(static_cast<std::uint32_t>(i));
+      nodes_[g] = node;
+      parent_[g] = i == 0 ? 0 : global(local_parent[k][i]);
     }
-    mid = hi;
-  }
-  const auto left = static_cast<std::uint32_t>(nodes_.size());
-  nodes_[node].index = left;
-  nodes_.emplace_back();
-  nodes_.emplace_back();
-  parent_.push_back(node);
-  parent_.push_back(node);
-  build(left, begin, mid, codes);
-  build(left + 1, mid, end, codes);
-  nodes_[node].box = merge(nodes_[left].box, nodes_[left + 1].box);
+  });
+  nodes_[0].box = merge(nodes_[1].box, nodes_[2].box);
 }
 
 std::vector<std::uint32_t> morton_order(const std::vector<Eigen::Vector3d>& points) {

@@ -57,8 +57,10 @@ class AabbTree {
     [[nodiscard]] std::uint32_t end() const { return index + count; }
   };
 
-  //! Builds the tree over the given faces of the soup (indices must be valid).
-  AabbTree(const TriangleSoup& soup, std::vector<std::uint32_t> faces);
+  //! Builds the tree over the given faces of the soup (indices must be valid). With
+  //! n_threads >= 2 the per-face work runs in chunks and the root's two subtrees are built
+  //! in parallel: the same tree (the same nodes at the same indices) for any thread count.
+  AabbTree(const TriangleSoup& soup, std::vector<std::uint32_t> faces, unsigned n_threads = 1);
 
   [[nodiscard]] const std::vector<Node>& nodes() const { return nodes_; }
   //! Face indices in leaf order.
@@ -77,7 +79,14 @@ class AabbTree {
   [[nodiscard]] Closest closest(const Eigen::Vector3d& p, std::uint32_t hint) const;
 
  private:
-  void build(std::uint32_t node, std::uint32_t begin, std::uint32_t end, const std::vector<std::uint64_t>& codes);
+  //! The subtree of faces_[begin, end) at nodes[node]: its descendants appended to nodes
+  //! (children in pairs, each pair before the descendants of its left child), their
+  //! parents to parent.
+  void build(std::vector<Node>& nodes, std::vector<std::uint32_t>& parent, std::uint32_t node, std::uint32_t begin,
+             std::uint32_t end, const std::vector<std::uint64_t>& codes) const;
+  //! build() of the root with its two subtrees built on two threads, then placed where
+  //! build() puts them.
+  void build_halves(const std::vector<std::uint64_t>& codes);
   //! Improves `best` by the faces of the subtree at `start` closer than best.squared_distance.
   void search(const Eigen::Vector3d& p, std::uint32_t start, Closest& best) const;
 

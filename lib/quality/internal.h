@@ -23,8 +23,9 @@ namespace nurbsfront::quality_detail {
 class AabbTree;
 
 //! Tree over all faces of `soup` (what count_self_intersections_with and
-//! mesh_distance_with share when a report computes both).
-AabbTree all_faces_tree(const TriangleSoup& soup);
+//! mesh_distance_with share when a report computes both), built on n_threads threads (the
+//! same tree for any count).
+AabbTree all_faces_tree(const TriangleSoup& soup, unsigned n_threads = 1);
 
 //! count_self_intersections() on a given tree over all faces of the soup (validated).
 std::size_t count_self_intersections_with(const TriangleSoup& soup, const AabbTree& tree, unsigned n_threads,

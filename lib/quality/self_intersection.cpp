@@ -440,10 +440,10 @@ BoxGrid::BoxGrid(std::vector<Eigen::Vector3d> lo, std::vector<Eigen::Vector3d> h
   }
 }
 
-AabbTree all_faces_tree(const TriangleSoup& soup) {
+AabbTree all_faces_tree(const TriangleSoup& soup, unsigned n_threads) {
   std::vector<std::uint32_t> faces(soup.triangles.size());
   std::iota(faces.begin(), faces.end(), 0u);
-  return AabbTree(soup, std::move(faces));
+  return AabbTree(soup, std::move(faces), n_threads);
 }
 
 std::size_t count_self_intersections_with(const TriangleSoup& soup, const AabbTree& tree, unsigned n_threads,
@@ -484,14 +484,14 @@ std::size_t count_self_intersections_with(const TriangleSoup& soup, const AabbTr
 std::size_t count_self_intersections(const TriangleSoup& soup, unsigned n_threads) {
   quality_detail::validate_soup(soup, "count_self_intersections");
   if (n_threads == 0) throw InvalidInput("nurbsfront: count_self_intersections needs at least one thread");
-  return quality_detail::count_self_intersections_with(soup, quality_detail::all_faces_tree(soup), n_threads);
+  return quality_detail::count_self_intersections_with(soup, quality_detail::all_faces_tree(soup, n_threads), n_threads);
 }
 
 std::vector<std::array<std::uint32_t, 2>> self_intersecting_pairs(const TriangleSoup& soup, unsigned n_threads) {
   quality_detail::validate_soup(soup, "self_intersecting_pairs");
   if (n_threads == 0) throw InvalidInput("nurbsfront: self_intersecting_pairs needs at least one thread");
   std::vector<FacePair> pairs;
-  quality_detail::count_self_intersections_with(soup, quality_detail::all_faces_tree(soup), n_threads, &pairs);
+  quality_detail::count_self_intersections_with(soup, quality_detail::all_faces_tree(soup, n_threads), n_threads, &pairs);
   std::sort(pairs.begin(), pairs.end());
   return pairs;
 }

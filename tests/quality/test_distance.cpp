@@ -46,6 +46,47 @@ TEST(QualityDistance, TreeQueryMatchesBruteForce) {
   }
 }
 
+// The tree built on 2 and 4 threads (per-face loops in chunks, the root's halves built
+// apart) is the one-thread tree, node for node; its hinted queries (leaf and parent
+// arrays) find the brute-force closest face. 20 480 faces: above the parallel build's
+// size and the per-face chunk.
+TEST(QualityDistance, TreeBuiltOnThreadsIsTheSerialTree) {
+  const TriangleSoup s = test::icosphere(5);
+  std::vector<std::uint32_t> faces;
+  for (std::uint32_t i = 0; i < s.triangles.size(); ++i) {
+    if (i % 7 != 3) faces.push_back(i);  // a subset: some faces in no leaf
+  }
+  const quality_detail::AabbTree serial(s, faces, 1);
+  ASSERT_GT(serial.faces().size(), 4096u * 4);
+  for (const unsigned threads : {2u, 4u}) {
+    const quality_detail::AabbTree tree(s, faces, threads);
+    ASSERT_EQ(tree.faces(), serial.faces());
+    ASSERT_EQ(tree.nodes().size(), serial.nodes().size());
+    for (std::size_t k = 0; k < tree.nodes().size(); ++k) {
+      const auto& a = tree.nodes()[k];
+      const auto& b = serial.nodes()[k];
+      ASSERT_EQ(a.index, b.index) << k;
+      ASSERT_EQ(a.count, b.count) << k;
+      for (int c = 0; c < 3; ++c) {
+        ASSERT_EQ(a.box.lo[c], b.box.lo[c]) << k;
+        ASSERT_EQ(a.box.hi[c], b.box.hi[c]) << k;
+      }
+    }
+    for (int k = 0; k < 40; ++k) {
+      const V p(std::sin(k * 1.3) * 1.2, std::cos(k * 0.7) * 1.2, std::sin(k * 0.31) * 1.1);
+      double best = std::numeric_limits<double>::infinity();
+      for (const std::uint32_t f : faces) {
+        const auto& t = s.triangles[f];
+        const V q = quality_detail::closest_point_on_triangle(p, s.points[t[0]], s.points[t[1]], s.points[t[2]]);
+        best = std::min(best, (q - p).squaredNorm());
+      }
+      // Hints: a face of the tree far from p, and one that is in no leaf.
+      EXPECT_DOUBLE_EQ(tree.closest(p, faces[static_cast<std::size_t>(k) * 401 % faces.size()]).squared_distance, best);
+      EXPECT_DOUBLE_EQ(tree.closest(p, 3).squared_distance, best);
+    }
+  }
+}
+
 TEST(QualityDistance, MeshToItselfIsZero) {
   const TriangleSoup s = test::icosphere(3);
   const DistanceReport d = mesh_distance(s, s, coarse());
