@@ -2,6 +2,7 @@
 #include "nurbsfront/core/soup.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <exception>
 #include <limits>
@@ -223,6 +224,9 @@ ManifoldCheck check_manifold(const TriangleSoup& soup) {
 
 namespace {
 
+// Corners (or vertices, edges, faces) per chunk of to_trimesh_checked()'s parallel steps.
+constexpr std::size_t kBuildChunk = 32768;
+
 void require_finite(const TriangleSoup& soup) {
   for (const auto& p : soup.points) {
     if (!p.allFinite()) throw InvalidInput("nurbsfront: mesh has non-finite (NaN or infinite) coordinates");
@@ -262,13 +266,14 @@ ManifoldCheck core_detail::check_and_build(const TriangleSoup& soup, TriMesh& me
   }
   ManifoldCheck check;
   std::exception_ptr build_error;  // reported only when the check accepts the soup
+  // The build's own steps on n_threads threads too (they outlast the check).
   parallel::for_chunks(2, 2, 1, [&](std::size_t begin, std::size_t, unsigned) {
     if (begin == 0) {
       check = check_manifold(soup);
       return;
     }
     try {
-      to_trimesh_checked(soup, mesh);
+      to_trimesh_checked(soup, mesh, n_threads);
     } catch (const InvalidInput&) {
       build_error = std::current_exception();
     }
@@ -284,7 +289,7 @@ ManifoldCheck core_detail::check_and_build(const TriangleSoup& soup, TriMesh& me
   return check;
 }
 
-void core_detail::to_trimesh_checked(const TriangleSoup& soup, TriMesh& mesh) {
+void core_detail::to_trimesh_checked(const TriangleSoup& soup, TriMesh& mesh, unsigned n_threads) {
   mesh.clear();
   require_finite(soup);
   // The halfedge structure is built directly (the soup is an oriented 2-manifold), exactly
@@ -293,8 +298,16 @@ void core_detail::to_trimesh_checked(const TriangleSoup& soup, TriMesh& mesh) {
   // its third one; an interior vertex keeps the halfedge leaving it in its last face; a
   // boundary vertex and a boundary halfedge's successor are the vertex's one outgoing
   // boundary halfedge. (Test Soup.DirectBuildMatchesAddFace compares with add_face.)
+  // The per-corner, per-edge, per-face and per-vertex steps run in chunks on n_threads
+  // threads, each writing only its own elements: the same mesh for any thread count.
   const std::size_t n_points = soup.points.size(), n_corners = 3 * soup.triangles.size();
-  // Corners c = 3 f + k (edge t[k] -> t[k + 1]) listed by their start vertex.
+  n_threads = std::max(n_threads, 1U);
+  auto in_chunks = [n_threads](std::size_t n, const auto& body, std::size_t chunk = kBuildChunk) {
+    parallel::for_chunks(n, n_threads, chunk, [&body](std::size_t begin, std::size_t end, unsigned) {
+      for (std::size_t i = begin; i < end; ++i) body(i);
+    });
+  };
+  // Corners c = 3 f + k (edge t[k] -> t[k + 1]) listed by their start vertex, in corner order.
   std::vector<std::uint32_t> first(n_points + 1, 0);
   for (const auto& t : soup.triangles) {
     for (const std::uint32_t v : t) ++first[v + 1];
@@ -315,49 +328,88 @@ void core_detail::to_trimesh_checked(const TriangleSoup& soup, TriMesh& mesh) {
     }
   }
   constexpr auto kNoCorner = std::numeric_limits<std::uint32_t>::max();
-  std::vector<TriMesh::HalfedgeHandle> halfedge(n_corners);
-  std::vector<std::uint32_t> boundary;  // corners whose edge has no other face
-  std::vector<std::uint32_t> edge_corner;  // per edge, the corner of its first use
-  edge_corner.reserve(n_corners / 2 + n_points);
-  for (std::size_t c = 0; c < n_corners; ++c) {
+  // Each corner's twin (the first listed corner b -> a of its edge a -> b, if any); a corner
+  // starts an edge when it has no twin or a later one.
+  std::vector<std::uint32_t> twin(n_corners);
+  in_chunks(n_corners, [&](std::size_t c) {
     const std::uint32_t a = soup.triangles[c / 3][c % 3], b = corner_end(c);
-    std::uint32_t twin = kNoCorner;  // the corner b -> a, if any
+    std::uint32_t found = kNoCorner;
     for (std::uint32_t i = first[b]; i < first[b + 1]; ++i) {
       if (outgoing_end[i] == a) {
-        twin = outgoing[i];
+        found = outgoing[i];
         break;
       }
     }
-    if (twin != kNoCorner && twin < c) {
-      halfedge[c] = mesh.opposite_halfedge_handle(halfedge[twin]);
-    } else {
+    twin[c] = found;
+  });
+  outgoing_end = {};
+  auto starts_edge = [&twin](std::size_t c) { return twin[c] == kNoCorner || twin[c] > c; };
+  // Edges numbered in corner order: each chunk's count, then its first edge number.
+  const std::size_t n_chunks = (n_corners + kBuildChunk - 1) / kBuildChunk;
+  std::vector<std::size_t> chunk_edges(n_chunks + 1, 0);
+  in_chunks(n_chunks, [&](std::size_t k) {
+    const std::size_t end = std::min(n_corners, (k + 1) * kBuildChunk);
+    for (std::size_t c = k * kBuildChunk; c < end; ++c) chunk_edges[k + 1] += starts_edge(c) ? 1 : 0;
+  }, 1);
+  for (std::size_t k = 0; k < n_chunks; ++k) chunk_edges[k + 1] += chunk_edges[k];
+  const std::size_t n_edges = chunk_edges[n_chunks];
+  std::vector<TriMesh::HalfedgeHandle> halfedge(n_corners);
+  std::vector<std::uint32_t> edge_corner(n_edges);  // per edge, the corner of its first use
+  in_chunks(n_chunks, [&](std::size_t k) {
+    const std::size_t end = std::min(n_corners, (k + 1) * kBuildChunk);
+    std::size_t e = chunk_edges[k];
+    for (std::size_t c = k * kBuildChunk; c < end; ++c) {
+      if (!starts_edge(c)) continue;
       // Edge e's halfedges are 2 e (first use, a -> b) and 2 e + 1, as new_edge() numbers them.
-      halfedge[c] = TriMesh::HalfedgeHandle(static_cast<int>(2 * edge_corner.size()));
-      edge_corner.push_back(static_cast<std::uint32_t>(c));
-      if (twin == kNoCorner) boundary.push_back(static_cast<std::uint32_t>(c));
+      halfedge[c] = TriMesh::HalfedgeHandle(static_cast<int>(2 * e));
+      edge_corner[e++] = static_cast<std::uint32_t>(c);
     }
+  }, 1);
+  // The other corners take their twin's opposite halfedge. A twin that starts no edge
+  // itself, or whose own twin is another corner, means an edge used twice in one
+  // direction: no oriented 2-manifold (undefined result; left empty, with no two corners
+  // on one halfedge: the steps below write each element once).
+  std::atomic<bool> refused{false};
+  in_chunks(n_corners, [&](std::size_t c) {
+    if (starts_edge(c)) return;
+    const std::uint32_t t = twin[c];
+    if (!starts_edge(t) || twin[t] != c) {
+      refused = true;
+      return;
+    }
+    halfedge[c] = mesh.opposite_halfedge_handle(halfedge[t]);
+  });
+  if (refused.load()) return;
+  std::vector<std::uint32_t> boundary;  // corners whose edge has no other face, in corner order
+  for (const std::uint32_t c : edge_corner) {
+    if (twin[c] == kNoCorner) boundary.push_back(c);
   }
   // All elements at once (add_vertex/new_edge/new_face resize every property per element);
   // the items and properties are the same as when they are added one by one.
-  mesh.resize(n_points, edge_corner.size(), soup.triangles.size());
-  for (std::size_t v = 0; v < n_points; ++v) {
-    mesh.set_point(TriMesh::VertexHandle(static_cast<int>(v)), to_openmesh(soup.points[v]));
-  }
-  for (const std::uint32_t c : edge_corner) {
+  mesh.resize(n_points, n_edges, soup.triangles.size());
+  in_chunks(n_points, [&](std::size_t v) {
+    const TriMesh::VertexHandle vh(static_cast<int>(v));
+    mesh.set_point(vh, to_openmesh(soup.points[v]));
+    // add_face() leaves a vertex the halfedge leaving it in its last face: its last listed
+    // corner (boundary vertices are set again below).
+    if (first[v + 1] > first[v]) mesh.set_halfedge_handle(vh, halfedge[outgoing[first[v + 1] - 1]]);
+  });
+  outgoing = {};
+  in_chunks(n_edges, [&](std::size_t e) {
+    const std::uint32_t c = edge_corner[e];
     mesh.set_vertex_handle(halfedge[c], TriMesh::VertexHandle(static_cast<int>(corner_end(c))));
     mesh.set_vertex_handle(mesh.opposite_halfedge_handle(halfedge[c]),
                            TriMesh::VertexHandle(static_cast<int>(soup.triangles[c / 3][c % 3])));
-  }
-  for (std::size_t f = 0; f < soup.triangles.size(); ++f) {
+  });
+  in_chunks(soup.triangles.size(), [&](std::size_t f) {
     const TriMesh::FaceHandle fh(static_cast<int>(f));
     mesh.set_halfedge_handle(fh, halfedge[3 * f + 2]);
     for (std::size_t k = 0; k < 3; ++k) {
       const auto h = halfedge[3 * f + k];
       mesh.set_face_handle(h, fh);
       mesh.set_next_halfedge_handle(h, halfedge[3 * f + (k + 1) % 3]);
-      mesh.set_halfedge_handle(TriMesh::VertexHandle(static_cast<int>(soup.triangles[f][k])), h);
     }
-  }
+  });
   for (const std::uint32_t c : boundary) {
     const auto h = mesh.opposite_halfedge_handle(halfedge[c]);
     mesh.set_halfedge_handle(mesh.from_vertex_handle(h), h);

@@ -6,9 +6,11 @@
 namespace nurbsfront::core_detail {
 
 //! As to_trimesh(soup, mesh) for a soup the caller has already found ok by
-//! check_manifold() (not checked again: the result is undefined otherwise); the same mesh.
+//! check_manifold() (not checked again: the result is undefined otherwise, but every
+//! triangle naming three distinct in-range points is read and written safely); the same
+//! mesh. Its steps run on n_threads threads: the same mesh for any count.
 //! \throw InvalidInput for non-finite coordinates; `mesh` is left empty then.
-void to_trimesh_checked(const TriangleSoup& soup, TriMesh& mesh);
+void to_trimesh_checked(const TriangleSoup& soup, TriMesh& mesh, unsigned n_threads = 1);
 
 //! check_manifold(soup); when it is ok, `mesh` is to_trimesh_checked(soup, mesh)'s mesh,
 //! otherwise it is left empty. With n_threads >= 2 and every triangle naming three distinct

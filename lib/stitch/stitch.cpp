@@ -280,7 +280,7 @@ void assemble(const std::vector<Eigen::Vector3d>& nodes, const std::vector<std::
   AssemblySoup& a = prepared != nullptr ? *prepared : *own;
   report.n_unused_nodes = a.n_unused_nodes;
   if (prepared != nullptr) {
-    core_detail::to_trimesh_checked(a.soup, result.mesh);
+    core_detail::to_trimesh_checked(a.soup, result.mesh, n_threads);
     result.vertex_node = std::move(a.vertex_node);
     result.face_patch = triangle_patch;
     return;

@@ -229,6 +229,45 @@ TEST(Soup, DirectBuildMatchesAddFace) {
   EXPECT_GT(n_compared, 40);
 }
 
+// The direct build's steps on 2 and 4 threads: add_face()'s mesh, as on one thread, for a
+// grid of 33 800 faces (101 400 corners: four chunks of 32 768) shuffled, with holes and
+// rotated corners. A soup with an edge used twice in one direction (no oriented
+// 2-manifold) is read safely: check_and_build() refuses it and leaves the mesh empty.
+TEST(Soup, DirectBuildOnThreadsMatchesAddFace) {
+  std::mt19937 random(5);
+  TriangleSoup s = test::grid_patch(130, 130);
+  std::shuffle(s.triangles.begin(), s.triangles.end(), random);
+  for (int k = 0; k < 40; ++k)
+    s.triangles.erase(s.triangles.begin() + static_cast<std::ptrdiff_t>(random() % s.triangles.size()));
+  for (std::size_t f = 0; f < s.triangles.size(); f += 3) {
+    std::rotate(s.triangles[f].begin(), s.triangles[f].begin() + 1, s.triangles[f].end());
+  }
+  ASSERT_TRUE(check_manifold(s).ok());
+  TriMesh expected;
+  std::vector<TriMesh::VertexHandle> handles;
+  for (const auto& p : s.points) handles.push_back(expected.add_vertex(to_openmesh(p)));
+  for (const auto& t : s.triangles) ASSERT_TRUE(expected.add_face(handles[t[0]], handles[t[1]], handles[t[2]]).is_valid());
+  for (const unsigned threads : {1u, 2u, 4u}) {
+    TriMesh built;
+    core_detail::to_trimesh_checked(s, built, threads);
+    expect_same_mesh(built, expected, static_cast<int>(threads));
+    if (HasFatalFailure()) return;
+    TriMesh checked;
+    ASSERT_TRUE(core_detail::check_and_build(s, checked, threads).ok());
+    expect_same_mesh(checked, expected, static_cast<int>(threads));
+    if (HasFatalFailure()) return;
+  }
+  TriangleSoup twice = s;
+  twice.triangles.push_back(twice.triangles[100]);  // the same face again: its edges twice
+  std::rotate(twice.triangles.back().begin(), twice.triangles.back().begin() + 1, twice.triangles.back().end());
+  for (const unsigned threads : {2u, 4u}) {
+    TriMesh built = to_trimesh(test::cube());
+    EXPECT_FALSE(core_detail::check_and_build(twice, built, threads).ok());
+    EXPECT_EQ(built.n_faces(), 0u);
+    core_detail::to_trimesh_checked(twice, built, threads);  // undefined mesh, but no bad access
+  }
+}
+
 TEST(Soup, MeanEdgeLengthIsTheSameForAnyThreadCount) {
   // A 160 x 160 grid (77 120 edges, more than two chunks of 32 768): the mean of its edges
   // (n_axis of length h, n_diagonal of length h sqrt(2)), bit for bit the same on 1, 2 and
