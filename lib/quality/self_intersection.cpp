@@ -440,6 +440,9 @@ BoxGrid::BoxGrid(std::vector<Eigen::Vector3d> lo, std::vector<Eigen::Vector3d> h
   }
 }
 
+// Faces per task of the usable-face flags on several threads.
+constexpr std::size_t kUsableChunk = 16384;
+
 AabbTree all_faces_tree(const TriangleSoup& soup, unsigned n_threads) {
   std::vector<std::uint32_t> faces(soup.triangles.size());
   std::iota(faces.begin(), faces.end(), 0u);
@@ -454,14 +457,16 @@ std::size_t count_self_intersections_with(const TriangleSoup& soup, const AabbTr
   // elsewhere and skipped here: the predicates need a proper plane per triangle.
   const double diagonal = bounding_box(soup).diagonal();
   const double area_floor = tolerance::kDegenerateAreaRelative * diagonal * diagonal;
-  std::vector<char> usable(tree.faces().size());  // by position in the tree
-  for (std::size_t i = 0; i < usable.size(); ++i) {
-    const auto& t = soup.triangles[tree.faces()[i]];
-    if (ids[t[0]] == ids[t[1]] || ids[t[1]] == ids[t[2]] || ids[t[2]] == ids[t[0]]) continue;
-    const double area =
-        0.5 * (soup.points[t[1]] - soup.points[t[0]]).cross(soup.points[t[2]] - soup.points[t[0]]).norm();
-    usable[i] = area > area_floor;
-  }
+  std::vector<char> usable(tree.faces().size());  // by position in the tree; on n_threads threads
+  parallel::for_chunks(usable.size(), n_threads, kUsableChunk, [&](std::size_t begin, std::size_t end, unsigned) {
+    for (std::size_t i = begin; i < end; ++i) {
+      const auto& t = soup.triangles[tree.faces()[i]];
+      if (ids[t[0]] == ids[t[1]] || ids[t[1]] == ids[t[2]] || ids[t[2]] == ids[t[0]]) continue;
+      const double area =
+          0.5 * (soup.points[t[1]] - soup.points[t[0]]).cross(soup.points[t[2]] - soup.points[t[0]]).norm();
+      usable[i] = area > area_floor;
+    }
+  });
   const SelfIntersectionCounter counter(soup, tree, ids, usable);
   if (n_threads == 1) return counter.run({0, 0}, pairs);
   // Independent subtree pairs, handed out dynamically; the total does not depend on

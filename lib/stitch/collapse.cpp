@@ -22,6 +22,9 @@ namespace {
 
 using Vec = Eigen::Vector3d;
 
+// Faces per task of the candidate scan on several threads.
+constexpr std::size_t kScanChunk = 8192;
+
 // Two feature corners closer than this (in target edge lengths) may merge.
 constexpr double kCoincidentCornersSize = 0.05;
 
@@ -57,17 +60,23 @@ class Collapser {
     NodeMerges out;
     out.target.resize(surface_.nodes.size());
     std::iota(out.target.begin(), out.target.end(), 0);
-    // The triangles below the angle, worst first.
-    std::vector<std::pair<double, int>> bad;
+    // The triangles below the angle, worst first (scanned on n_threads threads:
+    // select_in_order gives the serial scan's list).
     const double sin_bound = std::sin(options_.collapse_below_angle_deg * std::numbers::pi / 180.0);
-    for (auto f : mesh_.faces()) {
-      std::array<Vec, 3> p;
-      int k = 0;
-      for (auto v : mesh_.fv_range(f)) p[static_cast<std::size_t>(k++)] = point(mesh_, v);
-      if (!may_have_angle_below(p[0], p[1], p[2], sin_bound)) continue;
-      const double angle = min_angle_deg(p[0], p[1], p[2]);
-      if (angle < options_.collapse_below_angle_deg) bad.emplace_back(angle, f.idx());
-    }
+    const bool has_status = mesh_.has_face_status();
+    std::vector<std::pair<double, int>> bad = select_in_order<std::pair<double, int>>(
+        mesh_.n_faces(), options_.n_threads, kScanChunk, [&](std::size_t i, std::pair<double, int>& found) {
+          const TriMesh::FaceHandle f(static_cast<int>(i));
+          if (has_status && mesh_.status(f).deleted()) return false;
+          std::array<Vec, 3> p;
+          int k = 0;
+          for (auto v : mesh_.fv_range(f)) p[static_cast<std::size_t>(k++)] = point(mesh_, v);
+          if (!may_have_angle_below(p[0], p[1], p[2], sin_bound)) return false;
+          const double angle = min_angle_deg(p[0], p[1], p[2]);
+          if (!(angle < options_.collapse_below_angle_deg)) return false;
+          found = {angle, f.idx()};
+          return true;
+        });
     std::sort(bad.begin(), bad.end());
     for (const auto& [angle, index] : bad) {
       const TriMesh::FaceHandle f(index);
