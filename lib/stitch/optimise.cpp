@@ -982,16 +982,17 @@ class Optimiser {
 
 }  // namespace
 
-std::vector<double> face_alphas(const TriMesh& mesh) {
-  std::vector<double> alpha;
-  alpha.reserve(mesh.n_faces());
-  for (auto f : mesh.faces()) {
+std::vector<double> face_alphas(const TriMesh& mesh, unsigned n_threads, std::size_t chunk) {
+  const bool has_status = mesh.has_face_status();
+  return select_in_order<double>(mesh.n_faces(), n_threads, chunk, [&mesh, has_status](std::size_t i, double& alpha) {
+    const TriMesh::FaceHandle f(static_cast<int>(i));
+    if (has_status && mesh.status(f).deleted()) return false;
     std::array<Vec, 3> p;
     int k = 0;
     for (auto v : mesh.fv_range(f)) p[static_cast<std::size_t>(k++)] = point(mesh, v);
-    alpha.push_back(triangle_alpha(p[0], p[1], p[2]));
-  }
-  return alpha;
+    alpha = triangle_alpha(p[0], p[1], p[2]);
+    return true;
+  });
 }
 
 void optimise(const SurfaceMesh& surface, const StitchOptions& options, const std::vector<std::uint8_t>& is_feature,

@@ -606,7 +606,7 @@ StitchResult stitch_impl(const SurfaceMesh& surface, const TriMesh* input, const
                             "direction, or a closed vertex fan: duplicated, flipped or overlapping triangles)");
   }
   {
-    const std::vector<double> alpha = stitch_detail::face_alphas(mesh);
+    const std::vector<double> alpha = stitch_detail::face_alphas(mesh, options.n_threads);
     report.alpha_mean_before = mean_of(alpha);
     double min_alpha = std::numeric_limits<double>::quiet_NaN();
     for (double a : alpha) min_alpha = std::isnan(min_alpha) ? a : std::min(min_alpha, a);

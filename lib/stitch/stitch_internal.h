@@ -313,8 +313,9 @@ std::size_t compensate_volume(const SurfaceMesh& surface, const TriMesh* input, 
                               const std::vector<int>& face_patch, const std::vector<int>& vertex_node,
                               const std::vector<std::uint8_t>& is_feature, double strength, bool label_gate_done = false);
 
-//! alpha of every face, in face order.
-std::vector<double> face_alphas(const TriMesh& mesh);
+//! alpha of every face (not deleted), in face order; the faces on n_threads threads
+//! (select_in_order, `chunk` faces a task): the same list at every count.
+std::vector<double> face_alphas(const TriMesh& mesh, unsigned n_threads = 1, std::size_t chunk = 8192);
 
 //! Edge flips and constrained smoothing (StitchOptions::optimisation_passes rounds) on
 //! result.mesh; result.face_patch stays valid (flips keep face handles).

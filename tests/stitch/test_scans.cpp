@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // The stitch's whole-mesh scans on several threads: stitch_detail::select_in_order and
 // small_away_faces give the serial loop's list at 1, 2 and 4 threads; smallest_angle_sine
-// (no sort) equals the sorted formula bit for bit.
+// (no sort) equals the sorted formula bit for bit; face_alphas gives the serial list too.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -15,6 +15,7 @@
 
 #include "fixtures/shapes.h"
 #include "nurbsfront/core/soup.h"
+#include "nurbsfront/quality/report.h"
 #include "nurbsfront/stitch/stitch_internal.h"
 
 namespace nurbsfront {
@@ -117,6 +118,34 @@ TEST(SmallAwayFaces, SerialListAtEveryThreadCount) {
     for (const std::size_t chunk : {std::size_t{16}, std::size_t{8192}}) {
       EXPECT_EQ(stitch_detail::small_away_faces(mesh, vertex_node, is_feature, sin_bound, threads, chunk), expected)
           << threads << " threads, chunk " << chunk;
+    }
+  }
+}
+
+TEST(FaceAlphas, SerialListAtEveryThreadCount) {
+  // A torus with every 5th collapsible edge collapsed: deleted faces are skipped, the
+  // others' alphas listed in face order, bit for bit at 1, 2 and 4 threads.
+  TriMesh mesh = to_trimesh(test::torus(24, 12));
+  int n = 0;
+  for (int e = 0; e < static_cast<int>(mesh.n_edges()); ++e) {
+    const TriMesh::EdgeHandle edge(e);
+    if (mesh.status(edge).deleted()) continue;
+    const auto h = mesh.halfedge_handle(edge, 0);
+    if (!mesh.is_collapse_ok(h) || ++n % 5 != 0) continue;
+    mesh.collapse(h);
+  }
+  std::vector<double> expected;
+  for (auto f : mesh.faces()) {
+    std::array<Vec, 3> p;
+    int k = 0;
+    for (auto v : mesh.fv_range(f)) p[static_cast<std::size_t>(k++)] = stitch_detail::point(mesh, v);
+    expected.push_back(triangle_alpha(p[0], p[1], p[2]));
+  }
+  ASSERT_LT(expected.size() + 50, mesh.n_faces());  // deleted faces in the middle
+  ASSERT_LT(*std::min_element(expected.begin(), expected.end()), 0.9);
+  for (const unsigned threads : {1U, 2U, 4U}) {
+    for (const std::size_t chunk : {std::size_t{16}, std::size_t{8192}}) {
+      EXPECT_EQ(stitch_detail::face_alphas(mesh, threads, chunk), expected) << threads << " threads, chunk " << chunk;
     }
   }
 }
