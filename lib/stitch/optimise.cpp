@@ -78,6 +78,18 @@ class Optimiser {
     double l_old;
   };
 
+  // A split of split_sweep: the halfedge (a, b) split, the new node m and its NodeInfo (on the
+  // segment: a feature node), the edges to flip after it; best: its obtuse new triangles
+  // (evaluate_split), -1 when no split of the edge passes.
+  struct SplitPlan {
+    TriMesh::HalfedgeHandle h;
+    Vec m = Vec::Zero();
+    NodeInfo info;
+    bool on_segment = false, one_sided = false;
+    int best = -1;
+    std::vector<std::array<TriMesh::VertexHandle, 2>> flips;
+  };
+
  public:
   Optimiser(const SurfaceMesh& surface, const StitchOptions& options, StitchResult& result,
             const std::vector<std::uint8_t>& is_feature)
@@ -474,6 +486,7 @@ class Optimiser {
     vertex_node_ = &vertex_node;
     is_split_feature_ = &is_feature;
     const std::size_t n_faces = mesh_.n_faces();
+    SplitPlan plan, far;
     for (std::size_t fi = 0; fi < n_faces; ++fi) {
       const TriMesh::FaceHandle f(static_cast<int>(fi));
       // The halfedge (a, b) opposite the obtuse corner c.
@@ -484,57 +497,39 @@ class Optimiser {
         if ((a - c).dot(b - c) < 0.0) h = g;
       }
       if (!h.is_valid()) continue;
-      const auto va = mesh_.from_vertex_handle(h), vb = mesh_.to_vertex_handle(h);
-      const std::array<int, 2> key{std::min(va.idx(), vb.idx()), std::max(va.idx(), vb.idx())};
-      if (std::binary_search(refused.begin(), refused.end(), key)) continue;
-      NodeInfo info;
-      bool on_segment = false;
-      if (!plan_split(h, vertex_node, is_feature, info, on_segment)) continue;
-      const Vec a = point(mesh_, va), b = point(mesh_, vb);
       const Vec c = point(mesh_, mesh_.to_vertex_handle(mesh_.next_halfedge_handle(h)));
-      const auto o = mesh_.opposite_halfedge_handle(h);
-      const bool one_sided = mesh_.is_boundary(o);
-      const double foot = std::clamp((c - a).dot(b - a) / (b - a).squaredNorm(), kSplitMin, 1.0 - kSplitMin);
-      // The best of: the foot, the midpoint; each without and with flips (fewest obtuse
-      // triangles; the first of equals).
-      int best = -1;
-      Vec best_m;
-      for (const double t : {foot, 0.5}) {
-        const Vec m0 = a + t * (b - a);
-        const Vec m = on_segment ? m0 : project(info, m0);
-        // Not far off the edge: a fit far off there (a border of a patch fitted badly).
-        if (!m.allFinite() || (m - m0).norm() > kSplitMaxOffset * (b - a).norm()) continue;
-        for (const bool with_flips : {false, true}) {
-          const int n = evaluate_split(h, one_sided, m, on_segment, with_flips, false, flips_);
-          if (n >= 0 && (best < 0 || n < best)) {
-            best = n;
-            best_m = m;
-            best_flips_ = flips_;
-          }
-        }
+      plan_edge_split(h, c, vertex_node, is_feature, refused, plan);
+      // The far piece of a strip (docs/stitch.md "Far pieces of strips"): split instead when
+      // that leaves fewer obtuse triangles.
+      const TriMesh::HalfedgeHandle g = far_piece(h);
+      if (g.is_valid()) {
+        plan_edge_split(g, c, vertex_node, is_feature, refused, far);
+        if (far.best >= 0 && (plan.best < 0 || far.best < plan.best)) std::swap(plan, far);
       }
-      if (!on_segment) relaxed_split(h, one_sided, info, a, b, best, best_m);
-      if (best < 0) continue;
-      const auto v = mesh_.add_vertex(to_openmesh(best_m));
-      const int patch_c = face_patch_[fi];
-      const int patch_d = one_sided ? -1 : face_patch_[static_cast<std::size_t>(mesh_.face_handle(o).idx())];
-      const auto vc = mesh_.to_vertex_handle(mesh_.next_halfedge_handle(h));
-      mesh_.split_edge(mesh_.edge_handle(h), v);
+      if (plan.best < 0) continue;
+      const auto o = mesh_.opposite_halfedge_handle(plan.h);
+      const auto va = mesh_.from_vertex_handle(plan.h), vb = mesh_.to_vertex_handle(plan.h);
+      const std::array<int, 2> key{std::min(va.idx(), vb.idx()), std::max(va.idx(), vb.idx())};
+      const auto v = mesh_.add_vertex(to_openmesh(plan.m));
+      const int patch_c = face_patch_[static_cast<std::size_t>(mesh_.face_handle(plan.h).idx())];
+      const int patch_d = plan.one_sided ? -1 : face_patch_[static_cast<std::size_t>(mesh_.face_handle(o).idx())];
+      const auto vc = mesh_.to_vertex_handle(mesh_.next_halfedge_handle(plan.h));
+      mesh_.split_edge(mesh_.edge_handle(plan.h), v);
       face_patch_.resize(mesh_.n_faces(), -1);
-      for (auto g : mesh_.vf_range(v)) {
-        int& patch = face_patch_[static_cast<std::size_t>(g.idx())];
+      for (auto e : mesh_.vf_range(v)) {
+        int& patch = face_patch_[static_cast<std::size_t>(e.idx())];
         if (patch >= 0) continue;
         bool has_c = false;
-        for (auto u : mesh_.fv_range(g)) has_c = has_c || u == vc;
+        for (auto u : mesh_.fv_range(e)) has_c = has_c || u == vc;
         patch = has_c ? patch_c : patch_d;
       }
       vertex_node.push_back(static_cast<int>(is_feature.size()));
-      is_feature.push_back(on_segment ? 1 : 0);
-      nodes_.push_back(info);
+      is_feature.push_back(plan.on_segment ? 1 : 0);
+      nodes_.push_back(plan.info);
       made.push_back(v);
       split_edges.push_back(key);
       ++n_splits;
-      for (const auto& [u, w] : best_flips_) {
+      for (const auto& [u, w] : plan.flips) {
         const auto e = mesh_.edge_handle(mesh_.find_halfedge(u, w));
         if (mesh_.is_flip_ok(e)) {
           mesh_.flip(e);
@@ -543,6 +538,74 @@ class Optimiser {
       }
     }
     return n_splits;
+  }
+
+  // The best split of h's edge (a, b) (split_sweep): at the foot of the altitude from apex
+  // (clamped to [kSplitMin, 1 - kSplitMin] of the edge) or the midpoint, each without and
+  // with flips, then relaxed_split's candidates off the segments; plan.best < 0 when none
+  // passes (or the edge is refused or may not be split).
+  void plan_edge_split(TriMesh::HalfedgeHandle h, const Vec& apex, const std::vector<int>& vertex_node,
+                       const std::vector<std::uint8_t>& is_feature, const std::vector<std::array<int, 2>>& refused,
+                       SplitPlan& plan) {
+    plan.h = h;
+    plan.best = -1;
+    const auto va = mesh_.from_vertex_handle(h), vb = mesh_.to_vertex_handle(h);
+    const std::array<int, 2> key{std::min(va.idx(), vb.idx()), std::max(va.idx(), vb.idx())};
+    if (std::binary_search(refused.begin(), refused.end(), key)) return;
+    if (!plan_split(h, vertex_node, is_feature, plan.info, plan.on_segment)) return;
+    const Vec a = point(mesh_, va), b = point(mesh_, vb);
+    plan.one_sided = mesh_.is_boundary(mesh_.opposite_halfedge_handle(h));
+    const double foot = std::clamp((apex - a).dot(b - a) / (b - a).squaredNorm(), kSplitMin, 1.0 - kSplitMin);
+    // The best of: the foot, the midpoint; each without and with flips (fewest obtuse
+    // triangles; the first of equals).
+    best_flips_.clear();
+    for (const double t : {foot, 0.5}) {
+      const Vec m0 = a + t * (b - a);
+      const Vec m = plan.on_segment ? m0 : project(plan.info, m0);
+      // Not far off the edge: a fit far off there (a border of a patch fitted badly).
+      if (!m.allFinite() || (m - m0).norm() > kSplitMaxOffset * (b - a).norm()) continue;
+      for (const bool with_flips : {false, true}) {
+        const int n = evaluate_split(h, plan.one_sided, m, plan.on_segment, with_flips, false, flips_);
+        if (n >= 0 && (plan.best < 0 || n < plan.best)) {
+          plan.best = n;
+          plan.m = m;
+          best_flips_ = flips_;
+        }
+      }
+    }
+    if (!plan.on_segment) relaxed_split(h, plan.one_sided, plan.info, a, b, plan.best, plan.m);
+    plan.flips = best_flips_;
+  }
+
+  // The far piece of a strip (issue 5; docs/stitch.md "Far pieces of strips"): h is the edge
+  // (a, b) opposite the obtuse corner c of its triangle, c a node on a patch border (or the
+  // input's boundary) with only two triangles of that patch, whose angles there sum to about
+  // 180 deg: one of them stays obtuse wherever the nodes move. When the triangle across h is
+  // of the same patch and exactly one of its other two edges is on a patch border (the far
+  // border of a strip, facing c), that edge, as a halfedge of the triangle across h, is
+  // returned: its split with the flip of h gives c a third triangle. Else an invalid handle.
+  TriMesh::HalfedgeHandle far_piece(TriMesh::HalfedgeHandle h) const {
+    const auto o = mesh_.opposite_halfedge_handle(h);
+    if (mesh_.is_boundary(o)) return TriMesh::HalfedgeHandle();
+    const int patch = face_patch_[static_cast<std::size_t>(mesh_.face_handle(h).idx())];
+    if (face_patch_[static_cast<std::size_t>(mesh_.face_handle(o).idx())] != patch) return TriMesh::HalfedgeHandle();
+    const auto vc = mesh_.to_vertex_handle(mesh_.next_halfedge_handle(h));
+    int n_own = 0;
+    bool on_border = mesh_.is_boundary(vc);
+    for (auto g : mesh_.vf_range(vc)) {
+      const int p = face_patch_[static_cast<std::size_t>(g.idx())];
+      n_own += p == patch ? 1 : 0;
+      on_border = on_border || p != patch;
+    }
+    if (n_own != 2 || !on_border) return TriMesh::HalfedgeHandle();
+    auto is_border = [&](TriMesh::HalfedgeHandle g) {
+      const auto r = mesh_.opposite_halfedge_handle(g);
+      return mesh_.is_boundary(r) || face_patch_[static_cast<std::size_t>(mesh_.face_handle(r).idx())] != patch;
+    };
+    const auto g1 = mesh_.next_halfedge_handle(o), g2 = mesh_.next_halfedge_handle(g1);
+    const bool b1 = is_border(g1), b2 = is_border(g2);
+    if (b1 == b2) return TriMesh::HalfedgeHandle();
+    return b1 ? g1 : g2;
   }
 
   // Relaxed split nodes (issue 5; docs/stitch.md "Relaxed split nodes"). The largest class

@@ -477,6 +477,66 @@ TEST(Stitch, AStraightBorderNodeWithTwoTrianglesGetsAThirdOne) {
   }
 }
 
+// Issue 5, a strip's far piece (docs/stitch.md "Far pieces of strips"): a flat strip one
+// triangle wide between two straight feature borders (both the input's boundary, y = 0 and
+// y = 0.8) whose far border has fewer nodes: the node V = (1, 0) has two triangles, both
+// with the far node X = (0.9, 0.8), and 97.1 deg at V in (V, A2, X). V, X and A2 are fixed,
+// a flip of A2-X leaves (V, A2, Y) obtuse at A2 (116.6 deg), and a split of A2-X puts a node
+// inside a strip too narrow for it. The split of the far piece X-Y (node on the segment)
+// with the flip of A2-X gives V a third triangle: no obtuse triangle is left.
+TEST(Stitch, AStripNodeFacingAFarPieceGetsAThirdTriangle) {
+  TriangleSoup strip;
+  strip.points = {{0.0, 0.0, 0.0}, {1.0, 0.0, 0.0}, {2.0, 0.0, 0.0}, {3.0, 0.0, 0.0},
+                  {2.4, 0.8, 0.0}, {0.9, 0.8, 0.0}, {-0.5, 0.8, 0.0}};
+  constexpr int kV = 1, kY = 4, kX = 5;
+  strip.triangles = {{0, 1, 5}, {1, 2, 5}, {2, 4, 5}, {0, 5, 6}, {2, 3, 4}};
+  SurfaceMesh surface = make_surface(strip, std::vector<int>(strip.triangles.size(), 0), 1);
+  // The far border is a curve of its own (make_surface gives the whole boundary one curve,
+  // and an edge between two nodes of one feature curve is a crease that never flips).
+  surface.curve_is_feature.push_back(true);
+  for (const int node : {kY, kX, 6}) surface.node_owner[node] = static_cast<int>(surface.curve_is_feature.size()) - 1;
+  const TriMesh input = to_trimesh(strip);
+  auto triangles_at = [](const StitchResult& r, int node) {
+    std::size_t n = 0;
+    for (auto v : r.mesh.vertices()) {
+      if (r.vertex_node[static_cast<std::size_t>(v.idx())] != node) continue;
+      for (auto f : r.mesh.vf_range(v)) n += f.is_valid() ? 1 : 0;
+    }
+    return n;
+  };
+  StitchOptions off;
+  off.obtuse_split_rounds = 0;
+  const StitchResult before = stitch(surface, input, off);
+  ASSERT_TRUE(before.report.ok()) << joined(before.report.errors);
+  EXPECT_EQ(triangles_at(before, kV), 2u);
+  ASSERT_GT(before.report.output.quality.obtuse_fraction, 0.0);  // the planted defect survives the repair
+  const StitchResult r = stitch(surface, input, StitchOptions{});
+  EXPECT_TRUE(r.report.ok()) << joined(r.report.errors);
+  EXPECT_EQ(r.report.n_obtuse_splits, 1u);
+  EXPECT_EQ(r.report.output.quality.obtuse_fraction, 0.0);
+  EXPECT_EQ(triangles_at(r, kV), 3u);
+  EXPECT_EQ(r.report.output.topology.euler_characteristic, 1);
+  EXPECT_EQ(r.report.output.topology.n_boundary_loops, 1u);
+  EXPECT_TRUE(r.report.output.topology.is_manifold);
+  EXPECT_GE(r.report.output.quality.alpha_min, std::min(before.report.output.quality.alpha_min, StitchOptions{}.alpha_floor));
+  // The new node is on the far piece X-Y (a boundary segment: on it, strictly between its
+  // ends), the old nodes where they were.
+  ASSERT_EQ(r.mesh.n_vertices(), strip.points.size() + 1);
+  for (auto v : r.mesh.vertices()) {
+    const auto g = static_cast<std::size_t>(r.vertex_node[static_cast<std::size_t>(v.idx())]);
+    const Eigen::Vector3d p = to_eigen(r.mesh.point(v));
+    if (g < strip.points.size()) {
+      EXPECT_EQ(p, strip.points[g]);
+      continue;
+    }
+    EXPECT_TRUE(r.mesh.is_boundary(v));
+    EXPECT_EQ(p.y(), 0.8);
+    EXPECT_EQ(p.z(), 0.0);
+    EXPECT_GT(p.x(), strip.points[kX].x());
+    EXPECT_LT(p.x(), strip.points[kY].x());
+  }
+}
+
 // The obtuse repair and the chord compensation have their own switches: they run with the
 // flip and smoothing sweeps off, and nothing moves with all three off. Bad strengths are
 // refused.
