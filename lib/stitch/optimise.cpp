@@ -101,6 +101,7 @@ class Optimiser {
     alpha_sine_skip_ = std::numbers::sqrt3 * (sin_angle_floor_ + kSineSkipMargin);
     sin_obtuse_floor_ = std::sin(std::min(options.angle_floor_deg + kObtuseAngleMarginDeg, 60.0) * std::numbers::pi / 180.0);
     obtuse_sine_skip_ = std::numbers::sqrt3 * (sin_obtuse_floor_ + kSineSkipMargin);
+    sin_split_feature_floor_ = std::sin(options.obtuse_split_feature_angle_deg * std::numbers::pi / 180.0);
     classify_nodes(result.vertex_node);
   }
 
@@ -703,7 +704,9 @@ class Optimiser {
   // may then remove it).
   // A new triangle none of whose corners is a feature node (m_is_feature for m) also keeps
   // its smallest angle at least min(that of the old triangles without a feature node,
-  // angle_floor_deg): issue 5's bound away from features.
+  // angle_floor_deg): issue 5's bound away from features. The others, when the split takes
+  // the obtuse angle off a node that nothing moves (c), need only min(old, the floor,
+  // obtuse_split_feature_angle_deg) (sin_split_feature_floor_).
   int evaluate_split(TriMesh::HalfedgeHandle h, bool one_sided, const Vec& m, bool m_is_feature, bool with_flips, bool relaxed,
                      std::vector<std::array<TriMesh::VertexHandle, 2>>& flips) const {
     flips.clear();
@@ -789,6 +792,9 @@ class Optimiser {
       tris[n_tris++] = {{m, u, w}, t.parent, !m_is_feature && away({t.u, t.w}), t.u, t.w};
     }
     int new_obtuse = 0, new_fixed = 0;
+    // The obtuse angle at c, a node that nothing moves: only a split takes it off.
+    const bool off_fixed = !movable(vc) && (a - c).dot(b - c) < 0.0;
+    const double sin_feature_floor = off_fixed ? std::min(sin_floor, sin_split_feature_floor_) : sin_floor;
     for (std::size_t k = 0; k < n_tris; ++k) {
       const auto& [p, parent, is_away, h1, h2] = tris[k];
       const Vec n = area_vector(p[0], p[1], p[2]);
@@ -797,7 +803,7 @@ class Optimiser {
       if (parent != nullptr && n.dot(*parent) <= options_.min_normal_dot * l * parent->norm()) return -1;
       const auto [alpha, sine] = alpha_and_min_angle_sine(p[0], p[1], p[2], l);
       if (alpha < std::min(old_alpha, options_.alpha_floor)) return -1;
-      if (sine < std::min(old_sine, sin_floor) * (1.0 - kSplitSineTolerance)) return -1;
+      if (sine < std::min(old_sine, is_away ? sin_floor : sin_feature_floor) * (1.0 - kSplitSineTolerance)) return -1;
       if (is_away && sine < std::min(old_sine_away, sin_floor) * (1.0 - kSplitSineTolerance)) return -1;
       new_obtuse += int(triangle_is_obtuse(p[0], p[1], p[2]));
       new_fixed += int((!movable(h1) && (p[2] - p[1]).dot(p[0] - p[1]) < 0.0) || (!movable(h2) && (p[0] - p[2]).dot(p[1] - p[2]) < 0.0));
@@ -1023,6 +1029,8 @@ class Optimiser {
   static constexpr double kObtuseAngleMarginDeg = 2.5;
   double sin_obtuse_floor_ = 0.0;
   double obtuse_sine_skip_ = 0.0;
+  // The sine of StitchOptions::obtuse_split_feature_angle_deg (evaluate_split).
+  double sin_split_feature_floor_ = 0.0;
   // An obtuse split's node stays at least this share of the edge away from its ends.
   static constexpr double kSplitMin = 0.2;
   // A split keeps the angles at the edge's ends (the new triangles on the obtuse side have

@@ -28,6 +28,8 @@ void StitchOptions::validate() const {
   if (angle_repair_rounds < 0) fail("angle_repair_rounds must be >= 0");
   if (obtuse_repair_rounds < 0) fail("obtuse_repair_rounds must be >= 0");
   if (obtuse_split_rounds < 0) fail("obtuse_split_rounds must be >= 0");
+  if (!(obtuse_split_feature_angle_deg >= 0.0 && obtuse_split_feature_angle_deg < 60.0))
+    fail("obtuse_split_feature_angle_deg must be in [0, 60)");
   if (!(max_flip_dihedral_deg >= 0.0 && max_flip_dihedral_deg < 180.0)) fail("max_flip_dihedral_deg must be in [0, 180)");
   if (!(flip_gain >= 0.0) || !std::isfinite(flip_gain)) fail("flip_gain must be finite and >= 0");
   if (!(smoothing_relaxation > 0.0 && smoothing_relaxation <= 1.0)) fail("smoothing_relaxation must be in (0, 1]");

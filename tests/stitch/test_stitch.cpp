@@ -10,6 +10,7 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <numbers>
 #include <random>
 #include <set>
 #include <string>
@@ -341,6 +342,55 @@ TEST(Stitch, ObtuseSplitOfABoundaryEdgeKeepsTheBoundaryStraight) {
     EXPECT_TRUE(r.mesh.is_boundary(v));
     EXPECT_TRUE(between_its_curve_neighbours(r.mesh, v, [&](TriMesh::HalfedgeHandle h) { return r.mesh.is_boundary(r.mesh.edge_handle(h)); }));
     EXPECT_NEAR(r.mesh.point(v)[0], 0.5, 1e-12);
+  }
+}
+
+// Issue 5, cheese.off's tunnel walls: a triangle obtuse at a node that nothing moves (here
+// C, on the input's boundary) whose split leaves angles between 20 and 25 deg beside feature
+// nodes. A flat kite of one patch, every node on the boundary: (A, B, C) is 118 deg at C,
+// (B, A, D) 43.6 deg at D; flips only make two obtuse triangles, nothing can move. The split
+// of A-B at the altitude's foot makes four right triangles, two of them 21.8 deg at D: refused
+// under the usual floor (min(31 deg, 25 deg)), taken under obtuse_split_feature_angle_deg 20.
+TEST(Stitch, ObtuseSplitOffAFixedNodeMayLeaveAngleBelowTheFloorAtFeatures) {
+  TriangleSoup kite;
+  kite.points = {{0.0, 0.0, 0.0}, {1.0, 0.0, 0.0}, {0.5, 0.3, 0.0}, {0.5, -1.25, 0.0}};
+  kite.triangles = {{0, 1, 2}, {1, 0, 3}};
+  const SurfaceMesh surface = make_surface(kite, {0, 0}, 1);
+  const TriMesh input = to_trimesh(kite);
+  StitchOptions usual;
+  usual.obtuse_split_feature_angle_deg = 27.5;  // the usual floor: nothing changes
+  const StitchResult before = stitch(surface, input, usual);
+  ASSERT_TRUE(before.report.ok()) << joined(before.report.errors);
+  EXPECT_EQ(before.report.n_obtuse_splits, 0u);
+  EXPECT_EQ(before.report.output.quality.obtuse_fraction, 0.5);  // the planted defect works
+  const StitchResult r = stitch(surface, input);
+  ASSERT_TRUE(r.report.ok()) << joined(r.report.errors);
+  EXPECT_EQ(r.report.n_obtuse_splits, 1u);
+  ASSERT_EQ(r.mesh.n_vertices(), 5u);
+  EXPECT_EQ(r.mesh.n_faces(), 4u);
+  EXPECT_EQ(r.report.output.quality.obtuse_fraction, 0.0);
+  const double d_half = std::atan(0.5 / 1.25) * 180.0 / std::numbers::pi;  // 21.8 deg
+  EXPECT_NEAR(r.report.output.quality.min_angle_deg, d_half, 1e-6);
+  EXPECT_EQ(r.report.output.topology.euler_characteristic, 1);
+  for (auto v : r.mesh.vertices()) {
+    const auto g = static_cast<std::size_t>(r.vertex_node[static_cast<std::size_t>(v.idx())]);
+    const Eigen::Vector3d p = to_eigen(r.mesh.point(v));
+    if (g < kite.points.size()) {
+      EXPECT_EQ(p, kite.points[g]);  // nothing else moved
+      continue;
+    }
+    EXPECT_EQ(r.mesh.valence(v), 4u);  // the new node, inside, on A-B
+    EXPECT_NEAR(p.x(), 0.5, 1e-12);
+    EXPECT_NEAR(p.y(), 0.0, 1e-12);
+  }
+  // Above the angle at D the split is refused again.
+  StitchOptions tight;
+  tight.obtuse_split_feature_angle_deg = 22.0;
+  EXPECT_EQ(stitch(surface, input, tight).report.n_obtuse_splits, 0u);
+  for (const double bad : {-1.0, 60.0, std::numeric_limits<double>::quiet_NaN()}) {
+    StitchOptions o;
+    o.obtuse_split_feature_angle_deg = bad;
+    EXPECT_THROW((void)stitch(surface, input, o), InvalidInput) << bad;
   }
 }
 

@@ -60,6 +60,7 @@ struct RemeshArgs {
   std::optional<double> fin_rim_max_move;
   std::optional<int> obtuse_repair_rounds;
   std::optional<int> obtuse_split_rounds;
+  std::optional<double> obtuse_split_feature_angle;
   std::optional<int> angle_repair_rounds;
   std::optional<double> fidelity_distance;
   std::optional<double> border_input_distance;
@@ -135,6 +136,7 @@ void run_remesh(RemeshArgs& args) {
   if (args.fin_rim_max_move) options.stitch.fin_rim_max_move = *args.fin_rim_max_move;
   if (args.obtuse_repair_rounds) options.stitch.obtuse_repair_rounds = *args.obtuse_repair_rounds;
   if (args.obtuse_split_rounds) options.stitch.obtuse_split_rounds = *args.obtuse_split_rounds;
+  if (args.obtuse_split_feature_angle) options.stitch.obtuse_split_feature_angle_deg = *args.obtuse_split_feature_angle;
   if (args.angle_repair_rounds) options.stitch.angle_repair_rounds = *args.angle_repair_rounds;
   if (args.fidelity_distance) options.stitch.fidelity_distance_edges = *args.fidelity_distance;
   if (args.border_input_distance) options.segment.border_smoothing.max_input_distance = *args.border_input_distance;
@@ -301,6 +303,11 @@ void add_remesh_command(CLI::App& app) {
   cmd->add_option("--obtuse-split-rounds", args->obtuse_split_rounds,
                   "Sweeps of the stitch's obtuse splits (longest edge split at the altitude's foot; default 2; "
                   "0 = off; docs/stitch.md \"Obtuse splits\")");
+  cmd->add_option("--obtuse-split-feature-angle", args->obtuse_split_feature_angle,
+                  "The obtuse splits' angle floor (deg) beside a feature node when the split takes an obtuse angle "
+                  "off a node that never moves (default 20; 27.5 or more = the usual floor; docs/surfmesh.md "
+                  "\"Cheese's hole walls, session 15\")")
+      ->check(CLI::Range(0.0, 59.999));
   cmd->add_option("--angle-repair-rounds", args->angle_repair_rounds,
                   "Sweeps of the stitch's small-angle repair (flips and collapses at the triangles below 25 deg away "
                   "from features; default 12; 0 = off; docs/stitch.md \"Small angles left after the optimisation\")");
