@@ -12,6 +12,7 @@
 
 #include <Eigen/Geometry>
 
+#include "nurbsfront/core/disjoint_sets.h"
 #include "nurbsfront/core/error.h"
 #include "nurbsfront/core/parallel.h"
 #include "nurbsfront/core/soup.h"
@@ -235,6 +236,99 @@ std::vector<int> tiny_curve_merges(const TriMesh& mesh, const Segmentation& seg,
   return target;
 }
 
+std::vector<int> corner_cluster_merges(const TriMesh& mesh, const Segmentation& seg, const SizeAt& size_at,
+                                       double fraction, std::vector<int> target) {
+  const std::size_t n_corners = seg.corners.size();
+  if (target.size() != n_corners) {
+    target.resize(n_corners);
+    std::iota(target.begin(), target.end(), 0);
+  }
+  if (!(fraction > 0.0) || n_corners == 0) return target;
+  // Links: open curves between two corners shorter (along their input vertices) than
+  // `fraction` x the size at their middle, and the pairs merged already.
+  const std::size_t n_curves = seg.curves.size();
+  std::vector<std::array<int, 2>> ends(n_curves, {-1, -1});
+  std::vector<std::uint8_t> is_link(n_curves, 0), is_fixed(n_corners, 0);
+  DisjointSets sets(n_corners);
+  for (std::size_t k = 0; k < n_corners; ++k) sets.unite(static_cast<std::uint32_t>(k), static_cast<std::uint32_t>(target[k]));
+  for (std::size_t c = 0; c < n_curves; ++c) {
+    const BorderCurve& curve = seg.curves[c];
+    if (curve.is_closed) continue;
+    const int a = corner_index(seg.corners, curve.vertices.front());
+    const int b = corner_index(seg.corners, curve.vertices.back());
+    ends[c] = {a, b};
+    if (curve.patch_right < 0) is_fixed[static_cast<std::size_t>(a)] = is_fixed[static_cast<std::size_t>(b)] = 1;
+    if (a == b) continue;
+    double length = 0.0;
+    for (std::size_t i = 0; i + 1 < curve.vertices.size(); ++i)
+      length += (point(mesh, curve.vertices[i + 1]) - point(mesh, curve.vertices[i])).norm();
+    const Eigen::Vector3d mid = 0.5 * (point(mesh, curve.vertices.front()) + point(mesh, curve.vertices.back()));
+    if (!(length < fraction * size_at(mid))) continue;
+    is_link[c] = 1;
+    sets.unite(static_cast<std::uint32_t>(a), static_cast<std::uint32_t>(b));
+  }
+  // The clusters (members ascending; the first, the lowest index, survives).
+  std::vector<std::vector<int>> members(n_corners);
+  for (std::size_t k = 0; k < n_corners; ++k) members[sets.find(static_cast<std::uint32_t>(k))].push_back(static_cast<int>(k));
+  std::vector<int> cluster_of(n_corners, -1);
+  for (std::size_t r = 0; r < n_corners; ++r)
+    for (const int k : members[r]) cluster_of[static_cast<std::size_t>(k)] = static_cast<int>(r);
+  // Per cluster: curves with both ends in it (all must be links: they vanish) and curves with
+  // one or two ends in it (their patches' loops must pass the survivor once at most).
+  std::vector<std::vector<int>> touching(n_corners);
+  for (std::size_t c = 0; c < n_curves; ++c) {
+    if (ends[c][0] < 0) continue;
+    const int ra = cluster_of[static_cast<std::size_t>(ends[c][0])];
+    const int rb = cluster_of[static_cast<std::size_t>(ends[c][1])];
+    if (members[static_cast<std::size_t>(ra)].size() > 1) touching[static_cast<std::size_t>(ra)].push_back(static_cast<int>(c));
+    if (rb != ra && members[static_cast<std::size_t>(rb)].size() > 1) touching[static_cast<std::size_t>(rb)].push_back(static_cast<int>(c));
+  }
+  for (std::size_t r = 0; r < n_corners; ++r) {
+    const std::vector<int>& cluster = members[r];
+    if (cluster.size() < 2) continue;
+    // Already the pair tiny_curve_merges made: kept as it is.
+    if (cluster.size() == 2 && target[static_cast<std::size_t>(cluster[1])] == cluster[0]) continue;
+    bool ok = true;
+    Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+    for (const int k : cluster) {
+      ok = ok && is_fixed[static_cast<std::size_t>(k)] == 0;
+      centre += point(mesh, seg.corners[static_cast<std::size_t>(k)]);
+    }
+    centre /= static_cast<double>(cluster.size());
+    // Small: every member within fraction x size of the survivor's place (no chains).
+    const double radius = fraction * size_at(centre);
+    for (const int k : cluster) ok = ok && (point(mesh, seg.corners[static_cast<std::size_t>(k)]) - centre).norm() < radius;
+    // A curve between two members that is no link would become a loop; every patch at the
+    // cluster keeps an open curve that does not vanish, and its loop passes the survivor once
+    // at most (two curve ends there).
+    auto inside = [&](int k) { return k >= 0 && cluster_of[static_cast<std::size_t>(k)] == static_cast<int>(r); };
+    auto vanishes = [&](std::size_t c) { return inside(ends[c][0]) && inside(ends[c][1]) && ends[c][0] != ends[c][1]; };
+    std::map<int, int> ends_at;  // patch -> curve ends at the survivor
+    std::size_t n_vanishing = 0;
+    for (const int ci : touching[r]) {
+      const auto c = static_cast<std::size_t>(ci);
+      if (vanishes(c) && is_link[c] == 0) ok = false;
+      if (vanishes(c)) ++n_vanishing;
+      for (const int p : {seg.curves[c].patch_left, seg.curves[c].patch_right})
+        if (p >= 0) ends_at[p] += vanishes(c) ? 0 : static_cast<int>(inside(ends[c][0])) + static_cast<int>(inside(ends[c][1]));
+    }
+    // The vanishing curves form a tree: contracting a cycle of them would pinch the surface
+    // (the cycle round a one-voxel tunnel) or collapse the faces inside it.
+    ok = ok && n_vanishing + 1 == cluster.size();
+    for (const auto& [p, n] : ends_at) {
+      if (!ok) break;
+      ok = n <= 2;
+      bool open_kept = false;
+      for (const int c : seg.patches[static_cast<std::size_t>(p)].curves)
+        open_kept = open_kept || (ends[static_cast<std::size_t>(c)][0] >= 0 && !vanishes(static_cast<std::size_t>(c)));
+      ok = ok && open_kept;
+    }
+    if (!ok) continue;
+    for (const int k : cluster) target[static_cast<std::size_t>(k)] = cluster[0];
+  }
+  return target;
+}
+
 BorderNodes discretise_borders(const TriMesh& mesh, const Segmentation& seg, const SizeAt& size_at,
                                const std::vector<CurveSource>& source, const std::vector<int>& corner_target) {
   BorderNodes out;
@@ -248,10 +342,16 @@ BorderNodes discretise_borders(const TriMesh& mesh, const Segmentation& seg, con
     const int k = corner_index(seg.corners, vertex);
     return corner_target.empty() ? k : corner_target[static_cast<std::size_t>(k)];
   };
+  // A survivor sits at the mean of its cluster (of a pair: the middle).
+  std::vector<int> n_merged(corner_target.size(), 1);
   for (std::size_t k = 0; k < corner_target.size(); ++k) {
     const auto t = static_cast<std::size_t>(corner_target[k]);
-    if (t != k) out.positions[t] = 0.5 * (point(mesh, seg.corners[t]) + point(mesh, seg.corners[k]));
+    if (t == k) continue;
+    out.positions[t] += point(mesh, seg.corners[k]);
+    ++n_merged[t];
   }
+  for (std::size_t t = 0; t < corner_target.size(); ++t)
+    if (n_merged[t] > 1) out.positions[t] *= 1.0 / static_cast<double>(n_merged[t]);
   // Open curves joining the same two corners: each needs 2 pieces at least, or a patch
   // bounded by two of them would get the same segment twice.
   std::vector<std::pair<int, int>> ends;

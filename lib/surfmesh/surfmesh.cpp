@@ -217,6 +217,8 @@ void SurfMeshOptions::validate() const {
     bad_option("fin_rim_max_gap_edges must be >= 0 (infinity: no test), got " + std::to_string(fin_rim_max_gap_edges));
   if (!(tiny_curve_merge_size >= 0.0 && tiny_curve_merge_size <= 0.5))
     bad_option("tiny_curve_merge_size must be in [0, 0.5], got " + std::to_string(tiny_curve_merge_size));
+  if (!(corner_cluster_size >= 0.0 && corner_cluster_size <= 1.0))
+    bad_option("corner_cluster_size must be in [0, 1], got " + std::to_string(corner_cluster_size));
   if (!(std::isfinite(max_node_offset_edges) && max_node_offset_edges >= 0.0))
     bad_option("max_node_offset_edges must be finite and >= 0, got " + std::to_string(max_node_offset_edges));
   if (!(std::isfinite(small_patch_node_offset_edges) && small_patch_node_offset_edges >= 0.0))
@@ -361,6 +363,8 @@ SurfaceMesh surfmesh_detail::mesh_surface(const TriMesh& input, const Segmentati
   // or folds (below): that merge is undone first.
   std::vector<int> corner_target =
       options.cell_grid.enabled ? std::vector<int>() : tiny_curve_merges(input, segmentation, size_at, options.tiny_curve_merge_size);
+  if (!options.cell_grid.enabled && options.corner_cluster_size > 0.0)
+    corner_target = corner_cluster_merges(input, segmentation, size_at, options.corner_cluster_size, std::move(corner_target));
   auto undo_merges = [&](int c) {
     const BorderCurve& curve = segmentation.curves[static_cast<std::size_t>(c)];
     if (curve.is_closed || corner_target.empty()) return false;
@@ -368,8 +372,10 @@ SurfaceMesh surfmesh_detail::mesh_surface(const TriMesh& input, const Segmentati
     for (const int v : {curve.vertices.front(), curve.vertices.back()}) {
       const auto k = static_cast<std::size_t>(std::lower_bound(segmentation.corners.begin(), segmentation.corners.end(), v) -
                                               segmentation.corners.begin());
+      // The whole cluster of k (corner_cluster_merges; of a pair: both) is undone.
+      const int t = corner_target[k];
       for (std::size_t j = 0; j < corner_target.size(); ++j) {
-        if (static_cast<std::size_t>(corner_target[j]) == j || (j != k && static_cast<std::size_t>(corner_target[j]) != k)) continue;
+        if (static_cast<std::size_t>(corner_target[j]) == j || corner_target[j] != t) continue;
         corner_target[j] = static_cast<int>(j);
         undone = true;
       }

@@ -263,6 +263,15 @@ struct SurfMeshOptions {
   //! the input's boundary never merge; nothing merges with a cell grid (occupancy inputs).
   //! 0 disables. In [0, 0.5]. Default 0.3.
   double tiny_curve_merge_size = 0.3;
+  //! Corners joined by curves shorter (along their input vertices) than this many local target
+  //! sizes form a cluster; a cluster whose corners all lie within this many sizes of their mean
+  //! becomes one node there before the patches are meshed (its curves vanish), unless a curve
+  //! between two of its corners is longer, a patch would lose its last open curve or pass the
+  //! node twice, a corner is on the input's boundary, or the curves around it then cross in a
+  //! patch plane: marching cubes puts three or more corners a fraction of h apart at voxel-sized
+  //! spikes and fin ends, and the fronts around them grade down to that size (docs/surfmesh.md,
+  //! "Corner clusters"). Nothing merges with a cell grid. 0 disables. In [0, 1]. Default 0 (off).
+  double corner_cluster_size = 0.0;
   //! Fin rims (docs/stitch.md "Fin rims"): on marching-cubes surfaces (the lattice gate) that
   //! are not a label image's staircase, a crease curve between two patches one of which is a
   //! strip narrower than this many target sizes next to a wide patch (segment's

@@ -97,6 +97,18 @@ enum class CurveSource : std::uint8_t {
 [[nodiscard]] std::vector<int> tiny_curve_merges(const TriMesh& mesh, const Segmentation& segmentation,
                                                  const SizeAt& size_at, double fraction);
 
+//! `target` (tiny_curve_merges's, or empty: none) with corner clusters merged too: corners
+//! joined (through any chain) by open curves shorter along their input vertices than
+//! `fraction` x size_at at the middle of their ends, or by a merge of `target`, form a
+//! cluster; every member of a cluster then merges into its lowest index when all members lie
+//! within `fraction` x size_at of their mean (where discretise_borders puts the survivor),
+//! none is on the input's boundary, every curve between two members is such a short curve
+//! (all of them vanish), and every patch at the cluster keeps an open curve that does not
+//! vanish and meets the survivor with two curve ends at most (its loop stays simple). A
+//! cluster that fails keeps the merges of `target`.
+[[nodiscard]] std::vector<int> corner_cluster_merges(const TriMesh& mesh, const Segmentation& segmentation,
+                                                     const SizeAt& size_at, double fraction, std::vector<int> target);
+
 //! Border of one patch as directed edges (domain on the left) between its border nodes.
 struct PatchBorder {
   std::vector<int> nodes;                 //!< global ids, ascending

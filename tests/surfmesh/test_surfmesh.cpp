@@ -14,6 +14,7 @@
 #include <limits>
 #include <map>
 #include <numbers>
+#include <numeric>
 #include <set>
 #include <string>
 #include <variant>
@@ -444,6 +445,114 @@ TEST(Surfmesh, TinyCornerCurveMergesItsCorners) {
   EXPECT_GT(f[1].min_edge, 0.1 / kN);
   EXPECT_LT(after.triangles.size(), before.triangles.size());
   EXPECT_GT(f[1].min_alpha, f[0].min_alpha);
+}
+
+// A flat 8 x 8 grid whose cell (4, 4) is shrunk to 0.0025 x 0.0025 (a fiftieth of the target
+// size h = 1/8) about its centre. Patches: X = the cells i <= 4, j >= 4 (the centre cell
+// included), SW = i <= 3, j <= 3, S = i >= 4, j <= 3, E = i >= 5, j == 4, NE = i >= 5, j >= 5.
+// The centre cell's corners a = (4, 4), b = (5, 4) and c = (5, 5) are corners joined by the
+// one-edge curves a-b (X | S) and b-c (X | E): a tree of two tiny curves. With `centre_patch`
+// the centre cell is a sixth patch and its four corners a cycle of four tiny curves.
+struct ClusterGrid {
+  TriMesh mesh;
+  Segmentation seg;
+  std::array<int, 4> centre{};  // vertices a, b, c, d = (4, 5)
+};
+ClusterGrid cluster_grid(bool centre_patch) {
+  constexpr int kN = 8;
+  ClusterGrid g;
+  g.mesh = to_trimesh(test::grid_patch(kN, kN));
+  auto vertex = [](int i, int j) { return j * (kN + 1) + i; };
+  g.centre = {vertex(4, 4), vertex(5, 4), vertex(5, 5), vertex(4, 5)};
+  const Eigen::Vector3d mid(4.5 / kN, 4.5 / kN, 0.0);
+  for (const int v : g.centre) {
+    const TriMesh::VertexHandle vh(v);
+    g.mesh.set_point(vh, to_openmesh(mid + 0.02 * (to_eigen(g.mesh.point(vh)) - mid)));
+  }
+  std::vector<int> face_patch(g.mesh.n_faces(), 0);
+  for (int j = 0; j < kN; ++j)
+    for (int i = 0; i < kN; ++i) {
+      int patch = 0;                          // X
+      if (j <= 3) patch = i <= 3 ? 1 : 2;     // SW, S
+      else if (i >= 5) patch = j == 4 ? 3 : 4;  // E, NE
+      if (centre_patch && i == 4 && j == 4) patch = 5;
+      face_patch[static_cast<std::size_t>(2 * (j * kN + i))] = face_patch[static_cast<std::size_t>(2 * (j * kN + i) + 1)] = patch;
+    }
+  g.seg = labelled_segmentation(g.mesh, face_patch, centre_patch ? 6 : 5);
+  return g;
+}
+
+TEST(Surfmesh, CornerClusterBecomesOneNode) {
+  const ClusterGrid g = cluster_grid(false);
+  const Segmentation& seg = g.seg;
+  const auto size_at = [](const Eigen::Vector3d&) { return 1.0 / 8.0; };
+  auto corner = [&](int v) {
+    const auto it = std::lower_bound(seg.corners.begin(), seg.corners.end(), v);
+    return it != seg.corners.end() && *it == v ? static_cast<int>(it - seg.corners.begin()) : -1;
+  };
+  const int a = corner(g.centre[0]), b = corner(g.centre[1]), c = corner(g.centre[2]);
+  ASSERT_GE(a, 0);
+  ASSERT_GE(b, 0);
+  ASSERT_GE(c, 0);
+  EXPECT_LT(corner(g.centre[3]), 0);
+  // The pair merge takes a-b only (a corner merges once); the cluster merge all three, nothing else.
+  const std::vector<int> pairs = surfmesh_detail::tiny_curve_merges(g.mesh, seg, size_at, 0.3);
+  EXPECT_EQ(pairs[static_cast<std::size_t>(b)], a);
+  EXPECT_EQ(pairs[static_cast<std::size_t>(c)], c);
+  const std::vector<int> target = surfmesh_detail::corner_cluster_merges(g.mesh, seg, size_at, 0.5, pairs);
+  for (std::size_t k = 0; k < target.size(); ++k) {
+    const bool member = k == static_cast<std::size_t>(a) || k == static_cast<std::size_t>(b) || k == static_cast<std::size_t>(c);
+    EXPECT_EQ(target[k], member ? a : static_cast<int>(k)) << "corner " << k;
+  }
+  // Below the cluster's size (each member 0.0014 from the mean, 0.011 h): not merged.
+  EXPECT_EQ(surfmesh_detail::corner_cluster_merges(g.mesh, seg, size_at, 0.01, pairs), pairs);
+
+  SurfMeshOptions options;
+  options.sizing.size = 1.0 / 8.0;
+  options.corner_cluster_size = 0.0;
+  const SurfaceMesh before = mesh_surface(g.mesh, seg, options);
+  options.corner_cluster_size = 0.5;
+  const SurfaceMesh after = mesh_surface(g.mesh, seg, options);
+  std::array<SoupFigures, 2> f;
+  for (int i = 0; i < 2; ++i) {
+    const SurfaceMesh& sm = i == 0 ? before : after;
+    expect_consistent(seg, sm);
+    f[static_cast<std::size_t>(i)] = figures(sm);
+    EXPECT_FALSE(f[static_cast<std::size_t>(i)].closed);
+    EXPECT_EQ(f[static_cast<std::size_t>(i)].euler, 1);  // a disk, before and after
+    const std::vector<double> area = flat_patch_areas(sm, 5);
+    EXPECT_NEAR(std::accumulate(area.begin(), area.end(), 0.0), 1.0, 1e-3);
+  }
+  // The survivor sits at the mean of the three corners, and no output edge is that short.
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (int k = 0; k < 3; ++k) mean += to_eigen(g.mesh.point(TriMesh::VertexHandle(g.centre[static_cast<std::size_t>(k)])));
+  EXPECT_LT((after.nodes[static_cast<std::size_t>(a)] - mean / 3.0).norm(), 1e-12);
+  EXPECT_LT(f[0].min_edge, 0.003);  // the tiny curve the pair merge leaves (0.0028)
+  EXPECT_GT(f[1].min_edge, 0.1 / 8.0);
+  EXPECT_GT(f[1].min_alpha, f[0].min_alpha);
+  for (const auto& t : after.triangles)
+    for (const int n : t) EXPECT_TRUE(n != b && n != c);
+}
+
+TEST(Surfmesh, CornerClusterRoundAPatchIsNotMerged) {
+  // The four corners of the centre patch are joined by a cycle of tiny curves: contracting it
+  // would remove that patch. The cluster is refused; the pair merges stay.
+  const ClusterGrid g = cluster_grid(true);
+  const auto size_at = [](const Eigen::Vector3d&) { return 1.0 / 8.0; };
+  const std::vector<int> pairs = surfmesh_detail::tiny_curve_merges(g.mesh, g.seg, size_at, 0.3);
+  EXPECT_EQ(surfmesh_detail::corner_cluster_merges(g.mesh, g.seg, size_at, 0.5, pairs), pairs);
+  const std::vector<int> none = surfmesh_detail::corner_cluster_merges(g.mesh, g.seg, size_at, 0.5, {});
+  for (std::size_t k = 0; k < none.size(); ++k) EXPECT_EQ(none[k], static_cast<int>(k));
+}
+
+TEST(Surfmesh, CornerClusterSizeIsValidated) {
+  SurfMeshOptions options;
+  options.corner_cluster_size = -0.1;
+  EXPECT_THROW(options.validate(), InvalidInput);
+  options.corner_cluster_size = 1.5;
+  EXPECT_THROW(options.validate(), InvalidInput);
+  options.corner_cluster_size = 1.0;
+  EXPECT_NO_THROW(options.validate());
 }
 
 TEST(Surfmesh, SmallPatchesFitTheirOwnVerticesOnly) {

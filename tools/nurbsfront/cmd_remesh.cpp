@@ -76,6 +76,7 @@ struct RemeshArgs {
   std::optional<double> sharp_crease;
   std::optional<double> unsmoothed_crease_angle;
   std::optional<double> tiny_curve_merge;
+  std::optional<double> corner_cluster;
   std::optional<double> chord_compensation;
   std::optional<double> volume_compensation;
   bool smoothed_boundary = false;
@@ -153,6 +154,7 @@ void run_remesh(RemeshArgs& args) {
   if (args.unsmoothed_crease_angle) options.surfmesh.unsmoothed_crease_angle_deg = *args.unsmoothed_crease_angle;
   if (args.smoothed_boundary) options.surfmesh.unsmoothed_boundary_curves = false;
   if (args.tiny_curve_merge) options.surfmesh.tiny_curve_merge_size = *args.tiny_curve_merge;
+  if (args.corner_cluster) options.surfmesh.corner_cluster_size = *args.corner_cluster;
   if (args.chord_compensation) options.stitch.chord_compensation = *args.chord_compensation;
   if (args.volume_compensation) options.stitch.volume_compensation = *args.volume_compensation;
   if (args.threads) options.set_threads(*args.threads);
@@ -354,6 +356,10 @@ void add_remesh_command(CLI::App& app) {
   cmd->add_option("--tiny-curve-merge", args->tiny_curve_merge,
                   "Merge the two corners of a one-edge border curve shorter than this many target edges "
                   "(default 0.3; 0 = never; not with a cell grid; docs/surfmesh.md)");
+  cmd->add_option("--corner-cluster", args->corner_cluster,
+                  "Merge corners joined by border curves shorter than this many target edges into one node "
+                  "when they all lie within that distance of their mean (in [0, 1]; default 0 = never; "
+                  "not with a cell grid; docs/surfmesh.md \"Corner clusters\")");
   cmd->add_flag("--no-crease-gap", args->no_crease_gap,
                 "Keep --crease where a non-marching-cubes input's bends leave a gap below it (by default the "
                 "crease angle drops to that gap, by at most 15 deg: a CAD mesh's 65-80 deg edges become creases; "
