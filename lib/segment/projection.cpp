@@ -5,6 +5,9 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdint>
+#include <limits>
+#include <tuple>
 
 #include "nurbsfront/core/error.h"
 #include "nurbsfront/segment/segment_internal.h"
@@ -375,6 +378,355 @@ std::pair<std::vector<int>, std::vector<int>> bisect_patch(const FaceGraph& grap
     (scratch.face_owner[f] == 0 ? parts.first : parts.second).push_back(f);
   }
   return parts;
+}
+
+namespace {
+// The unit roundoff of double (2^-53).
+constexpr double kRoundoff = std::numeric_limits<double>::epsilon() / 2.0;
+}  // namespace
+
+void MergeProjection::Loop::add(const Eigen::Vector2d& origin, const Eigen::Vector2d& a, const Eigen::Vector2d& b,
+                                const double sign) {
+  // orient(origin, a, b) with the rounding of each of its terms bounded: the exact value is
+  // within 4 roundoffs of the two products' sum of magnitudes (5 taken), the running sum
+  // within one of its magnitude per step.
+  const double p1 = (a.x() - origin.x()) * (b.y() - origin.y());
+  const double p2 = (a.y() - origin.y()) * (b.x() - origin.x());
+  sum += sign * (p1 - p2);
+  error += 5.0 * kRoundoff * (std::abs(p1) + std::abs(p2)) + kRoundoff * std::abs(sum);
+  lo = lo.cwiseMin(a).cwiseMin(b);
+  hi = hi.cwiseMax(a).cwiseMax(b);
+}
+
+int MergeProjection::Loop::sign() const {
+  // check_projection() sums a loop's n terms from one of its vertices: each term is at most
+  // 2 w_x w_y (the box's sides) and is rounded by at most 4 roundoffs of that, each partial
+  // sum by one roundoff of at most k terms, so its sum is within 2 w_x w_y u n (n + 12) of
+  // the exact twice-area. Beyond both bounds the exact area, and so that sum, has this sign.
+  const Eigen::Vector2d w = hi - lo;
+  const auto m = static_cast<double>(n);
+  const double theirs = 2.0 * w.x() * w.y() * kRoundoff * m * (m + 12.0);
+  const double bound = 1.01 * (error + theirs);
+  if (sum > bound) return 1;
+  if (sum < -bound) return -1;
+  return 0;
+}
+
+MergeProjection::MergeProjection(const FaceGraph& graph)
+    : graph_(graph),
+      vertex_stamp_(graph.points.size(), -1),
+      vertex_out_(graph.points.size(), -1),
+      halfedge_stamp_(graph.mesh->n_halfedges(), -1),
+      halfedge_pos_(graph.mesh->n_halfedges(), -1),
+      halfedge_loop_(graph.mesh->n_halfedges(), -1),
+      halfedge_slot_(graph.mesh->n_halfedges(), -1) {}
+
+Eigen::Vector2d MergeProjection::xy(const int v) const {
+  // As check_projection() projects (the same doubles).
+  const Eigen::Vector3d& p = graph_.points[v];
+  return Eigen::Vector2d(p.dot(e1_), p.dot(e2_));
+}
+
+int MergeProjection::degree(const int v, const int patch, const std::vector<int>& face_patch) const {
+  const TriMesh& mesh = *graph_.mesh;
+  int n = 0;
+  for (const auto h : mesh.voh_range(mesh.vertex_handle(static_cast<unsigned>(v)))) {
+    const auto f = mesh.face_handle(h);
+    if (!f.is_valid() || face_patch[f.idx()] != patch) continue;
+    const auto g = mesh.opposite_face_handle(h);
+    if (!g.is_valid() || face_patch[g.idx()] != patch) ++n;
+  }
+  return n;
+}
+
+void MergeProjection::build(PatchState& state, const std::vector<OpenMesh::HalfedgeHandle>& border,
+                            const bool with_loops) {
+  const TriMesh& mesh = *graph_.mesh;
+  const int epoch = ++vertex_epoch_;
+  state.pinched = 0;
+  for (const auto h : border) {
+    const int a = mesh.from_vertex_handle(h).idx();
+    if (vertex_stamp_[a] != epoch) {
+      vertex_stamp_[a] = epoch;
+      vertex_out_[a] = h.idx();
+    } else if (vertex_out_[a] >= 0) {
+      vertex_out_[a] = -1;
+      ++state.pinched;
+    }
+  }
+  state.has_loops = false;
+  state.loops.clear();
+  state.segments.clear();
+  state.n_live = state.n_outer = state.n_unsure = 0;
+  if (!with_loops || state.pinched != 0 || border.empty()) return;
+  state.origin = xy(mesh.from_vertex_handle(border[0]).idx());
+  state.segments.reserve(border.size());
+  for (const auto h : border) {
+    const int a = mesh.from_vertex_handle(h).idx(), b = mesh.to_vertex_handle(h).idx();
+    halfedge_slot_[h.idx()] = static_cast<int>(state.segments.size());
+    state.segments.push_back({h.idx(), a, b, xy(a), xy(b)});
+  }
+  // No vertex is passed twice: a loop follows each vertex's only outgoing border halfedge.
+  const int loop_epoch = ++halfedge_epoch_;
+  for (const auto start : border) {
+    if (halfedge_stamp_[start.idx()] == loop_epoch) continue;
+    const int id = static_cast<int>(state.loops.size());
+    Loop loop;
+    int h = start.idx();
+    do {
+      halfedge_stamp_[h] = loop_epoch;
+      halfedge_loop_[h] = id;
+      const Segment& s = state.segments[static_cast<std::size_t>(halfedge_slot_[h])];
+      loop.add(state.origin, s.xa, s.xb, 1.0);
+      ++loop.n;
+      NURBSFRONT_ASSERT(vertex_stamp_[s.b] == epoch && loop.n <= border.size());
+      h = vertex_out_[s.b];
+    } while (h != start.idx());
+    const int sign = loop.sign();
+    state.n_outer += sign > 0 ? 1 : 0;
+    state.n_unsure += sign == 0 ? 1 : 0;
+    state.loops.push_back(loop);
+  }
+  state.n_live = state.loops.size();
+  state.has_loops = true;
+}
+
+void MergeProjection::prepare(const int into, const int from, const std::vector<OpenMesh::HalfedgeHandle>& into_border,
+                              const std::vector<OpenMesh::HalfedgeHandle>& from_border,
+                              const std::vector<int>& face_patch, const Eigen::Vector3d& old_axis,
+                              const Eigen::Vector3d& new_axis) {
+  const TriMesh& mesh = *graph_.mesh;
+  const auto needed = static_cast<std::size_t>(std::max(into, from)) + 1;
+  if (states_.size() < needed) states_.resize(needed);
+  PatchState& state = states_[static_cast<std::size_t>(into)];
+  Pending& pd = pending_;
+  pd.into = into;
+  pd.from = from;
+  pd.axis = new_axis;
+  pd.from_border = from_border;
+  pd.incremental = false;
+  pd.pinched = -1;
+  const bool same_axis = old_axis == new_axis;
+  if (state.pinched < 0 || (state.has_loops && state.axis != old_axis) ||
+      (state.pinched == 0 && !state.has_loops && same_axis)) {
+    std::tie(e1_, e2_) = plane_frame(old_axis);
+    build(state, into_border, same_axis);
+    state.axis = old_axis;
+  }
+  // from's border vertices, and how many of them into's border passes twice.
+  pd.vertices.clear();
+  const int epoch = ++vertex_epoch_;
+  for (const auto h : from_border) {
+    const int v = mesh.from_vertex_handle(h).idx();
+    if (vertex_stamp_[v] == epoch) continue;
+    vertex_stamp_[v] = epoch;
+    pd.vertices.push_back(v);
+  }
+  pd.removed_pinched = 0;
+  for (const int v : pd.vertices) pd.removed_pinched += degree(v, into, face_patch) >= 2 ? 1 : 0;
+}
+
+int MergeProjection::check(const std::vector<int>& face_patch) {
+  const TriMesh& mesh = *graph_.mesh;
+  Pending& pd = pending_;
+  const PatchState& state = states_[static_cast<std::size_t>(pd.into)];
+  const int into = pd.into;
+  // Only from's border vertices change how often the border passes them.
+  int added_pinched = 0;
+  for (const int v : pd.vertices) added_pinched += degree(v, into, face_patch) >= 2 ? 1 : 0;
+  pd.pinched = state.pinched - pd.removed_pinched + added_pinched;
+  if (!state.has_loops || state.axis != pd.axis || state.pinched != 0 || pd.pinched != 0 || state.n_unsure != 0)
+    return -1;
+  std::tie(e1_, e2_) = plane_frame(pd.axis);
+  // into's border halfedges across from's border become inner; from's others stay border.
+  pd.shared.clear();
+  pd.added.clear();
+  const int shared_epoch = ++halfedge_epoch_;
+  for (const auto h : pd.from_border) {
+    const auto o = mesh.opposite_halfedge_handle(h);
+    const auto g = mesh.face_handle(o);
+    if (g.is_valid() && face_patch[g.idx()] == into) {
+      pd.shared.push_back(o.idx());
+      halfedge_stamp_[o.idx()] = shared_epoch;
+    } else {
+      const int a = mesh.from_vertex_handle(h).idx(), b = mesh.to_vertex_handle(h).idx();
+      pd.added.push_back({h.idx(), a, b, xy(a), xy(b)});
+    }
+  }
+  if (pd.shared.empty()) return -1;
+  auto registered = [&](int h) {
+    const int slot = halfedge_slot_[h];
+    return slot >= 0 && static_cast<std::size_t>(slot) < state.segments.size() &&
+           state.segments[static_cast<std::size_t>(slot)].h == h;
+  };
+  const int joined = halfedge_loop_[pd.shared[0]];
+  for (const int o : pd.shared)
+    if (!registered(o) || halfedge_loop_[o] != joined) return -1;
+  // The shared halfedges are one run of the joined loop (one end) or all of it (none).
+  const int run_epoch = ++vertex_epoch_;
+  for (const int o : pd.shared) vertex_stamp_[mesh.from_vertex_handle(OpenMesh::HalfedgeHandle(o)).idx()] = run_epoch;
+  std::size_t ends = 0;
+  for (const int o : pd.shared)
+    ends += vertex_stamp_[mesh.to_vertex_handle(OpenMesh::HalfedgeHandle(o)).idx()] != run_epoch ? 1 : 0;
+  const Loop& old_loop = state.loops[static_cast<std::size_t>(joined)];
+  if (ends > 1 || (ends == 0) != (pd.shared.size() == old_loop.n) || pd.shared.size() > old_loop.n) return -1;
+  // The added segments' successors in the merged border (one outgoing halfedge per vertex).
+  const int added_epoch = ++halfedge_epoch_;
+  const std::size_t n_added = pd.added.size();
+  for (std::size_t i = 0; i < n_added; ++i) {
+    halfedge_stamp_[pd.added[i].h] = added_epoch;
+    halfedge_pos_[pd.added[i].h] = static_cast<int>(i);
+  }
+  auto in_merged = [&](OpenMesh::HalfedgeHandle h) {
+    const auto f = mesh.face_handle(h);
+    return f.is_valid() && face_patch[f.idx()] == into;
+  };
+  std::vector<int> next(n_added, -1);
+  std::vector<std::uint8_t> has_previous(n_added, 0);
+  std::size_t n_exits = 0, exit = 0;
+  for (std::size_t i = 0; i < n_added; ++i) {
+    auto h = mesh.next_halfedge_handle(OpenMesh::HalfedgeHandle(pd.added[i].h));
+    while (in_merged(mesh.opposite_halfedge_handle(h))) h = mesh.next_halfedge_handle(mesh.opposite_halfedge_handle(h));
+    if (halfedge_stamp_[h.idx()] == added_epoch) {
+      next[i] = halfedge_pos_[h.idx()];
+      has_previous[static_cast<std::size_t>(next[i])] = 1;
+      continue;
+    }
+    // Leaves from's segments: into the joined loop where the run ends.
+    if (halfedge_stamp_[h.idx()] == shared_epoch || !registered(h.idx()) || halfedge_loop_[h.idx()] != joined) return -1;
+    ++n_exits;
+    exit = i;
+  }
+  if (n_exits != ends) return -1;
+  // The run's replacement (from the one added segment without a predecessor to the exit),
+  // then closed loops of added segments only (from's holes).
+  pd.added_loop.assign(n_added, -2);
+  pd.new_loops.clear();
+  pd.joined = joined;
+  pd.closes = ends == 0;
+  if (!pd.closes) {
+    std::size_t start = n_added;
+    for (std::size_t i = 0; i < n_added; ++i) {
+      if (has_previous[i] != 0) continue;
+      if (start != n_added) return -1;
+      start = i;
+    }
+    if (start == n_added) return -1;
+    Loop after = old_loop;
+    for (const int o : pd.shared) {
+      const Segment& s = state.segments[static_cast<std::size_t>(halfedge_slot_[o])];
+      after.add(state.origin, s.xa, s.xb, -1.0);
+    }
+    after.n -= pd.shared.size();
+    for (std::size_t i = start;; i = static_cast<std::size_t>(next[i])) {
+      if (pd.added_loop[i] != -2) return -1;
+      pd.added_loop[i] = -1;
+      after.add(state.origin, pd.added[i].xa, pd.added[i].xb, 1.0);
+      ++after.n;
+      if (i == exit) break;
+      if (next[i] < 0) return -1;
+    }
+    pd.joined_after = after;
+  }
+  for (std::size_t first = 0; first < n_added; ++first) {
+    if (pd.added_loop[first] != -2) continue;
+    Loop loop;
+    const int id = static_cast<int>(pd.new_loops.size());
+    std::size_t i = first;
+    do {
+      if (next[i] < 0 || pd.added_loop[i] != -2) return -1;
+      pd.added_loop[i] = id;
+      loop.add(state.origin, pd.added[i].xa, pd.added[i].xb, 1.0);
+      ++loop.n;
+      i = static_cast<std::size_t>(next[i]);
+    } while (i != first);
+    pd.new_loops.push_back(loop);
+  }
+  // Orientations: at most one counter-clockwise loop.
+  const int old_sign = old_loop.sign();
+  if (old_sign == 0) return -1;
+  std::size_t n_outer = state.n_outer - (old_sign > 0 ? 1 : 0);
+  std::size_t n_live = state.n_live - 1;
+  if (!pd.closes) {
+    const int sign = pd.joined_after.sign();
+    if (sign == 0) return -1;
+    n_outer += sign > 0 ? 1 : 0;
+    ++n_live;
+  }
+  for (const Loop& loop : pd.new_loops) {
+    const int sign = loop.sign();
+    if (sign == 0) return -1;
+    n_outer += sign > 0 ? 1 : 0;
+    ++n_live;
+  }
+  pd.n_outer = n_outer;
+  pd.n_live = n_live;
+  pd.incremental = true;
+  ++n_incremental_;
+  // No border (a closed surface) or two counter-clockwise loops: not a height field. No
+  // loop passes a vertex twice, so no counter-clockwise cycle can hide inside another.
+  if (n_live == 0 || n_outer > 1) return 0;
+  // Crossings: each added segment against the receiver's remaining ones near the added
+  // segments' box, and against the other added ones (check_projection's pairs).
+  if (n_added == 0) return 1;
+  Eigen::Vector2d lo = pd.added[0].xa, hi = lo;
+  for (const Segment& s : pd.added) {
+    lo = lo.cwiseMin(s.xa).cwiseMin(s.xb);
+    hi = hi.cwiseMax(s.xa).cwiseMax(s.xb);
+  }
+  auto meet = [](const Segment& s, const Segment& t) {
+    if (s.a == t.a || s.a == t.b || s.b == t.a || s.b == t.b) return false;
+    return segments_meet(s.xa, s.xb, t.xa, t.xb);
+  };
+  for (const Segment& s : state.segments) {
+    if (std::max(s.xa.x(), s.xb.x()) < lo.x() || std::min(s.xa.x(), s.xb.x()) > hi.x() ||
+        std::max(s.xa.y(), s.xb.y()) < lo.y() || std::min(s.xa.y(), s.xb.y()) > hi.y())
+      continue;
+    if (halfedge_stamp_[s.h] == shared_epoch) continue;
+    for (const Segment& t : pd.added)
+      if (meet(s, t)) return 0;
+  }
+  for (std::size_t j = 0; j < n_added; ++j)
+    for (std::size_t k = 0; k < j; ++k)
+      if (meet(pd.added[k], pd.added[j])) return 0;
+  return 1;
+}
+
+void MergeProjection::keep() {
+  Pending& pd = pending_;
+  PatchState& state = states_[static_cast<std::size_t>(pd.into)];
+  state.pinched = pd.pinched;
+  if (pd.incremental) {
+    for (const int o : pd.shared) {
+      const auto slot = static_cast<std::size_t>(halfedge_slot_[o]);
+      state.segments[slot] = state.segments.back();
+      halfedge_slot_[state.segments[slot].h] = static_cast<int>(slot);
+      state.segments.pop_back();
+      halfedge_slot_[o] = -1;
+    }
+    const auto base = static_cast<int>(state.loops.size());
+    for (std::size_t i = 0; i < pd.added.size(); ++i) {
+      const int h = pd.added[i].h;
+      halfedge_slot_[h] = static_cast<int>(state.segments.size());
+      halfedge_loop_[h] = pd.added_loop[i] < 0 ? pd.joined : base + pd.added_loop[i];
+      state.segments.push_back(pd.added[i]);
+    }
+    Loop& joined = state.loops[static_cast<std::size_t>(pd.joined)];
+    if (pd.closes) {
+      joined = Loop{};
+    } else {
+      joined = pd.joined_after;
+    }
+    state.loops.insert(state.loops.end(), pd.new_loops.begin(), pd.new_loops.end());
+    state.n_live = pd.n_live;
+    state.n_outer = pd.n_outer;
+  } else {
+    // Checked in full: the loops are traced again when next needed.
+    state.has_loops = false;
+    state.loops.clear();
+    state.segments.clear();
+  }
+  states_[static_cast<std::size_t>(pd.from)] = PatchState{};
 }
 
 }  // namespace nurbsfront::segment_detail
