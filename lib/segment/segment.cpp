@@ -11,7 +11,6 @@
 #include <limits>
 #include <memory>
 #include <numbers>
-#include <optional>
 #include <string>
 
 #include "nurbsfront/core/error.h"
@@ -647,9 +646,6 @@ void merge_patches(const Grouping& grouping, std::size_t min_faces, Patches& pat
     return border[p];
   };
   std::vector<OpenMesh::HalfedgeHandle> merged_border;
-  // The projection checks of the merges, incremental where the merge is the simple case.
-  std::optional<segment_detail::MergeProjection> merge_check;
-  if (scratch != nullptr) merge_check.emplace(graph);
   std::vector<PatchCones> cones(n_patches);
   for (int p = 0; p < n_patches; ++p) cones[p] = patch_cones(grouping, patches.faces[p], patches.axes[p]);
   const double max_smooth = grouping.max_slope - kAngleMarginRad;
@@ -719,8 +715,6 @@ void merge_patches(const Grouping& grouping, std::size_t min_faces, Patches& pat
           // Both borders before the faces change hands (face_patch decides what is border).
           (void)border_of(q.patch);
           (void)border_of(p);
-          merge_check->prepare(q.patch, p, border[q.patch], border[p], patches.face_patch, old_axis,
-                               patches.axes[q.patch]);
         }
         for (int f : patches.faces[p]) patches.face_patch[f] = q.patch;
         auto& target = patches.faces[q.patch];
@@ -739,14 +733,9 @@ void merge_patches(const Grouping& grouping, std::size_t min_faces, Patches& pat
             if (part == &border[q.patch] && patches.axes[q.patch] == old_axis) n_known = merged_border.size();
           }
         }
-        auto passes = [&] {
-          const int known = merge_check->check(patches.face_patch);
-          if (known >= 0) return known == 1;
-          return segment_detail::check_projection(graph, merged_border, patches.face_patch, patches.axes[q.patch],
-                                                  *scratch, n_known)
-              .is_simple;
-        };
-        if (scratch != nullptr && !passes()) {
+        if (scratch != nullptr && !segment_detail::check_projection(graph, merged_border, patches.face_patch,
+                                                                    patches.axes[q.patch], *scratch, n_known)
+                                       .is_simple) {
           target.resize(target.size() - patches.faces[p].size());
           for (int f : patches.faces[p]) patches.face_patch[f] = p;
           cones[q.patch] = old_cones;
@@ -757,7 +746,6 @@ void merge_patches(const Grouping& grouping, std::size_t min_faces, Patches& pat
         if (scratch != nullptr) {
           border[q.patch].swap(merged_border);
           border_size[q.patch] = target.size();
-          merge_check->keep();
         }
         patches.faces[p].clear();
         ++version[p];

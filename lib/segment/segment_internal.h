@@ -7,7 +7,6 @@
 #include <atomic>
 #include <cstdint>
 #include <exception>
-#include <limits>
 #include <memory>
 #include <mutex>
 #include <thread>
@@ -113,87 +112,6 @@ struct ProjectionCheck {
                                                const std::vector<int>& face_patch,
                                                const Eigen::Vector3d& axis, Scratch& scratch,
                                                std::size_t n_known = 0);
-
-//! The projection checks of merges into patches that passed check_projection() with their
-//! axis (merge_patches after the fold splits), made incrementally: each receiving patch keeps
-//! its border segments (projected), its loops' areas and the count of vertices its border
-//! passes twice, so a merge costs the small patch's border and a scan of the receiver's
-//! segments instead of tracing every loop again. check() answers what check_projection() of
-//! the merged border would answer (is_simple), or "unknown" where the merge is not the simple
-//! case (the receiver's axis changes, the border passes a vertex twice, the shared border is
-//! not one run, a loop's orientation is too close to call): the caller then checks in full.
-//! An area's sign is taken only when it is farther from zero than a bound on the rounding of
-//! both sums (this one's, kept with fixed origin, and check_projection()'s), so it is the sign
-//! check_projection() computes. Crossings are tested between the new segments and all others,
-//! the receiver's own being known not to cross (it passed the check with this axis).
-class MergeProjection {
- public:
-  explicit MergeProjection(const FaceGraph& graph);
-  //! Before the faces of patch `from` join patch `into` (face_patch still has them as
-  //! from's): the two patches' current borders (patch_border()), into's axis before the
-  //! merge and the merged patch's axis.
-  void prepare(int into, int from, const std::vector<OpenMesh::HalfedgeHandle>& into_border,
-               const std::vector<OpenMesh::HalfedgeHandle>& from_border, const std::vector<int>& face_patch,
-               const Eigen::Vector3d& old_axis, const Eigen::Vector3d& new_axis);
-  //! After the faces changed hands: 1 the merged patch passes check_projection() with the
-  //! new axis, 0 it does not, -1 unknown.
-  [[nodiscard]] int check(const std::vector<int>& face_patch);
-  //! The merge of the last prepare() is kept (it passed).
-  void keep();
-  //! Checks that took the incremental path (answered 0 or 1), for tests.
-  [[nodiscard]] std::size_t n_incremental() const { return n_incremental_; }
-
- private:
-  struct Loop {
-    double sum = 0.0, error = 0.0;  // twice the area (origin fixed per patch), bound on its rounding
-    Eigen::Vector2d lo = Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity());  // a box around
-    Eigen::Vector2d hi = -lo;                                                                 // its vertices
-    std::size_t n = 0;               // segments; 0: gone
-    void add(const Eigen::Vector2d& origin, const Eigen::Vector2d& a, const Eigen::Vector2d& b, double sign);
-    [[nodiscard]] int sign() const;  // +1, -1, 0: too close to call
-  };
-  struct Segment {
-    int h = -1, a = -1, b = -1;  // halfedge, from and to vertex
-    Eigen::Vector2d xa, xb;
-  };
-  struct PatchState {
-    int pinched = -1;  // vertices with two or more outgoing border halfedges; -1 unknown
-    bool has_loops = false;  // the loops and segments below are those of the current border
-    Eigen::Vector3d axis = Eigen::Vector3d::Zero();
-    Eigen::Vector2d origin = Eigen::Vector2d::Zero();
-    std::vector<Loop> loops;
-    std::size_t n_live = 0, n_outer = 0, n_unsure = 0;
-    std::vector<Segment> segments;
-  };
-  void build(PatchState& state, const std::vector<OpenMesh::HalfedgeHandle>& border, bool with_loops);
-  [[nodiscard]] int degree(int v, int patch, const std::vector<int>& face_patch) const;
-  [[nodiscard]] Eigen::Vector2d xy(int v) const;
-
-  const FaceGraph& graph_;
-  std::vector<PatchState> states_;
-  std::vector<int> vertex_stamp_, vertex_out_, halfedge_stamp_, halfedge_pos_, halfedge_loop_, halfedge_slot_;
-  int vertex_epoch_ = 0, halfedge_epoch_ = 0;
-  Eigen::Vector3d e1_ = Eigen::Vector3d::UnitX(), e2_ = Eigen::Vector3d::UnitY();  // the frame of the patch being checked
-  // The attempt between prepare() and keep().
-  struct Pending {
-    int into = -1, from = -1;
-    Eigen::Vector3d axis = Eigen::Vector3d::Zero();
-    std::vector<OpenMesh::HalfedgeHandle> from_border;
-    std::vector<int> vertices;  // from's border vertices
-    int removed_pinched = 0;
-    int pinched = -1;     // the merged patch's, -1 unknown
-    bool incremental = false;
-    std::vector<int> shared;  // into's border halfedges that become inner ones
-    std::vector<Segment> added;  // from's that stay border
-    std::vector<int> added_loop;  // per added segment: -1 the loop it joins, else index into new_loops
-    int joined = -1;  // into's loop the run joins (or that closes, when `closes`)
-    bool closes = false;
-    Loop joined_after;
-    std::vector<Loop> new_loops;
-    std::size_t n_live = 0, n_outer = 0;
-  } pending_;
-  std::size_t n_incremental_ = 0;
-};
 
 //! narrow_patches(mesh, segmentation, max_width) with the faces' areas and the border edges'
 //! lengths computed on `workers` threads (the sums in face and edge order on the calling

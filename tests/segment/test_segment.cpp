@@ -587,7 +587,7 @@ TEST(Segment, ProjectionCheckWithAKnownSimplePrefixAgrees) {
 }
 
 // Patches of one to six faces grown breadth-first from seeds taken in a shuffled face order
-// (a fixed seed): the blobs the merge and narrow-patch tests below start from.
+// (a fixed seed): the patches the narrow-patch test below starts from.
 std::vector<int> random_blobs(const segment_detail::FaceGraph& graph, unsigned seed, int* n_blobs) {
   const int n_faces = graph.n_faces();
   std::vector<int> order(static_cast<std::size_t>(n_faces));
@@ -611,81 +611,6 @@ std::vector<int> random_blobs(const segment_detail::FaceGraph& graph, unsigned s
   }
   *n_blobs = n;
   return face_patch;
-}
-
-// MergeProjection, the incremental check of merge_patches: blobs join patch 0 one by one
-// (a neighbour of it in a shuffled order); wherever the incremental check answers, its
-// answer is check_projection()'s of the merged patch's faces. Merges that fail are undone
-// (patch 0 always passed, as merge_patches' receivers do); every fifth merge turns the
-// axis (the full check then decides, and the loops are traced again in the new plane).
-// The ramp's turns cross in projection; the sphere's and the torus' lower faces turn
-// loops clockwise.
-TEST(Segment, IncrementalMergeCheckAgreesWithTheFullCheck) {
-  const std::array<TriangleSoup, 3> soups{ramp(1.5, 24, 3), test::icosphere(3), test::torus(24, 12)};
-  std::array<int, 2> n_answers{};  // incremental answers 0 and 1, all meshes
-  for (std::size_t m = 0; m < soups.size(); ++m) {
-    const TriMesh mesh = to_trimesh(soups[m]);
-    const segment_detail::FaceGraph graph = segment_detail::build_graph(mesh);
-    segment_detail::Scratch scratch(mesh);
-    int n_blobs = 0;
-    std::vector<int> face_patch = random_blobs(graph, 7 + static_cast<unsigned>(m), &n_blobs);
-    std::vector<std::vector<int>> faces(static_cast<std::size_t>(n_blobs));
-    for (int f = 0; f < graph.n_faces(); ++f) faces[static_cast<std::size_t>(face_patch[static_cast<std::size_t>(f)])].push_back(f);
-    // Face 0's normal, and a turned one.
-    const auto normal = mesh.calc_face_normal(mesh.face_handle(0));
-    const Eigen::Vector3d first_axis(normal[0], normal[1], normal[2]);
-    const Eigen::Vector3d tilted = (first_axis + Eigen::Vector3d(0.03, 0.01, 0.02)).normalized();
-    Eigen::Vector3d axis = first_axis;
-    ASSERT_TRUE(segment_detail::check_projection(graph, faces[0], face_patch, axis, scratch).is_simple);
-    segment_detail::MergeProjection merges(graph);
-    std::mt19937 random(11);
-    int n_checks = 0, n_kept = 0, n_refused = 0, n_tilted = 0;
-    for (int round = 0; round < 400; ++round) {
-      std::vector<int> around;
-      for (const int f : faces[0])
-        for (const int g : graph.neighbours[static_cast<std::size_t>(f)])
-          if (g >= 0 && face_patch[static_cast<std::size_t>(g)] != 0) around.push_back(face_patch[static_cast<std::size_t>(g)]);
-      if (around.empty()) break;
-      const int p = around[random() % around.size()];
-      const bool tilt = round % 5 == 4;
-      const Eigen::Vector3d new_axis = !tilt ? axis : axis == tilted ? first_axis : tilted;
-      merges.prepare(0, p, segment_detail::patch_border(graph, faces[0], face_patch),
-                     segment_detail::patch_border(graph, faces[static_cast<std::size_t>(p)], face_patch), face_patch,
-                     axis, new_axis);
-      for (const int f : faces[static_cast<std::size_t>(p)]) face_patch[static_cast<std::size_t>(f)] = 0;
-      std::vector<int> merged = faces[0];
-      merged.insert(merged.end(), faces[static_cast<std::size_t>(p)].begin(), faces[static_cast<std::size_t>(p)].end());
-      const std::size_t before = merges.n_incremental();
-      const int answer = merges.check(face_patch);
-      const bool full = segment_detail::check_projection(graph, merged, face_patch, new_axis, scratch).is_simple;
-      if (tilt) {
-        EXPECT_EQ(answer, -1);
-      }
-      EXPECT_EQ(answer >= 0, merges.n_incremental() == before + 1);
-      if (answer >= 0) {
-        ++n_checks;
-        ++n_answers[static_cast<std::size_t>(answer)];
-        EXPECT_EQ(answer == 1, full) << "mesh " << m << " round " << round << " patch " << p;
-      }
-      if (!full) {
-        for (const int f : faces[static_cast<std::size_t>(p)]) face_patch[static_cast<std::size_t>(f)] = p;
-        ++n_refused;
-        continue;
-      }
-      merges.keep();
-      faces[0] = std::move(merged);
-      faces[static_cast<std::size_t>(p)].clear();
-      axis = new_axis;
-      ++n_kept;
-      n_tilted += tilt ? 1 : 0;
-    }
-    EXPECT_GT(n_checks, 30) << "mesh " << m;
-    EXPECT_GT(n_kept, 20) << "mesh " << m;
-    EXPECT_GT(n_refused, 0) << "mesh " << m;
-    EXPECT_GT(n_tilted, 0) << "mesh " << m;
-  }
-  EXPECT_GT(n_answers[0], 0);
-  EXPECT_GT(n_answers[1], 0);
 }
 
 // narrow_patches on 1, 2 and 4 threads: the serial list (the faces and edges span several
