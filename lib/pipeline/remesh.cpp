@@ -220,7 +220,8 @@ RemeshResult remesh(const TriMesh& input, const RemeshOptions& options) {
   if (options.narrow_patch_merge > 0.0 && surfmesh_detail::marching_cubes_lattice(input_lattice()) &&
       !surfmesh_detail::label_image_staircase(input_lattice())) {
     const double h = surfmesh_detail::uniform_size(surfmesh_options.sizing, mean_edge);
-    const std::vector<int> narrow = narrow_patches(input, first_segmentation, options.narrow_patch_merge * h);
+    const std::vector<int> narrow =
+        segment_detail::narrow_patches(input, first_segmentation, options.narrow_patch_merge * h, input_threads);
     if (!narrow.empty()) {
       const std::size_t n_before = first_segmentation.patches.size();
       first_segmentation = segment_detail::merge_into_neighbours(*splitter, first_segmentation, narrow, false);

@@ -1776,38 +1776,68 @@ Segmentation merge_patches_into_neighbours(const TriMesh& mesh, const Segmentati
 }
 
 std::vector<int> narrow_patches(const TriMesh& mesh, const Segmentation& segmentation, double max_width) {
+  return segment_detail::narrow_patches(mesh, segmentation, max_width, 1);
+}
+
+std::vector<int> segment_detail::narrow_patches(const TriMesh& mesh, const Segmentation& segmentation, double max_width,
+                                                unsigned workers) {
   if (!std::isfinite(max_width)) throw InvalidInput("narrow_patches: max_width must be finite");
   if (segmentation.face_patch.size() != mesh.n_faces())
     throw InvalidInput("narrow_patches: the segmentation is not one of this mesh");
   const std::size_t n_patches = segmentation.patches.size();
+  for (const int p : segmentation.face_patch)
+    if (p < 0 || static_cast<std::size_t>(p) >= n_patches) throw InvalidInput("narrow_patches: a face has no valid patch");
+  const auto patch_of = [&](OpenMesh::HalfedgeHandle h) {
+    const auto f = mesh.face_handle(h);
+    return f.is_valid() ? segmentation.face_patch[static_cast<std::size_t>(f.idx())] : -1;
+  };
+  // The faces' areas and the edges between two patches (or on the boundary) with their
+  // lengths on `workers` threads; the sums below add them in face and edge order on this
+  // thread, as one serial pass would (the same doubles for any thread count).
+  struct BorderEdge {
+    int a, b;
+    double length;
+  };
+  const std::size_t n_faces = mesh.n_faces(), n_edges = mesh.n_edges();
+  const std::size_t n_face_chunks = (n_faces + kFaceChunk - 1) / kFaceChunk;
+  const std::size_t n_edge_chunks = (n_edges + kFaceChunk - 1) / kFaceChunk;
+  std::vector<double> face_area(n_faces);
+  std::vector<std::vector<BorderEdge>> chunk_edges(n_edge_chunks);  // each chunk's in edge order
+  segment_detail::parallel_chunks(n_face_chunks + n_edge_chunks, workers, 1, [&](std::size_t first, std::size_t last, unsigned) {
+    for (std::size_t c = first; c < last; ++c) {
+      if (c < n_face_chunks) {
+        for (std::size_t f = c * kFaceChunk; f < std::min(n_faces, (c + 1) * kFaceChunk); ++f)
+          face_area[f] = mesh.calc_face_area(mesh.face_handle(static_cast<int>(f)));
+        continue;
+      }
+      const std::size_t k = c - n_face_chunks;
+      for (std::size_t i = k * kFaceChunk; i < std::min(n_edges, (k + 1) * kFaceChunk); ++i) {
+        const auto e = mesh.edge_handle(static_cast<int>(i));
+        const int a = patch_of(mesh.halfedge_handle(e, 0)), b = patch_of(mesh.halfedge_handle(e, 1));
+        if (a != b) chunk_edges[k].push_back({a, b, mesh.calc_edge_length(e)});
+      }
+    }
+  });
   std::vector<double> area(n_patches, 0.0);
   std::vector<double> border(n_patches, 0.0);
-  const auto patch_of = [&](OpenMesh::SmartHalfedgeHandle h) {
-    if (h.is_boundary()) return -1;
-    const int p = segmentation.face_patch[static_cast<std::size_t>(h.face().idx())];
-    if (p < 0 || static_cast<std::size_t>(p) >= n_patches) throw InvalidInput("narrow_patches: a face has no valid patch");
-    return p;
-  };
-  for (const auto f : mesh.faces()) area[static_cast<std::size_t>(patch_of(f.halfedge()))] += mesh.calc_face_area(f);
-  for (const auto e : mesh.edges()) {
-    const int a = patch_of(e.h0()), b = patch_of(e.h1());
-    if (a == b) continue;
-    const double length = mesh.calc_edge_length(e);
-    if (a >= 0) border[static_cast<std::size_t>(a)] += length;
-    if (b >= 0) border[static_cast<std::size_t>(b)] += length;
-  }
+  for (std::size_t f = 0; f < n_faces; ++f) area[static_cast<std::size_t>(segmentation.face_patch[f])] += face_area[f];
+  for (const auto& edges : chunk_edges)
+    for (const BorderEdge& e : edges) {
+      if (e.a >= 0) border[static_cast<std::size_t>(e.a)] += e.length;
+      if (e.b >= 0) border[static_cast<std::size_t>(e.b)] += e.length;
+    }
   std::vector<double> width(n_patches, std::numeric_limits<double>::infinity());
   for (std::size_t p = 0; p < n_patches; ++p)
     if (border[p] > 0.0) width[p] = 2.0 * area[p] / border[p];
   // Only a narrow patch next to a wide one: a small closed shape whose every side is narrow
   // (a box smaller than max_width) would collapse if its sides joined one another.
   std::vector<std::uint8_t> wide_neighbour(n_patches, 0);
-  for (const auto e : mesh.edges()) {
-    const int a = patch_of(e.h0()), b = patch_of(e.h1());
-    if (a < 0 || b < 0 || a == b) continue;
-    if (width[static_cast<std::size_t>(b)] >= max_width) wide_neighbour[static_cast<std::size_t>(a)] = 1;
-    if (width[static_cast<std::size_t>(a)] >= max_width) wide_neighbour[static_cast<std::size_t>(b)] = 1;
-  }
+  for (const auto& edges : chunk_edges)
+    for (const BorderEdge& e : edges) {
+      if (e.a < 0 || e.b < 0) continue;
+      if (width[static_cast<std::size_t>(e.b)] >= max_width) wide_neighbour[static_cast<std::size_t>(e.a)] = 1;
+      if (width[static_cast<std::size_t>(e.a)] >= max_width) wide_neighbour[static_cast<std::size_t>(e.b)] = 1;
+    }
   std::vector<std::pair<double, int>> narrow;
   for (std::size_t p = 0; p < n_patches; ++p)
     if (width[p] < max_width && wide_neighbour[p] != 0) narrow.emplace_back(width[p], static_cast<int>(p));

@@ -113,6 +113,12 @@ struct ProjectionCheck {
                                                const Eigen::Vector3d& axis, Scratch& scratch,
                                                std::size_t n_known = 0);
 
+//! narrow_patches(mesh, segmentation, max_width) with the faces' areas and the border edges'
+//! lengths computed on `workers` threads (the sums in face and edge order on the calling
+//! thread: the same list for any count).
+[[nodiscard]] std::vector<int> narrow_patches(const TriMesh& mesh, const Segmentation& segmentation, double max_width,
+                                              unsigned workers);
+
 //! Every cliff of a patch (has_cliff()) as vertex ids (lower, higher), each pair once.
 struct CliffPairs {
   std::vector<std::array<int, 2>> pairs;

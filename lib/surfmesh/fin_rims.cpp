@@ -11,12 +11,12 @@ namespace nurbsfront::surfmesh_detail {
 
 std::vector<int> fin_rim_curves(const TriMesh& mesh, const Segmentation& segmentation,
                                 const SurfaceMesh& surface, const std::vector<double>& angles, double max_width,
-                                double max_angle_deg, double max_gap) {
+                                double max_angle_deg, double max_gap, unsigned threads) {
   const std::vector<std::uint8_t>& is_feature = surface.curve_is_feature;
   std::vector<int> out;
   if (!(max_width > 0.0)) return out;
   std::vector<std::uint8_t> narrow(segmentation.patches.size(), 0);
-  for (const int p : narrow_patches(mesh, segmentation, max_width)) narrow[static_cast<std::size_t>(p)] = 1;
+  for (const int p : segment_detail::narrow_patches(mesh, segmentation, max_width, threads)) narrow[static_cast<std::size_t>(p)] = 1;
   for (std::size_t c = 0; c < segmentation.curves.size(); ++c) {
     const BorderCurve& curve = segmentation.curves[c];
     // The input's boundary is its geometry: always a feature.

@@ -492,7 +492,8 @@ SurfaceMesh surfmesh_detail::mesh_surface(const TriMesh& input, const Segmentati
   // (their sources, the unsmoothed sharp ones).
   if (fin_rims && marching_cubes && !label_image_staircase(lattice)) {
     for (const int c : fin_rim_curves(input, segmentation, out, crease_angles, options.fin_rim_width * h,
-                                      options.fin_rim_max_angle_deg, options.fin_rim_max_gap_edges * mean_edge)) {
+                                      options.fin_rim_max_angle_deg, options.fin_rim_max_gap_edges * mean_edge,
+                                      threads)) {
       out.curve_is_feature[static_cast<std::size_t>(c)] = 0;
       if (out.curve_is_fin_rim.empty()) out.curve_is_fin_rim.assign(out.curve_is_feature.size(), 0);
       out.curve_is_fin_rim[static_cast<std::size_t>(c)] = 1;

@@ -158,10 +158,11 @@ struct PatchBorder {
 //! patches, one of which is in narrow_patches(mesh, segmentation, max_width), whose crease
 //! angle (`angles`, per curve) is at most max_angle_deg and at each of whose nodes the
 //! projections onto the two patches' surfaces, and their mean to the node, are at most max_gap
-//! apart; ascending ids.
+//! apart; ascending ids. narrow_patches' pass over the faces and edges runs on `threads`.
 [[nodiscard]] std::vector<int> fin_rim_curves(const TriMesh& mesh, const Segmentation& segmentation,
                                               const SurfaceMesh& surface, const std::vector<double>& angles,
-                                              double max_width, double max_angle_deg, double max_gap);
+                                              double max_width, double max_angle_deg, double max_gap,
+                                              unsigned threads = 1);
 
 //! The band samples of points (world) in a patch frame: a point at the midpoint of a cell
 //! lattice edge (one coordinate half-way between centres, the other two on centres) gets

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <random>
 #include <set>
 #include <string>
 
@@ -583,6 +584,55 @@ TEST(Segment, ProjectionCheckWithAKnownSimplePrefixAgrees) {
   }
   EXPECT_GT(n_simple, 0);
   EXPECT_GT(n_not_simple, 0);
+}
+
+// Patches of one to six faces grown breadth-first from seeds taken in a shuffled face order
+// (a fixed seed): the patches the narrow-patch test below starts from.
+std::vector<int> random_blobs(const segment_detail::FaceGraph& graph, unsigned seed, int* n_blobs) {
+  const int n_faces = graph.n_faces();
+  std::vector<int> order(static_cast<std::size_t>(n_faces));
+  for (int f = 0; f < n_faces; ++f) order[static_cast<std::size_t>(f)] = f;
+  std::mt19937 random(seed);
+  std::shuffle(order.begin() + 1, order.end(), random);  // face 0 seeds blob 0
+  std::vector<int> face_patch(static_cast<std::size_t>(n_faces), -1);
+  int n = 0;
+  for (const int seed_face : order) {
+    if (face_patch[static_cast<std::size_t>(seed_face)] >= 0) continue;
+    const std::size_t size = 1 + random() % 6;
+    std::vector<int> blob{seed_face};
+    face_patch[static_cast<std::size_t>(seed_face)] = n;
+    for (std::size_t head = 0; head < blob.size() && blob.size() < size; ++head)
+      for (const int g : graph.neighbours[static_cast<std::size_t>(blob[head])])
+        if (g >= 0 && face_patch[static_cast<std::size_t>(g)] < 0 && blob.size() < size) {
+          face_patch[static_cast<std::size_t>(g)] = n;
+          blob.push_back(g);
+        }
+    ++n;
+  }
+  *n_blobs = n;
+  return face_patch;
+}
+
+// narrow_patches on 1, 2 and 4 threads: the serial list (the faces and edges span several
+// chunks of the parallel pass).
+TEST(Segment, NarrowPatchesAreTheSameOnAnyThreadCount) {
+  const TriMesh mesh = to_trimesh(test::torus(160, 64));  // 20 480 faces
+  const segment_detail::FaceGraph graph = segment_detail::build_graph(mesh);
+  Segmentation seg;
+  int n_blobs = 0;
+  seg.face_patch = random_blobs(graph, 3, &n_blobs);
+  seg.patches.resize(static_cast<std::size_t>(n_blobs));
+  for (int f = 0; f < graph.n_faces(); ++f)
+    seg.patches[static_cast<std::size_t>(seg.face_patch[static_cast<std::size_t>(f)])].faces.push_back(f);
+  const double mean_edge = mean_edge_length(mesh);
+  bool some = false;
+  for (const double width : {0.2, 0.35, 0.5}) {
+    const std::vector<int> serial = narrow_patches(mesh, seg, width * mean_edge);
+    some = some || !serial.empty();
+    for (const unsigned threads : {1U, 2U, 4U})
+      EXPECT_EQ(segment_detail::narrow_patches(mesh, seg, width * mean_edge, threads), serial) << width << " " << threads;
+  }
+  EXPECT_TRUE(some);
 }
 
 TEST(Segment, IsDeterministic) {
