@@ -127,24 +127,29 @@ HeightJet BicubicHeightField::jet(double x, double y) const {
 
 Eigen::Vector2d BicubicHeightField::gradient(double x, double y) const {
   // jet()'s first derivatives alone, with the same operations in the same order (the same
-  // numbers bit for bit): the front2d metric asks for them at every step.
-  const JetWeights w = jet_weights(x, y, domain_.min, inv_h_x_, inv_h_y_, n_x_, n_y_, coefficients_.data());
-  const double *bx = w.bx, *by = w.by, *dx1 = w.dx1, *dy1 = w.dy1;
-  const std::size_t stride = w.stride;
-  const double* c = w.c;
-  double zx = 0.0;
-  double zy = 0.0;
+  // numbers bit for bit): the front2d metric asks for them at every step. The value and
+  // derivative weights along x go in pairs (bx_k, dx1_k), so each row's two sums (r0, r1) are
+  // one pair of products and additions, and the pair (zy, zx) takes (dy1_l r0, by_l r1).
+  const Cell cx = locate_cell(x, domain_.min.x(), inv_h_x_, n_x_);
+  const Cell cy = locate_cell(y, domain_.min.y(), inv_h_y_, n_y_);
+  double bx[4], by[4], dx1[4], dx2[4], dy1[4], dy2[4];
+  detail::cubic_weights(cx.s, bx);
+  detail::cubic_weights(cy.s, by);
+  cubic_derivative_weights(cx.s, dx1, dx2);
+  cubic_derivative_weights(cy.s, dy1, dy2);
+  const std::size_t stride = static_cast<std::size_t>(n_x_) + 3;
+  const double* c = coefficients_.data() + static_cast<std::size_t>(cy.index) * stride + static_cast<std::size_t>(cx.index);
+  const Eigen::Array2d w0(bx[0], dx1[0]), w1(bx[1], dx1[1]), w2(bx[2], dx1[2]), w3(bx[3], dx1[3]);
+  Eigen::Array2d z = Eigen::Array2d::Zero();  // (zy, zx)
   for (int l = 0; l < 4; ++l, c += stride) {
-    double r0 = 0.0;
-    double r1 = 0.0;
-    for (int k = 0; k < 4; ++k) {
-      r0 += bx[k] * c[k];
-      r1 += dx1[k] * c[k];
-    }
-    zx += by[l] * r1;
-    zy += dy1[l] * r0;
+    Eigen::Array2d r = Eigen::Array2d::Zero();  // (r0, r1)
+    r += w0 * c[0];
+    r += w1 * c[1];
+    r += w2 * c[2];
+    r += w3 * c[3];
+    z += Eigen::Array2d(dy1[l], by[l]) * r;
   }
-  return {zx * inv_h_x_, zy * inv_h_y_};
+  return {z[1] * inv_h_x_, z[0] * inv_h_y_};
 }
 
 Eigen::Matrix2d BicubicHeightField::metric(double x, double y) const {

@@ -6,6 +6,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 #include <tuple>
 #include <utility>
@@ -118,16 +119,23 @@ inline double block_value(const double* phi, std::size_t stride, const WeightBlo
 
 // One level of B-spline approximation (BA) of the residuals r: every point proposes
 // phi_c = w_c r / sum w^2 for its 16 coefficients, each coefficient takes the
-// w^2-weighted mean of its proposals.
-Lattice approximate_level(const PointWeights& weights, const std::vector<double>& r, int n_x, int n_y) {
+// w^2-weighted mean of its proposals. `omega` holds each coefficient's sum of w^2, which
+// depends on the weights only: when it has the lattice's size it is read and only the sums
+// of w^2 phi_c are made (the final passes on one lattice share it: half the scatter's
+// products), else it is made here beside them and stored. The same sums in the same order
+// either way, so the same lattice bit for bit.
+Lattice approximate_level(const PointWeights& weights, const std::vector<double>& r, int n_x, int n_y,
+                          std::vector<double>& omega) {
   Lattice lattice{n_x, n_y, {}};
   const std::size_t size = lattice.stride() * (static_cast<std::size_t>(n_y) + 3);
-  // delta (sum of w^2 phi_c) and omega (sum of w^2) side by side: one cache line per update.
-  std::vector<double> acc(2 * size, 0.0);
   const std::size_t stride = lattice.stride();
+  const bool known = omega.size() == size;
+  // Without omega: delta (sum of w^2 phi_c) and omega side by side, one cache line per update.
+  std::vector<double> acc(known ? size : 2 * size, 0.0);
   // Per point, the update of coefficient (k, l) is (w^3 r / sum w^2, w^2) with
   // w = bx_k by_l: the product of the pairs (bx_k^3, bx_k^2) and (by_l^3 r / sum w^2, by_l^2),
-  // one row of four (delta, omega) pairs at a time (vectorised, two doubles per instruction).
+  // one row of four (delta, omega) pairs at a time (vectorised, two doubles per instruction);
+  // with omega known, of bx_k^3 and by_l^3 r / sum w^2.
   using Row = Eigen::Array<double, 8, 1>;
   double factor[kBlock];
   WeightBlock scratch;
@@ -138,6 +146,18 @@ Lattice approximate_level(const PointWeights& weights, const std::vector<double>
       const double sx = w.bx[0][q] * w.bx[0][q] + w.bx[1][q] * w.bx[1][q] + w.bx[2][q] * w.bx[2][q] + w.bx[3][q] * w.bx[3][q];
       const double sy = w.by[0][q] * w.by[0][q] + w.by[1][q] * w.by[1][q] + w.by[2][q] * w.by[2][q] + w.by[3][q] * w.by[3][q];
       factor[q] = r[first + q] / (sx * sy);
+    }
+    if (known) {
+      for (std::size_t q = 0; q < n; ++q) {
+        Eigen::Array4d x;
+        for (int k = 0; k < 4; ++k) x[k] = (w.bx[k][q] * w.bx[k][q]) * w.bx[k][q];
+        for (int l = 0; l < 4; ++l) {
+          const double b2 = w.by[l][q] * w.by[l][q];
+          Eigen::Map<Eigen::Array4d> a(acc.data() + w.offset[q] + static_cast<std::size_t>(l) * stride);
+          a += x * (b2 * w.by[l][q] * factor[q]);
+        }
+      }
+      continue;
     }
     for (std::size_t q = 0; q < n; ++q) {
       Row x;
@@ -154,7 +174,15 @@ Lattice approximate_level(const PointWeights& weights, const std::vector<double>
     }
   }
   lattice.phi.assign(size, 0.0);
+  if (known) {
+    for (std::size_t k = 0; k < size; ++k) {
+      if (omega[k] > 0.0) lattice.phi[k] = acc[k] / omega[k];
+    }
+    return lattice;
+  }
+  omega.resize(size);
   for (std::size_t k = 0; k < size; ++k) {
+    omega[k] = acc[2 * k + 1];
     if (acc[2 * k + 1] > 0.0) lattice.phi[k] = acc[2 * k] / acc[2 * k + 1];
   }
   return lattice;
@@ -255,7 +283,7 @@ class NormalMatrix {
   }
   //! Rows that some point touches: the matrix is worth building when these are few.
   [[nodiscard]] std::size_t n_rows() const { return touched_.size(); }
-  [[nodiscard]] bool built() const { return !band_.empty(); }
+  [[nodiscard]] bool built() const { return !pairs_.empty(); }
   void build(const PointWeights& weights) {
     band_.assign(touched_.size() * kEntries, 0.0);
     WeightBlock scratch;
@@ -265,6 +293,7 @@ class NormalMatrix {
         // Local copies: the band's stores cannot alias them.
         const double bx[4] = {w.bx[0][q], w.bx[1][q], w.bx[2][q], w.bx[3][q]};
         const double by[4] = {w.by[0][q], w.by[1][q], w.by[2][q], w.by[3][q]};
+        const Eigen::Array4d bx4(bx[0], bx[1], bx[2], bx[3]);
         for (std::size_t l1 = 0; l1 < 4; ++l1) {
           // The four coefficients of a lattice row are touched together: consecutive rows.
           double* row = band_.data() + static_cast<std::size_t>(row_of_[w.offset[q] + l1 * nx_]) * kEntries;
@@ -275,8 +304,8 @@ class NormalMatrix {
             for (std::size_t k2 = k1; k2 < 4; ++k2) row[3 * kBand + 3 + k2 - k1] += w11 * bx[k2];
             for (std::size_t l2 = l1 + 1; l2 < 4; ++l2) {
               const double w12 = w1 * by[l2];
-              double* at = row + (3 + l2 - l1) * kBand + 3 - k1;
-              for (std::size_t k2 = 0; k2 < 4; ++k2) at[k2] += w12 * bx[k2];
+              // The four products and sums of a lattice row two at a time (the same numbers).
+              Eigen::Map<Eigen::Array4d>(row + (3 + l2 - l1) * kBand + 3 - k1) += w12 * bx4;
             }
           }
         }
@@ -294,6 +323,14 @@ class NormalMatrix {
         band_[other * kEntries + (kEntries - 1 - m)] = v;
       }
     }
+    // Rows 2p and 2p + 1 interleaved entry by entry (an odd last row beside zeros), so that
+    // apply() makes two rows' sums side by side, two doubles per instruction.
+    const std::size_t n_pairs = (touched_.size() + 1) / 2;
+    pairs_.assign(n_pairs * 2 * kEntries, 0.0);
+    for (std::size_t r = 0; r < touched_.size(); ++r)
+      for (std::size_t m = 0; m < kEntries; ++m) pairs_[(r / 2) * 2 * kEntries + 2 * m + r % 2] = band_[r * kEntries + m];
+    band_.clear();
+    band_.shrink_to_fit();
     padded_.assign((nx_ + 6) * (ny_ + 6), 0.0);
   }
   //! out = B^T B x (x and out: the nx x ny coefficients).
@@ -301,15 +338,30 @@ class NormalMatrix {
     const std::size_t pnx = nx_ + 6;
     for (std::size_t j = 0; j < ny_; ++j) std::copy_n(x.data() + j * nx_, nx_, padded_.data() + (j + 3) * pnx + 3);
     std::fill(out.begin(), out.end(), 0.0);
-    for (std::size_t r = 0; r < touched_.size(); ++r) {
-      const std::size_t c = touched_[r], i = c % nx_, j = c / nx_;
-      const double* a = band_.data() + r * kEntries;
-      double sum = 0.0;
-      for (std::size_t dj = 0; dj < kBand; ++dj) {
-        const double* xr = padded_.data() + (j + dj) * pnx + i;
-        for (std::size_t di = 0; di < kBand; ++di) sum += a[dj * kBand + di] * xr[di];
+    // Two rows at a time: each lane sums its row's 49 products in the same order as one row
+    // alone (the same numbers). Two coefficients side by side in a lattice row (most pairs)
+    // read their two x values with one load.
+    using Pair = Eigen::Array2d;
+    for (std::size_t r = 0; r < touched_.size(); r += 2) {
+      const bool two = r + 1 < touched_.size();
+      const std::size_t c0 = touched_[r], c1 = two ? touched_[r + 1] : c0;
+      const std::size_t i0 = c0 % nx_, j0 = c0 / nx_, i1 = c1 % nx_, j1 = c1 / nx_;
+      const double* a = pairs_.data() + r * kEntries;  // pair r / 2
+      Pair sum = Pair::Zero();
+      if (j1 == j0 && i1 == i0 + 1) {
+        for (std::size_t dj = 0; dj < kBand; ++dj, a += 2 * kBand) {
+          const double* xr = padded_.data() + (j0 + dj) * pnx + i0;
+          for (std::size_t di = 0; di < kBand; ++di) sum += Eigen::Map<const Pair>(a + 2 * di) * Eigen::Map<const Pair>(xr + di);
+        }
+      } else {
+        for (std::size_t dj = 0; dj < kBand; ++dj, a += 2 * kBand) {
+          const double* xr0 = padded_.data() + (j0 + dj) * pnx + i0;
+          const double* xr1 = padded_.data() + (j1 + dj) * pnx + i1;
+          for (std::size_t di = 0; di < kBand; ++di) sum += Eigen::Map<const Pair>(a + 2 * di) * Pair(xr0[di], xr1[di]);
+        }
       }
-      out[c] = sum;
+      out[c0] = sum[0];
+      if (two) out[c1] = sum[1];
     }
   }
 
@@ -317,7 +369,8 @@ class NormalMatrix {
   std::size_t nx_, ny_;
   std::vector<int> row_of_;
   std::vector<std::size_t> touched_;
-  std::vector<double> band_;
+  std::vector<double> band_;   // while building: row r's 7 x 7 entries at r * kEntries
+  std::vector<double> pairs_;  // built: rows 2p and 2p + 1 interleaved
   std::vector<double> padded_;
 };
 
@@ -638,6 +691,10 @@ FitResult fit_height_field(const std::vector<Eigen::Vector3d>& points, const Fit
   result.base_max_residual = max_residual;
 
   report_progress(options.progress, "fit", 0.0);
+  // The last level's weights and sums of squared weights (approximate_level): the final
+  // passes and the polishes run on that lattice and reuse them.
+  std::optional<PointWeights> finest;
+  std::vector<double> omega;
   for (int level = 0;; ++level) {
     const double scale = std::ldexp(1.0, level);
     const double n_xd = n_x0 * scale;  // doubles: no int overflow before the size check
@@ -662,8 +719,9 @@ FitResult fit_height_field(const std::vector<Eigen::Vector3d>& points, const Fit
     }
     const int n_x = static_cast<int>(n_xd);
     const int n_y = static_cast<int>(n_yd);
-    const PointWeights weights(pts, scale, n_x, n_y, pts.size() <= PointWeights::kMaxCachedPoints);
-    const Lattice lattice = approximate_level(weights, r, n_x, n_y);
+    omega.clear();
+    const PointWeights& weights = finest.emplace(pts, scale, n_x, n_y, pts.size() <= PointWeights::kMaxCachedPoints);
+    const Lattice lattice = approximate_level(weights, r, n_x, n_y, omega);
     double sum_sq = 0.0;
     std::tie(max_residual, sum_sq) = subtract_level(lattice, weights, r);
     FitLevel report;
@@ -694,10 +752,13 @@ FitResult fit_height_field(const std::vector<Eigen::Vector3d>& points, const Fit
     // Further passes on the finest lattice: same BA, same resolution, residual shrinking.
     const int n_x = field.n_cells_x();
     const int n_y = field.n_cells_y();
-    const double scale = static_cast<double>(n_x / n_x0);
-    const PointWeights weights(pts, scale, n_x, n_y, pts.size() <= PointWeights::kMaxCachedPoints);
+    // The finest level's lattice (the loop always makes level 0, and the field was refined
+    // with every level): its weights are the ones at scale n_x / n_x0.
+    NURBSFRONT_ASSERT(finest && !result.levels.empty() && result.levels.back().n_cells_x == n_x &&
+                      result.levels.back().n_cells_y == n_y);
+    const PointWeights& weights = *finest;
     for (int pass = 0; pass < options.final_passes && max_residual > result.tolerance; ++pass) {
-      const Lattice lattice = approximate_level(weights, r, n_x, n_y);
+      const Lattice lattice = approximate_level(weights, r, n_x, n_y, omega);
       max_residual = subtract_level(lattice, weights, r).first;
       auto& coefficients = field.mutable_coefficients();
       for (std::size_t k = 0; k < coefficients.size(); ++k) coefficients[k] += lattice.phi[k];

@@ -75,6 +75,33 @@ TEST(HeightField, EvaluationMatchesTheDefinitionAndDerivativesMatchFiniteDiffere
   }
 }
 
+// gradient() pairs the value and derivative sums of each lattice row (two doubles per
+// instruction, for the front's metric): the same operations in the same order as jet(), so the
+// same numbers bit for bit, inside and beyond the rectangle (its corners and edges included),
+// on a fitted field.
+TEST(HeightField, GradientIsTheJetsFirstDerivativesBitForBit) {
+  const Function f = [](double x, double y) { return std::sin(1.3 * x) * std::cos(0.9 * y) + 0.2 * x * y; };
+  const Rectangle r = rect(-1.0, 0.5, 3.0, 2.5);
+  FitOptions o;
+  o.max_levels = 5;
+  o.least_squares_iterations = 10;
+  const BicubicHeightField field = fit_height_field(random_samples(f, 400, r, 7), o).field;
+  ASSERT_GT(field.n_cells_x(), 4);
+  int n = 0;
+  for (int i = -8; i <= 48; ++i) {
+    for (int j = -8; j <= 28; ++j) {
+      // A regular grid from a fifth of the rectangle before it to a fifth after it.
+      const double x = r.min.x() + i * r.width() / 40.0, y = r.min.y() + j * r.height() / 20.0;
+      const Eigen::Vector2d g = field.gradient(x, y);
+      const HeightJet jet = field.jet(x, y);
+      ASSERT_EQ(g.x(), jet.zx) << x << " " << y;
+      ASSERT_EQ(g.y(), jet.zy) << x << " " << y;
+      ++n;
+    }
+  }
+  EXPECT_EQ(n, 57 * 37);
+}
+
 TEST(HeightField, RefinementIsExact) {
   BicubicHeightField f(rect(0.0, 0.0, 2.0, 1.0), 3, 2);
   std::mt19937 rng(2);
