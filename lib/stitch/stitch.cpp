@@ -35,6 +35,8 @@ void StitchOptions::validate() const {
   if (!(smoothing_relaxation > 0.0 && smoothing_relaxation <= 1.0)) fail("smoothing_relaxation must be in (0, 1]");
   if (!(chord_compensation >= 0.0 && chord_compensation <= 2.0)) fail("chord_compensation must be in [0, 2]");
   if (!(volume_compensation >= 0.0 && volume_compensation <= 2.0)) fail("volume_compensation must be in [0, 2]");
+  if (!(volume_compensation_skip_within >= 0.0 && volume_compensation_skip_within <= 0.05))
+    fail("volume_compensation_skip_within must be in [0, 0.05]");
   if (!(min_normal_dot >= -1.0 && min_normal_dot < 1.0)) fail("min_normal_dot must be in [-1, 1)");
   if (!(alpha_floor >= 0.0 && alpha_floor <= 1.0)) fail("alpha_floor must be in [0, 1]");
   if (!(angle_floor_deg >= 0.0 && angle_floor_deg < 60.0)) fail("angle_floor_deg must be in [0, 60)");
@@ -633,10 +635,15 @@ StitchResult stitch_impl(const SurfaceMesh& surface, const TriMesh* input, const
                                                                          options.n_threads);
     // compensate_volume()'s label-image gate, taken here (it is told so).
     const bool gated = input != nullptr && options.volume_compensation > 0.0 && mesh.n_faces() > 0 && is_label_staircase();
+    stitch_detail::VolumeCompensation how;
+    how.strength = options.volume_compensation;
+    how.skip_within = options.volume_compensation_skip_within;
+    how.label_gate_done = true;
+    how.n_threads = options.n_threads;
     report.n_volume_compensation_moves =
         gated ? 0
               : stitch_detail::compensate_volume(surface, input, mesh, result.face_patch, result.vertex_node, feature,
-                                                 options.volume_compensation, true);
+                                                 how, &report.volume_compensation_skipped);
     // The compensation's moves come after the obtuse repair and can leave triangles obtuse
     // that the splits cannot take apart (rotor: 39 obtuse with it, 37 without): the repair once
     // more. Not where the compensation is gated off (label-image staircases).

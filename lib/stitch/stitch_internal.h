@@ -307,11 +307,21 @@ double mean_over_triangle(F&& f, const Eigen::Vector3d& a, const Eigen::Vector3d
 //! below min(that triangle's old one, kAwayFromFeaturesAngleBoundDeg). Nothing when input
 //! (may be null) is a label image's staircase (surfmesh_detail::on_label_image_staircase;
 //! label_gate_done: the caller has tested that already, and input is still used for the
-//! enclosed-volume check). With a closed input and mesh, the moves are undone when they do
-//! not bring the enclosed volume nearer the input's. Returns the number of nodes moved.
+//! enclosed-volume check). With a closed input and mesh, nothing is measured nor moved when
+//! the mesh's enclosed volume is already within skip_within of the input's (relative; then
+//! *skipped is set, when given), and the moves are undone when they do not bring the
+//! enclosed volume nearer the input's. The measure runs on n_threads threads (the same
+//! moves for any count). Returns the number of nodes moved.
+struct VolumeCompensation {
+  double strength = 1.0;        //!< StitchOptions::volume_compensation
+  double skip_within = 0.0;     //!< StitchOptions::volume_compensation_skip_within
+  bool label_gate_done = false;  //!< the caller has tested the label-image gate
+  unsigned n_threads = 1;
+};
 std::size_t compensate_volume(const SurfaceMesh& surface, const TriMesh* input, TriMesh& mesh,
                               const std::vector<int>& face_patch, const std::vector<int>& vertex_node,
-                              const std::vector<std::uint8_t>& is_feature, double strength, bool label_gate_done = false);
+                              const std::vector<std::uint8_t>& is_feature, const VolumeCompensation& how,
+                              bool* skipped = nullptr);
 
 //! alpha of every face (not deleted), in face order; the faces on n_threads threads
 //! (select_in_order, `chunk` faces a task): the same list at every count.

@@ -727,7 +727,9 @@ std::size_t count_obtuse(const TriMesh& mesh) {
 // Session 14: with feature sizing graded at 1.25 (the new default) the rotor's output has 39
 // obtuse triangles with the compensation and 38 without (docs/stitch.md "Volume on
 // marching-cubes surfaces", the lead's note): the repair sweep's property is tested on the
-// sizing it was written for (gradation 1.5).
+// sizing it was written for (gradation 1.5). Session 15: refusing the compensation's moves
+// that make an obtuse triangle more obtuse gives 38 at 1.25 but costs cheese the 0.5% volume
+// bound; not landed (docs/stitch.md "The volume compensation on level sets, session 15").
 TEST(PipelineSlow, VolumeCompensationAddsNoObtuseTriangles) {
   const TriMesh mesh = prepare_mesh(read_soup(test::test_data("meshes/rotor.off"))).mesh;
   const double volume_in = enclosed_volume(to_soup(mesh));
@@ -742,6 +744,54 @@ TEST(PipelineSlow, VolumeCompensationAddsNoObtuseTriangles) {
   ASSERT_TRUE(without.report.ok()) << errors_of(without.report);
   EXPECT_LE(count_obtuse(with.mesh), count_obtuse(without.mesh));
   EXPECT_LT(std::abs(enclosed_volume(to_soup(with.mesh)) - volume_in), 0.01 * volume_in);
+}
+
+// The volume compensation's gate (StitchOptions::volume_compensation_skip_within; docs/stitch.md
+// "The volume compensation on level sets, session 15"): where the mesh already encloses the
+// input's volume within the threshold, nothing is moved (the output is the one without the
+// compensation); the gear prism, about 1.3% short without the compensation, is outside
+// 0.05% and is brought within issue 5's 0.5%.
+TEST(Pipeline, VolumeCompensationSkippedWithinItsThreshold) {
+  const TriMesh mesh = prepare_mesh(gear_prism()).mesh;
+  const double volume_in = enclosed_volume(to_soup(mesh));
+  RemeshOptions options = fast_options();
+  options.compute_distances = false;
+  options.stitch.obtuse_split_rounds = 0;  // as GearPrismKeepsItsVolume
+  options.stitch.volume_compensation = 0.0;
+  const RemeshResult off = remesh(mesh, options);
+  ASSERT_TRUE(off.report.ok()) << errors_of(off.report);
+  const double change_off = std::abs(enclosed_volume(to_soup(off.mesh)) - volume_in) / volume_in;
+  ASSERT_GT(change_off, 0.005);
+  ASSERT_LT(change_off, 0.05);
+  options.stitch.volume_compensation = 1.0;
+  options.stitch.volume_compensation_skip_within = 0.05;  // above the prism's change: skipped
+  const RemeshResult skipped = remesh(mesh, options);
+  ASSERT_TRUE(skipped.report.ok()) << errors_of(skipped.report);
+  EXPECT_TRUE(skipped.report.stitch.volume_compensation_skipped);
+  EXPECT_EQ(skipped.report.stitch.n_volume_compensation_moves, 0u);
+  ASSERT_EQ(skipped.mesh.n_vertices(), off.mesh.n_vertices());
+  ASSERT_EQ(skipped.mesh.n_faces(), off.mesh.n_faces());
+  for (const auto v : off.mesh.vertices()) {
+    ASSERT_EQ(off.mesh.point(v), skipped.mesh.point(v)) << v.idx();
+  }
+  options.stitch.volume_compensation_skip_within = 0.0005;
+  const RemeshResult moved = remesh(mesh, options);
+  ASSERT_TRUE(moved.report.ok()) << errors_of(moved.report);
+  EXPECT_FALSE(moved.report.stitch.volume_compensation_skipped);
+  EXPECT_GT(moved.report.stitch.n_volume_compensation_moves, 0u);
+  EXPECT_LT(std::abs(enclosed_volume(to_soup(moved.mesh)) - volume_in) / volume_in, 0.005);
+  // The measure runs on the threads: the same moves on one.
+  options.set_threads(1);
+  const RemeshResult one = remesh(mesh, options);
+  EXPECT_EQ(one.report.stitch.n_volume_compensation_moves, moved.report.stitch.n_volume_compensation_moves);
+  ASSERT_EQ(one.mesh.n_vertices(), moved.mesh.n_vertices());
+  for (const auto v : one.mesh.vertices()) {
+    ASSERT_EQ(one.mesh.point(v), moved.mesh.point(v)) << v.idx();
+  }
+  options.stitch.volume_compensation_skip_within = -0.001;
+  EXPECT_THROW(remesh(mesh, options), InvalidInput);
+  options.stitch.volume_compensation_skip_within = 0.06;
+  EXPECT_THROW(remesh(mesh, options), InvalidInput);
 }
 
 // CGAL's blobby (a closed smooth blob, not a marching-cubes surface): the volume compensation

@@ -79,6 +79,7 @@ struct RemeshArgs {
   std::optional<double> corner_cluster;
   std::optional<double> chord_compensation;
   std::optional<double> volume_compensation;
+  std::optional<double> volume_skip_within;
   bool smoothed_boundary = false;
   std::optional<unsigned> threads;
   std::string report;
@@ -157,6 +158,7 @@ void run_remesh(RemeshArgs& args) {
   if (args.corner_cluster) options.surfmesh.corner_cluster_size = *args.corner_cluster;
   if (args.chord_compensation) options.stitch.chord_compensation = *args.chord_compensation;
   if (args.volume_compensation) options.stitch.volume_compensation = *args.volume_compensation;
+  if (args.volume_skip_within) options.stitch.volume_compensation_skip_within = *args.volume_skip_within;
   if (args.threads) options.set_threads(*args.threads);
   if (!args.cell_grid.empty()) {
     if (!args.scene.empty()) throw InvalidInput("remesh: --cell-grid applies to an input file (an occupancy scene sets it itself)");
@@ -353,6 +355,10 @@ void add_remesh_command(CLI::App& app) {
   cmd->add_option("--volume-compensation", args->volume_compensation,
                   "Then move them by this times the volume between each triangle and its patch's input faces, "
                   "measured along the patch axis (in [0, 2]; default 1; 0 = off; docs/stitch.md)");
+  cmd->add_option("--volume-skip-within", args->volume_skip_within,
+                  "No volume compensation where the closed output already encloses the input's volume within "
+                  "this fraction of it (in [0, 0.05]; default 0 = always; 0.0005 skips it on DRAM 256's level set; "
+                  "docs/stitch.md \"The volume compensation on level sets, session 15\")");
   cmd->add_option("--tiny-curve-merge", args->tiny_curve_merge,
                   "Merge the two corners of a one-edge border curve shorter than this many target edges "
                   "(default 0.3; 0 = never; not with a cell grid; docs/surfmesh.md)");
