@@ -381,8 +381,10 @@ class FidelityMover {
     return input_distance(p, hint);
   }
 
-  // Largest distance to the input of the ring's samples with the vertex at q.
-  double ring_to_input(const Ring& ring, const Vec& q) const {
+  // Largest distance to the input of the ring's samples with the vertex at q; stops at the
+  // first sample farther than cap (a value above cap then, not the largest).
+  double ring_to_input(const Ring& ring, const Vec& q,
+                       double cap = std::numeric_limits<double>::infinity()) const {
     double worst = 0.0;
     std::uint32_t hint = UINT32_MAX;
     for (std::size_t k = 0; k < ring.faces.size(); ++k) {
@@ -391,6 +393,7 @@ class FidelityMover {
         for (int j = 0; i + j <= kSampleSteps; ++j) {
           const double s = double(i) / kSampleSteps, t = double(j) / kSampleSteps;
           worst = std::max(worst, input_distance((1.0 - s - t) * p[0] + s * p[1] + t * p[2], hint));
+          if (worst > cap) return worst;
         }
       }
     }
@@ -479,15 +482,18 @@ class FidelityMover {
         old_in = std::max(old_in, near_distance_[face_inputs_[k]]);
       }
     }
-    const double old_worst = std::max(old_in, ring_to_input(ring, p));
+    // The ring's old largest distance: measured when a place passes the cheaper tests first
+    // (most candidates fail them; the same answer either way).
+    std::optional<double> old_worst;
     for (const double t : {1.0, 0.5}) {
       const Vec q = p + t * (goal - p);
       if (!rim_.allows(node, q) || !keeps_shape(ring, p, q)) continue;
       const double gain_distance = input_side ? to_ring(ring, q, probe) : input_distance(q);
       if (gain_distance > (1.0 - kMinGain) * distance) continue;
-      double new_worst = ring_to_input(ring, q);
+      if (!old_worst) old_worst = std::max(old_in, ring_to_input(ring, p));
+      double new_worst = ring_to_input(ring, q, *old_worst);
       for (const std::uint32_t i : near) new_worst = std::max(new_worst, to_ring(ring, q, probes_[i]));
-      if (new_worst > old_worst) continue;
+      if (new_worst > *old_worst) continue;
       mesh_.set_point(v, to_openmesh(q));
       return true;
     }

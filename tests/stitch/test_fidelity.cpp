@@ -39,17 +39,28 @@ std::size_t obtuse_triangles(const TriMesh& mesh) {
   return n;
 }
 
+// The brain's set-up of the tests below: the input (a smoothed image's level set), its surface
+// (segment(), mesh_surface() with default options) and the plain stitch (no fidelity moves).
+struct Brain {
+  Brain() : input(read_mesh(test::test_data("io/brainImageSmooth.vtk"))), surface(mesh_surface(input, segment(input))) {
+    options.fidelity_distance_edges = 0.0;
+    plain = stitch(surface, input, options);
+  }
+  TriMesh input;
+  SurfaceMesh surface;
+  StitchOptions options;  // the plain stitch's
+  StitchResult plain;
+};
+
 TEST(StitchFidelitySlow, MovesAndSplitsBringTheBrainCloserToItsInputAndKeepItsShape) {
   // The brain (a smoothed image's level set): the 2.5-edge fits smooth its folds, and the
   // output misses the input by 1.2 voxels (0.82 mean edges) by default. With the bound at
   // half a mean edge the moves and splits shrink the two-sided distance, add no obtuse
   // triangle, keep the smallest angle away from features at min(before, 25 deg), and every
   // new vertex sits on the input.
-  const TriMesh input = read_mesh(test::test_data("io/brainImageSmooth.vtk"));
-  const Segmentation seg = segment(input);
-  const SurfaceMesh surface = mesh_surface(input, seg);
-  StitchOptions options;
-  const StitchResult plain = stitch(surface, input, options);
+  const Brain brain;
+  const auto& [input, surface, plain_options, plain] = brain;
+  StitchOptions options = plain_options;
   options.fidelity_distance_edges = 0.5;
   const StitchResult moved = stitch(surface, input, options);
   ASSERT_TRUE(plain.report.ok());
@@ -85,10 +96,10 @@ TEST(StitchFidelitySlow, MovesAndSplitsBringTheBrainCloserToItsInputAndKeepItsSh
 }
 
 TEST(StitchFidelity, ZeroLeavesTheStitchAsItWasAndBadBoundsThrow) {
-  const TriMesh input = read_mesh(test::test_data("io/brainImageSmooth.vtk"));
-  const SurfaceMesh surface = mesh_surface(input, segment(input));
+  const Brain brain;
+  const auto& [input, surface, plain_options, plain] = brain;
   // No input mesh: nothing to move towards.
-  StitchOptions options;
+  StitchOptions options = plain_options;
   const StitchResult off = stitch(surface, options);
   options.fidelity_distance_edges = 0.5;
   const StitchResult no_input = stitch(surface, options);
@@ -117,11 +128,10 @@ TEST(StitchFidelitySlow, IncrementalSweepsGiveTheFullSweepsResult) {
   // The brain with the bound at 0.3 mean edges: several sweeps change the mesh. Measuring
   // again only near the last sweep's changes (and trying only the candidates there) makes
   // exactly the moves and splits of sweeps that measure and try everything.
-  const TriMesh input = read_mesh(test::test_data("io/brainImageSmooth.vtk"));
-  const SurfaceMesh surface = mesh_surface(input, segment(input));
-  StitchOptions options;
-  const StitchResult plain = stitch(surface, input, options);
+  const Brain brain;
+  const auto& [input, surface, plain_options, plain] = brain;
   ASSERT_TRUE(plain.report.ok());
+  StitchOptions options = plain_options;
   options.fidelity_distance_edges = 0.3;
   const stitch_detail::FinRimBound no_bound;
   StitchResult full = plain, incremental = plain;
@@ -153,10 +163,10 @@ TEST(StitchFidelitySlow, BoundedNodesStayWithinTheirBound) {
   // (Slow: about 1.5 s in RelWithDebInfo, 104 s under ASan; the CI runs it in the slow suite.)
   // Every node bounded at a tenth of a mean edge from where the front put it: after the moves
   // each vertex of a bounded node is where it was or within the bound of its origin.
-  const TriMesh input = read_mesh(test::test_data("io/brainImageSmooth.vtk"));
-  const SurfaceMesh surface = mesh_surface(input, segment(input));
-  StitchOptions options;
-  StitchResult result = stitch(surface, input, options);
+  const Brain brain;
+  const auto& [input, surface, plain_options, plain] = brain;
+  StitchOptions options = plain_options;
+  StitchResult result = plain;
   ASSERT_TRUE(result.report.ok());
   const StitchResult before = result;
   options.fidelity_distance_edges = 0.3;
@@ -192,11 +202,10 @@ TEST(StitchFidelity, WalkingFirstSweepSelectsTheFullSearchsCandidates) {
   // the output's tree only when its walk over the output ends farther than the bound picks
   // exactly the candidates (samples and vertices, with their distances) of the sweep that
   // searches every sample, and the walk alone settles most samples.
-  const TriMesh input = read_mesh(test::test_data("io/brainImageSmooth.vtk"));
-  const SurfaceMesh surface = mesh_surface(input, segment(input));
-  StitchOptions options;
-  const StitchResult plain = stitch(surface, input, options);
+  const Brain brain;
+  const auto& [input, surface, plain_options, plain] = brain;
   ASSERT_TRUE(plain.report.ok());
+  StitchOptions options = plain_options;
   const std::size_t n_samples = input.n_vertices() + 4 * input.n_faces();
   for (const double bound : {0.3, 0.5}) {
     options.fidelity_distance_edges = bound;
@@ -213,6 +222,29 @@ TEST(StitchFidelity, WalkingFirstSweepSelectsTheFullSearchsCandidates) {
   }
 }
 
+TEST(StitchFidelitySlow, DefaultBoundBringsTheBrainCloserToItsInput) {
+  // The default (a bound of 0.25 mean edges; issue 6): on the brain the moves shrink the
+  // two-sided distance to the input by a tenth at least, add no obtuse triangle, keep the
+  // smallest angle away from features at min(before, 25 deg) and the topology.
+  const Brain brain;
+  const auto& [input, surface, plain_options, plain] = brain;
+  ASSERT_TRUE(plain.report.ok());
+  const StitchOptions defaults;
+  EXPECT_EQ(defaults.fidelity_distance_edges, 0.25);
+  const StitchResult moved = stitch(surface, input, defaults);
+  ASSERT_TRUE(moved.report.ok());
+  EXPECT_GT(moved.report.n_fidelity_moves, 10u);
+  EXPECT_EQ(moved.report.output_components[0].euler_characteristic, plain.report.output_components[0].euler_characteristic);
+  EXPECT_LE(obtuse_triangles(moved.mesh), obtuse_triangles(plain.mesh));
+  EXPECT_GE(moved.report.min_angle_away_from_features_deg,
+            std::min(plain.report.min_angle_away_from_features_deg, kAwayFromFeaturesAngleBoundDeg) - 1e-9);
+  const TriangleSoup reference = to_soup(input);
+  DistanceOptions sampling;
+  sampling.sample_spacing_relative = 0.01;
+  EXPECT_LT(mesh_distance(to_soup(moved.mesh), reference, sampling).hausdorff,
+            0.9 * mesh_distance(to_soup(plain.mesh), reference, sampling).hausdorff);
+}
+
 TEST(StitchFidelity, LabelImageStaircaseIsLeftAsItWas) {
   // An occupancy (0/1) sphere's marching-cubes staircase: the moves would pull the output
   // onto the staircase, away from the smooth truth the band fits follow, so the stitch does
@@ -225,6 +257,7 @@ TEST(StitchFidelity, LabelImageStaircaseIsLeftAsItWas) {
   surf.cell_grid = {true, grid.origin, grid.spacing};
   const SurfaceMesh surface = mesh_surface(input, segment(input), surf);
   StitchOptions options;
+  options.fidelity_distance_edges = 0.0;  // the plain stitch
   const StitchResult plain = stitch(surface, input, options);
   options.fidelity_distance_edges = 0.25;
   const StitchResult with_bound = stitch(surface, input, options);
