@@ -317,7 +317,7 @@ void add_remesh_command(CLI::App& app) {
                   "from features; default 12; 0 = off; docs/stitch.md \"Small angles left after the optimisation\")");
   cmd->add_option("--fidelity-distance", args->fidelity_distance,
                   "The stitch's fidelity moves: vertices move onto the input where the output is farther from it "
-                  "than this many input mean edges (default 0.25; 0 = off; not on label images; docs/stitch.md "
+                  "than this many input mean edges (default 0 = off; 0.25 recommended for fidelity; not on label images; docs/stitch.md "
                   "\"Fidelity moves\")");
   cmd->add_option("--border-input-distance", args->border_input_distance,
                   "Smoothed border curves stay within this many mean curve edges of the input (>= 0; default "
