@@ -1806,13 +1806,16 @@ std::vector<int> segment_detail::narrow_patches(const TriMesh& mesh, const Segme
   segment_detail::parallel_chunks(n_face_chunks + n_edge_chunks, workers, 1, [&](std::size_t first, std::size_t last, unsigned) {
     for (std::size_t c = first; c < last; ++c) {
       if (c < n_face_chunks) {
-        for (std::size_t f = c * kFaceChunk; f < std::min(n_faces, (c + 1) * kFaceChunk); ++f)
-          face_area[f] = mesh.calc_face_area(mesh.face_handle(static_cast<int>(f)));
+        for (std::size_t f = c * kFaceChunk; f < std::min(n_faces, (c + 1) * kFaceChunk); ++f) {
+          const auto fh = mesh.face_handle(static_cast<int>(f));
+          face_area[f] = mesh.has_face_status() && mesh.status(fh).deleted() ? 0.0 : mesh.calc_face_area(fh);
+        }
         continue;
       }
       const std::size_t k = c - n_face_chunks;
       for (std::size_t i = k * kFaceChunk; i < std::min(n_edges, (k + 1) * kFaceChunk); ++i) {
         const auto e = mesh.edge_handle(static_cast<int>(i));
+        if (mesh.has_edge_status() && mesh.status(e).deleted()) continue;  // as edges() skips them
         const int a = patch_of(mesh.halfedge_handle(e, 0)), b = patch_of(mesh.halfedge_handle(e, 1));
         if (a != b) chunk_edges[k].push_back({a, b, mesh.calc_edge_length(e)});
       }

@@ -501,11 +501,16 @@ class Optimiser {
       const Vec c = point(mesh_, mesh_.to_vertex_handle(mesh_.next_halfedge_handle(h)));
       plan_edge_split(h, c, vertex_node, is_feature, refused, plan);
       // The far piece of a strip (docs/stitch.md "Far pieces of strips"): split instead when
-      // that leaves fewer obtuse triangles.
+      // that leaves fewer obtuse triangles. Only a plan that flips h relieves f (the two plans'
+      // counts are over different triangles otherwise; reviewer, session 15).
       const TriMesh::HalfedgeHandle g = far_piece(h);
       if (g.is_valid()) {
         plan_edge_split(g, c, vertex_node, is_feature, refused, far);
-        if (far.best >= 0 && (plan.best < 0 || far.best < plan.best)) std::swap(plan, far);
+        const auto ha = mesh_.from_vertex_handle(h), hb = mesh_.to_vertex_handle(h);
+        const bool flips_h = std::any_of(far.flips.begin(), far.flips.end(), [&](const auto& e) {
+          return (e[0] == ha && e[1] == hb) || (e[0] == hb && e[1] == ha);
+        });
+        if (flips_h && far.best >= 0 && (plan.best < 0 || far.best < plan.best)) std::swap(plan, far);
       }
       if (plan.best < 0) continue;
       const auto o = mesh_.opposite_halfedge_handle(plan.h);

@@ -264,7 +264,8 @@ TEST(Soup, DirectBuildOnThreadsMatchesAddFace) {
     TriMesh built = to_trimesh(test::cube());
     EXPECT_FALSE(core_detail::check_and_build(twice, built, threads).ok());
     EXPECT_EQ(built.n_faces(), 0u);
-    core_detail::to_trimesh_checked(twice, built, threads);  // undefined mesh, but no bad access
+    core_detail::to_trimesh_checked(twice, built, threads);  // refused: no bad access, an empty mesh
+    EXPECT_EQ(built.n_faces(), 0u);
   }
 }
 

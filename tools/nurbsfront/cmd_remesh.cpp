@@ -310,8 +310,7 @@ void add_remesh_command(CLI::App& app) {
   cmd->add_option("--obtuse-split-feature-angle", args->obtuse_split_feature_angle,
                   "The obtuse splits' angle floor (deg) beside a feature node when the split takes an obtuse angle "
                   "off a node that never moves (default 20; 27.5 or more = the usual floor; docs/surfmesh.md "
-                  "\"Cheese's hole walls, session 15\")")
-      ->check(CLI::Range(0.0, 59.999));
+                  "\"Cheese's hole walls, session 15\")");
   cmd->add_option("--angle-repair-rounds", args->angle_repair_rounds,
                   "Sweeps of the stitch's small-angle repair (flips and collapses at the triangles below 25 deg away "
                   "from features; default 12; 0 = off; docs/stitch.md \"Small angles left after the optimisation\")");
