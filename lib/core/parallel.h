@@ -175,4 +175,13 @@ bool for_chunks(std::size_t n, unsigned threads, std::size_t chunk, const Task& 
   return for_chunks_started_by(start, n, threads, chunk, task, monitor);
 }
 
+//! for_chunks with body(i) called for every index i of [0, n): for loops whose index writes
+//! only its own results.
+template <class Body>
+void for_each_index(std::size_t n, unsigned threads, std::size_t chunk, const Body& body) {
+  for_chunks(n, threads, chunk, [&body](std::size_t begin, std::size_t end, unsigned) {
+    for (std::size_t i = begin; i < end; ++i) body(i);
+  });
+}
+
 }  // namespace nurbsfront::parallel

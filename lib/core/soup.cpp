@@ -303,9 +303,7 @@ void core_detail::to_trimesh_checked(const TriangleSoup& soup, TriMesh& mesh, un
   const std::size_t n_points = soup.points.size(), n_corners = 3 * soup.triangles.size();
   n_threads = std::max(n_threads, 1U);
   auto in_chunks = [n_threads](std::size_t n, const auto& body, std::size_t chunk = kBuildChunk) {
-    parallel::for_chunks(n, n_threads, chunk, [&body](std::size_t begin, std::size_t end, unsigned) {
-      for (std::size_t i = begin; i < end; ++i) body(i);
-    });
+    parallel::for_each_index(n, n_threads, chunk, body);
   };
   // Corners c = 3 f + k (edge t[k] -> t[k + 1]) listed by their start vertex, in corner order.
   std::vector<std::uint32_t> first(n_points + 1, 0);

@@ -88,11 +88,7 @@ AabbTree::AabbTree(const TriangleSoup& soup, std::vector<std::uint32_t> faces, u
   const std::size_t n = faces.size();
   n_threads = std::max(n_threads, 1U);
   // Per-face loops in chunks on n_threads threads (each index writes its own entries).
-  auto for_faces = [n, n_threads](const auto& body) {
-    parallel::for_chunks(n, n_threads, kFaceChunk, [&body](std::size_t begin, std::size_t end, unsigned) {
-      for (std::size_t i = begin; i < end; ++i) body(i);
-    });
-  };
+  auto for_faces = [n, n_threads](const auto& body) { parallel::for_each_index(n, n_threads, kFaceChunk, body); };
   // Faces sorted along a Morton (Z-order) curve of their centroids; each range is split
   // where the codes of its first and last face first differ (a linear BVH, Karras 2012),
   // so sibling boxes follow octree cells.

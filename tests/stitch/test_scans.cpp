@@ -71,18 +71,25 @@ TEST(SmallestAngleSine, EqualsTheSortedFormulaBitForBit) {
   EXPECT_EQ(stitch_detail::smallest_angle_sine(Vec(1, 1, 1), Vec(1, 1, 1), Vec(1, 1, 1)), 0.0);
 }
 
-TEST(SmallAwayFaces, SerialListAtEveryThreadCount) {
-  // A torus with every 9th collapsible edge collapsed (deleted faces, squeezed triangles);
-  // every 7th vertex is a feature node.
+// A 24 x 12 torus with every k-th collapsible edge (in edge order) collapsed, not garbage
+// collected: deleted faces and squeezed triangles for the scans to skip or list.
+TriMesh torus_with_collapses(int k) {
   TriMesh mesh = to_trimesh(test::torus(24, 12));
   int n = 0;
   for (int e = 0; e < static_cast<int>(mesh.n_edges()); ++e) {
     const TriMesh::EdgeHandle edge(e);
     if (mesh.status(edge).deleted()) continue;
     const auto h = mesh.halfedge_handle(edge, 0);
-    if (!mesh.is_collapse_ok(h) || ++n % 9 != 0) continue;
+    if (!mesh.is_collapse_ok(h) || ++n % k != 0) continue;
     mesh.collapse(h);
   }
+  return mesh;
+}
+
+TEST(SmallAwayFaces, SerialListAtEveryThreadCount) {
+  // A torus with every 9th collapsible edge collapsed (deleted faces, squeezed triangles);
+  // every 7th vertex is a feature node.
+  TriMesh mesh = torus_with_collapses(9);
   std::vector<int> vertex_node(mesh.n_vertices());
   std::vector<std::uint8_t> is_feature(mesh.n_vertices(), 0);
   for (std::size_t v = 0; v < vertex_node.size(); ++v) {
@@ -125,15 +132,7 @@ TEST(SmallAwayFaces, SerialListAtEveryThreadCount) {
 TEST(FaceAlphas, SerialListAtEveryThreadCount) {
   // A torus with every 5th collapsible edge collapsed: deleted faces are skipped, the
   // others' alphas listed in face order, bit for bit at 1, 2 and 4 threads.
-  TriMesh mesh = to_trimesh(test::torus(24, 12));
-  int n = 0;
-  for (int e = 0; e < static_cast<int>(mesh.n_edges()); ++e) {
-    const TriMesh::EdgeHandle edge(e);
-    if (mesh.status(edge).deleted()) continue;
-    const auto h = mesh.halfedge_handle(edge, 0);
-    if (!mesh.is_collapse_ok(h) || ++n % 5 != 0) continue;
-    mesh.collapse(h);
-  }
+  TriMesh mesh = torus_with_collapses(5);
   std::vector<double> expected;
   for (auto f : mesh.faces()) {
     std::array<Vec, 3> p;
