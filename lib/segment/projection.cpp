@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdint>
 
 #include "nurbsfront/core/error.h"
 #include "nurbsfront/segment/segment_internal.h"
@@ -59,17 +60,16 @@ std::vector<std::pair<int, int>> find_crossings(const std::vector<Segment>& segm
     return std::clamp(static_cast<int>((value - origin) / width), 0, cells - 1);
   };
   // (cell, segment) entries ordered by cell, then segment: a counting sort by cell over
-  // the segments in index order.
-  auto cell_range = [&](int i) {
-    const Eigen::Vector2d& p = xy[segments[i].a];
-    const Eigen::Vector2d& q = xy[segments[i].b];
-    return std::array<int, 4>{
-        cell_of(std::min(p.x(), q.x()), lo.x(), width_x), cell_of(std::max(p.x(), q.x()), lo.x(), width_x),
-        cell_of(std::min(p.y(), q.y()), lo.y(), width_y), cell_of(std::max(p.y(), q.y()), lo.y(), width_y)};
-  };
+  // the segments in index order. Each segment's cell range is computed once (both passes
+  // read it).
+  std::vector<std::array<int, 4>> ranges(segments.size());
   std::vector<int> cell_start(static_cast<std::size_t>(cells) * cells + 1, 0);
   for (int i = 0; i < n; ++i) {
-    const auto [x0, x1, y0, y1] = cell_range(i);
+    const Eigen::Vector2d& p = xy[segments[i].a];
+    const Eigen::Vector2d& q = xy[segments[i].b];
+    const int x0 = cell_of(std::min(p.x(), q.x()), lo.x(), width_x), x1 = cell_of(std::max(p.x(), q.x()), lo.x(), width_x);
+    const int y0 = cell_of(std::min(p.y(), q.y()), lo.y(), width_y), y1 = cell_of(std::max(p.y(), q.y()), lo.y(), width_y);
+    ranges[i] = {x0, x1, y0, y1};
     for (int y = y0; y <= y1; ++y)
       for (int x = x0; x <= x1; ++x) ++cell_start[y * cells + x + 1];
   }
@@ -77,7 +77,7 @@ std::vector<std::pair<int, int>> find_crossings(const std::vector<Segment>& segm
   std::vector<std::pair<int, int>> entries(static_cast<std::size_t>(cell_start.back()));
   std::vector<int> fill(cell_start.begin(), cell_start.end() - 1);
   for (int i = 0; i < n; ++i) {
-    const auto [x0, x1, y0, y1] = cell_range(i);
+    const auto [x0, x1, y0, y1] = ranges[i];
     for (int y = y0; y <= y1; ++y)
       for (int x = x0; x <= x1; ++x) entries[fill[y * cells + x]++] = {y * cells + x, i};
   }
@@ -306,15 +306,18 @@ ProjectionCheck check_projection(const FaceGraph& graph, const std::vector<OpenM
   // vertex twice (where the patch touches itself) stays apart from the other. At most one
   // loop may be counter-clockwise (the outer loop); two would mean a region covered twice.
   std::vector<std::pair<std::size_t, OpenMesh::HalfedgeHandle>> outer;  // (edges, start) per outer loop
-  std::vector<std::vector<int>> cycles;  // the loops' simple cycles (split where a loop passes a vertex twice)
-  std::vector<int> loop_vertices;
+  // Each loop's vertices in order, one after the other (loop k is loop_vertices[loop_begin[k]
+  // .. loop_begin[k + 1])), and whether any loop passes a vertex twice.
+  std::vector<int> loop_vertices, loop_begin;
+  std::vector<std::uint8_t> loop_repeats;
+  loop_vertices.reserve(segments.size());
   for (const auto start : border) {
     if (scratch.halfedge_stamp[start.idx()] == epoch) continue;
     const Eigen::Vector2d origin = scratch.xy[mesh.from_vertex_handle(start).idx()];
     double twice_area = 0.0;
     auto h = start;
     std::size_t steps = 0;
-    loop_vertices.clear();
+    loop_begin.push_back(static_cast<int>(loop_vertices.size()));
     const int loop = ++scratch.loop_epoch;
     bool repeats = false;
     do {
@@ -327,13 +330,10 @@ ProjectionCheck check_projection(const FaceGraph& graph, const std::vector<OpenM
       h = next_border(h);
       NURBSFRONT_ASSERT(++steps <= segments.size());
     } while (h != start);
-    if (repeats) {
-      split_loop(loop_vertices, scratch.cycle_position, cycles);
-    } else {
-      cycles.push_back(loop_vertices);
-    }
+    loop_repeats.push_back(repeats ? 1 : 0);
     if (twice_area > 0) outer.emplace_back(steps, start);
   }
+  loop_begin.push_back(static_cast<int>(loop_vertices.size()));
   if (outer.size() > 1) {
     // Every outer loop but the largest one is extra; the short ones are local trouble
     // (all reported, so they are cut out together). Ties keep the first loop found.
@@ -352,8 +352,24 @@ ProjectionCheck check_projection(const FaceGraph& graph, const std::vector<OpenM
   // A loop that passes a vertex twice may hide a counter-clockwise cycle inside another
   // one (a neighbour's face seen from below, touching the outer loop at a corner): the
   // region inside both is covered twice although the loop's total area looks right.
-  const std::vector<int> nested = nested_ccw_cycle(cycles, scratch.xy);
-  if (!nested.empty()) return {false, nested.size() <= kMaxTroubleLoopEdges ? nested : std::vector<int>{}};
+  // Where no loop passes a vertex twice, the cycles are the loops, and a loop's twice-area
+  // from its first vertex is the cycle's sum in nested_ccw_cycle() (the same products in the
+  // same order, plus two exact zeros): at most one of them (the outer loop) is
+  // counter-clockwise, so none is nested and the cycles are not built.
+  if (std::find(loop_repeats.begin(), loop_repeats.end(), 1) != loop_repeats.end()) {
+    std::vector<std::vector<int>> cycles;  // the loops' simple cycles (split where a loop passes a vertex twice)
+    std::vector<int> loop;
+    for (std::size_t k = 0; k < loop_repeats.size(); ++k) {
+      loop.assign(loop_vertices.begin() + loop_begin[k], loop_vertices.begin() + loop_begin[k + 1]);
+      if (loop_repeats[k] != 0) {
+        split_loop(loop, scratch.cycle_position, cycles);
+      } else {
+        cycles.push_back(loop);
+      }
+    }
+    const std::vector<int> nested = nested_ccw_cycle(cycles, scratch.xy);
+    if (!nested.empty()) return {false, nested.size() <= kMaxTroubleLoopEdges ? nested : std::vector<int>{}};
+  }
   const std::vector<std::pair<int, int>> crossings =
       find_crossings_after(segments, scratch.xy, n_known, kMaxTroubleCrossings);
   if (crossings.empty()) return {true, {}};
