@@ -1060,15 +1060,21 @@ std::size_t split_folds(const Grouping& grouping, double mean_edge, Scratch& scr
   // patch not split since it was checked here takes this result (the same as checking it
   // in the loop: results do not depend on the thread count). First every patch of `work`,
   // then the parts of each split (each is checked before anything changes its faces).
-  std::vector<std::uint8_t> prechecked, prefails;
+  // A patch that fails without local trouble is bisected (bisect_patch depends only on its
+  // faces, as the check does): the parallel check bisects it too, and the loop takes those
+  // parts (prebisected) instead of bisecting on the calling thread.
+  std::vector<std::uint8_t> prechecked, prefails, prebisected;
   std::vector<segment_detail::ProjectionCheck> prechecks;
   std::vector<segment_detail::CliffPairs> precliffs;
+  std::vector<std::pair<std::vector<int>, std::vector<int>>> prehalves;
   auto precheck = [&](const std::vector<int>& which) {
     const std::size_t n = patches.faces.size();
     prechecked.resize(n, 0);
     prefails.resize(n, 0);
+    prebisected.resize(n, 0);
     prechecks.resize(n);
     precliffs.resize(n);
+    prehalves.resize(n);
     if (worker_scratch.size() < workers) worker_scratch.resize(workers);
     segment_detail::parallel_chunks(which.size(), workers, 1, [&](std::size_t begin, std::size_t end, unsigned worker) {
       if (worker > 0 && !worker_scratch[worker]) worker_scratch[worker] = std::make_unique<Scratch>(mesh);
@@ -1078,6 +1084,8 @@ std::size_t split_folds(const Grouping& grouping, double mean_edge, Scratch& scr
         bool fails = false;
         prechecks[p] = check_patch(p, own, fails, precliffs[p]);
         prefails[p] = fails ? 1 : 0;
+        prebisected[p] = fails && prechecks[p].trouble.empty() && patches.faces[p].size() >= 2 ? 1 : 0;
+        if (prebisected[p] != 0) prehalves[p] = segment_detail::bisect_patch(graph, patches.faces[p], patches.face_patch, own);
         prechecked[p] = 1;
       }
     });
@@ -1091,11 +1099,15 @@ std::size_t split_folds(const Grouping& grouping, double mean_edge, Scratch& scr
     segment_detail::ProjectionCheck check;
     segment_detail::CliffPairs found;
     bool fails = false;
+    std::pair<std::vector<int>, std::vector<int>> halves;
+    bool bisected = false;
     if (static_cast<std::size_t>(p) < prechecked.size() && prechecked[p] != 0) {
       prechecked[p] = 0;  // p's faces change if it is split
       check = std::move(prechecks[p]);
       fails = prefails[p] != 0;
       found = std::move(precliffs[p]);
+      bisected = prebisected[p] != 0;
+      if (bisected) halves = std::move(prehalves[p]);
     } else {
       check = check_patch(p, scratch, fails, found);
     }
@@ -1134,7 +1146,9 @@ std::size_t split_folds(const Grouping& grouping, double mean_edge, Scratch& scr
       if (carved.size() < patches.faces[p].size()) parts = carve_components(graph, patches.faces[p], patches.face_patch, scratch);
     }
     if (parts.size() < 2) {
-      auto [first, second] = segment_detail::bisect_patch(graph, patches.faces[p], patches.face_patch, scratch);
+      // Prebisected only where the trouble is empty, so no carve was tried above.
+      auto [first, second] =
+          bisected ? std::move(halves) : segment_detail::bisect_patch(graph, patches.faces[p], patches.face_patch, scratch);
       parts.clear();
       parts.push_back(std::move(first));
       parts.push_back(std::move(second));
