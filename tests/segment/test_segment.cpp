@@ -453,6 +453,34 @@ TEST(Segment, FoldSplitsDoNotDependOnTheThreadCount) {
   for (std::size_t p = 0; p < one.patches.size(); ++p) EXPECT_EQ(one.patches[p].axis, three.patches[p].axis);
 }
 
+// A patch that fails its check without local trouble (a cliff) is bisected by the
+// parallel check that found it (split_folds' prebisection); the splits are those of one
+// thread. Three 345-degree ramps side by side (each one patch, each holding a cliff: no
+// crossing, so no trouble to carve) and a folded 2.5-turn ramp (crossings: carved).
+TEST(Segment, PrebisectedFoldSplitsAreTheSameOnAnyThreadCount) {
+  TriangleSoup soup = ramp(2.5, 48, 4);
+  for (int k = 1; k <= 3; ++k) {
+    const TriangleSoup other = ramp(345.0 / 360.0, 40 + 4 * k, 4, 0.3);
+    const auto offset = static_cast<std::uint32_t>(soup.points.size());
+    for (const auto& p : other.points) soup.points.push_back(p + Eigen::Vector3d(6.0 * k, 0.0, 0.0));
+    for (const auto& t : other.triangles) soup.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
+  }
+  const TriMesh mesh = to_trimesh(soup);
+  SegmentOptions options;
+  options.threads = 1;
+  const Segmentation one = segment(mesh, options);
+  // Each ramp is split: the folded one at least twice, each cliff ramp at least once.
+  EXPECT_GE(one.n_fold_splits, 5u);
+  for (const int threads : {2, 4}) {
+    options.threads = threads;
+    const Segmentation many = run(mesh, options, 0.0);
+    EXPECT_EQ(one.n_fold_splits, many.n_fold_splits) << threads;
+    EXPECT_EQ(one.face_patch, many.face_patch) << threads;
+    ASSERT_EQ(one.patches.size(), many.patches.size()) << threads;
+    for (std::size_t p = 0; p < one.patches.size(); ++p) EXPECT_EQ(one.patches[p].axis, many.patches[p].axis) << threads;
+  }
+}
+
 // 345 of 360 deg of a steeper ramp (normals within 17 deg of +z): no overlap, but its two
 // ends are 0.26 apart in the plane (about one mean edge) and 1.8 (8 mean edges) apart in
 // height, a cliff no fit lattice of 2.5 mean edges holds. Half a turn has no cliff.
