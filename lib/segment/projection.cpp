@@ -6,6 +6,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <span>
 
 #include "nurbsfront/core/error.h"
 #include "nurbsfront/segment/segment_internal.h"
@@ -187,9 +188,9 @@ std::vector<int> nested_ccw_cycle(const std::vector<std::vector<int>>& cycles, c
 // split_at_repeated_vertices() of a loop, appended to `out`, with a per-vertex position
 // array (all -1 before and after) instead of a sort and a hash map: the same cycles in
 // the same order, in time linear in the loop.
-void split_loop(const std::vector<int>& loop, std::vector<int>& position, std::vector<std::vector<int>>& out) {
+void split_loop(const int* first, const int* last, std::vector<int>& position, std::vector<std::vector<int>>& out) {
   std::vector<int> stack;
-  for (const int v : loop) {
+  for (const int v : std::span<const int>(first, last)) {
     const int at = position[v];
     if (at < 0) {
       position[v] = static_cast<int>(stack.size());
@@ -358,13 +359,13 @@ ProjectionCheck check_projection(const FaceGraph& graph, const std::vector<OpenM
   // counter-clockwise, so none is nested and the cycles are not built.
   if (std::find(loop_repeats.begin(), loop_repeats.end(), 1) != loop_repeats.end()) {
     std::vector<std::vector<int>> cycles;  // the loops' simple cycles (split where a loop passes a vertex twice)
-    std::vector<int> loop;
     for (std::size_t k = 0; k < loop_repeats.size(); ++k) {
-      loop.assign(loop_vertices.begin() + loop_begin[k], loop_vertices.begin() + loop_begin[k + 1]);
+      const int* first = loop_vertices.data() + loop_begin[k];
+      const int* last = loop_vertices.data() + loop_begin[k + 1];
       if (loop_repeats[k] != 0) {
-        split_loop(loop, scratch.cycle_position, cycles);
+        split_loop(first, last, scratch.cycle_position, cycles);
       } else {
-        cycles.push_back(loop);
+        cycles.emplace_back(first, last);
       }
     }
     const std::vector<int> nested = nested_ccw_cycle(cycles, scratch.xy);
@@ -409,7 +410,7 @@ std::vector<std::vector<int>> split_at_repeated_vertices(const std::vector<int>&
     local[i] = static_cast<int>(std::lower_bound(sorted.begin(), sorted.end(), loop[i]) - sorted.begin());
   std::vector<int> position(sorted.size(), -1);
   std::vector<std::vector<int>> out;
-  segment_detail::split_loop(local, position, out);
+  segment_detail::split_loop(local.data(), local.data() + local.size(), position, out);
   for (auto& cycle : out)
     for (int& v : cycle) v = sorted[static_cast<std::size_t>(v)];
   return out;
