@@ -400,26 +400,46 @@ BorderNodes discretise_borders(const TriMesh& mesh, const Segmentation& seg, con
 
 PatchBorder patch_border(const Segmentation& seg, int p, const BorderNodes& borders) {
   PatchBorder out;
-  std::vector<std::array<int, 2>> global_edges;
+  // The edges with global ids first (into `edges`, made local at the end).
+  std::vector<std::array<int, 2>>& edges = out.edges;
   for (const int c : seg.patches[static_cast<std::size_t>(p)].curves) {
     const BorderCurve& curve = seg.curves[static_cast<std::size_t>(c)];
-    std::vector<int> chain = borders.curve_nodes[static_cast<std::size_t>(c)];
-    if (curve.is_closed) chain.push_back(chain.front());
-    // The curve walks with patch_left on its left: reversed for the right patch.
-    if (curve.patch_left != p) std::reverse(chain.begin(), chain.end());
-    for (std::size_t i = 0; i + 1 < chain.size(); ++i) {
-      if (chain[i] == chain[i + 1]) continue;  // a merged tiny curve (discretise_borders)
-      global_edges.push_back({chain[i], chain[i + 1]});
+    // The chain of nodes: the curve's, its first again at the end of a closed one; walked
+    // with patch_left on its left, so backwards for the right patch.
+    const std::vector<int>& nodes = borders.curve_nodes[static_cast<std::size_t>(c)];
+    const std::size_t n = nodes.size();
+    const std::size_t m = curve.is_closed && n > 0 ? n + 1 : n;
+    const bool backwards = curve.patch_left != p;
+    const auto chain = [&](std::size_t i) {
+      const std::size_t k = backwards ? m - 1 - i : i;
+      return nodes[k == n ? 0 : k];
+    };
+    for (std::size_t i = 0; i + 1 < m; ++i) {
+      const int a = chain(i), b = chain(i + 1);
+      if (a == b) continue;  // a merged tiny curve (discretise_borders)
+      edges.push_back({a, b});
       out.edge_curve.push_back(c);
     }
   }
-  for (const auto& e : global_edges) out.nodes.insert(out.nodes.end(), e.begin(), e.end());
+  // The nodes: every edge's ends (an edge's head is mostly the next edge's tail: pushed once).
+  out.nodes.reserve(edges.size() + 1);
+  for (std::size_t i = 0; i < edges.size(); ++i) {
+    out.nodes.push_back(edges[i][0]);
+    if (i + 1 == edges.size() || edges[i][1] != edges[i + 1][0]) out.nodes.push_back(edges[i][1]);
+  }
   std::sort(out.nodes.begin(), out.nodes.end());
   out.nodes.erase(std::unique(out.nodes.begin(), out.nodes.end()), out.nodes.end());
   auto local = [&](int g) {
     return static_cast<int>(std::lower_bound(out.nodes.begin(), out.nodes.end(), g) - out.nodes.begin());
   };
-  for (const auto& e : global_edges) out.edges.push_back({local(e[0]), local(e[1])});
+  // Local ids; an edge's tail that is the previous edge's head takes that one's.
+  int last_head = -1, last_local = -1;
+  for (auto& e : edges) {
+    const int tail = e[0] == last_head ? last_local : local(e[0]);
+    last_head = e[1];
+    last_local = local(e[1]);
+    e = {tail, last_local};
+  }
   return out;
 }
 

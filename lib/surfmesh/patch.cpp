@@ -494,18 +494,33 @@ namespace nurbsfront {
 
 PatchInputHeights::PatchInputHeights(const TriMesh& mesh, const std::vector<int>& faces, const PatchFrame& frame) {
   // The faces in the frame, in a uniform grid of about one face per cell.
-  local_.resize(faces.size());
+  faces_.resize(faces.size());
   lo_ = Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity());
   Eigen::Vector2d hi = -lo_;
+  std::vector<std::array<double, 4>> box(faces.size());  // per face: min x, min y, max x, max y
   for (std::size_t i = 0; i < faces.size(); ++i) {
     // The face's vertices in fv_range's order (the halfedge's head, then on along the face)
     // without its circulator.
+    std::array<Eigen::Vector3d, 3> t;
     TriMesh::HalfedgeHandle h = mesh.halfedge_handle(TriMesh::FaceHandle(faces[i]));
     for (std::size_t k = 0; k < 3; ++k, h = mesh.next_halfedge_handle(h)) {
-      local_[i][k] = frame.to_local(to_eigen(mesh.point(mesh.to_vertex_handle(h))));
-      lo_ = lo_.cwiseMin(local_[i][k].head<2>());
-      hi = hi.cwiseMax(local_[i][k].head<2>());
+      t[k] = frame.to_local(to_eigen(mesh.point(mesh.to_vertex_handle(h))));
+      lo_ = lo_.cwiseMin(t[k].head<2>());
+      hi = hi.cwiseMax(t[k].head<2>());
     }
+    box[i] = {std::min({t[0].x(), t[1].x(), t[2].x()}), std::min({t[0].y(), t[1].y(), t[2].y()}),
+              std::max({t[0].x(), t[1].x(), t[2].x()}), std::max({t[0].y(), t[1].y(), t[2].y()})};
+    Face& f = faces_[i];
+    f.x0 = t[0].x();
+    f.y0 = t[0].y();
+    f.ex1 = t[1].x() - t[0].x();
+    f.ey1 = t[1].y() - t[0].y();
+    f.ex2 = t[2].x() - t[0].x();
+    f.ey2 = t[2].y() - t[0].y();
+    f.area = f.ex1 * f.ey2 - f.ey1 * f.ex2;
+    f.z0 = t[0].z();
+    f.z1 = t[1].z();
+    f.z2 = t[2].z();
   }
   if (faces.empty()) return;
   extent_ = (hi - lo_).cwiseMax(std::numeric_limits<double>::min());
@@ -513,42 +528,43 @@ PatchInputHeights::PatchInputHeights(const TriMesh& mesh, const std::vector<int>
   nx_ = std::clamp(static_cast<int>(extent_.x() / cell) + 1, 1, 4096);
   ny_ = std::clamp(static_cast<int>(extent_.y() / cell) + 1, 1, 4096);
   // Two sweeps over the faces' cell ranges: count per cell, then fill (a counting sort).
+  // A face of zero (or NaN) area goes into no cell: height() skipped it.
   const std::size_t nx = static_cast<std::size_t>(nx_);
-  std::vector<std::array<std::size_t, 2>> range(local_.size());  // first and last cell
+  std::vector<std::array<int, 4>> range(faces_.size());  // per face: first and last column, first and last row
   cell_start_.assign(nx * static_cast<std::size_t>(ny_) + 1, 0);
-  for (std::size_t f = 0; f < local_.size(); ++f) {
-    const auto& t = local_[f];
-    range[f] = {cell_of(std::min({t[0].x(), t[1].x(), t[2].x()}), std::min({t[0].y(), t[1].y(), t[2].y()})),
-                cell_of(std::max({t[0].x(), t[1].x(), t[2].x()}), std::max({t[0].y(), t[1].y(), t[2].y()}))};
-    for (std::size_t j = range[f][0] / nx; j <= range[f][1] / nx; ++j)
-      for (std::size_t i = range[f][0] % nx; i <= range[f][1] % nx; ++i) ++cell_start_[j * nx + i + 1];
+  for (std::size_t f = 0; f < faces_.size(); ++f) {
+    if (!(std::abs(faces_[f].area) > 0.0)) {
+      range[f] = {1, 0, 1, 0};
+      continue;
+    }
+    range[f] = {column_of(box[f][0]), column_of(box[f][2]), row_of(box[f][1]), row_of(box[f][3])};
+    for (int j = range[f][2]; j <= range[f][3]; ++j)
+      for (int i = range[f][0]; i <= range[f][1]; ++i) ++cell_start_[static_cast<std::size_t>(j) * nx + static_cast<std::size_t>(i) + 1];
   }
   for (std::size_t k = 1; k < cell_start_.size(); ++k) cell_start_[k] += cell_start_[k - 1];
   cell_faces_.resize(cell_start_.back());
   std::vector<std::size_t> fill(cell_start_.begin(), cell_start_.end() - 1);
-  for (std::size_t f = 0; f < local_.size(); ++f)
-    for (std::size_t j = range[f][0] / nx; j <= range[f][1] / nx; ++j)
-      for (std::size_t i = range[f][0] % nx; i <= range[f][1] % nx; ++i) cell_faces_[fill[j * nx + i]++] = static_cast<int>(f);
+  for (std::size_t f = 0; f < faces_.size(); ++f)
+    for (int j = range[f][2]; j <= range[f][3]; ++j)
+      for (int i = range[f][0]; i <= range[f][1]; ++i)
+        cell_faces_[fill[static_cast<std::size_t>(j) * nx + static_cast<std::size_t>(i)]++] = static_cast<int>(f);
 }
 
-std::size_t PatchInputHeights::cell_of(double x, double y) const {
-  const int i = std::clamp(static_cast<int>((x - lo_.x()) / extent_.x() * nx_), 0, nx_ - 1);
-  const int j = std::clamp(static_cast<int>((y - lo_.y()) / extent_.y() * ny_), 0, ny_ - 1);
-  return static_cast<std::size_t>(j) * static_cast<std::size_t>(nx_) + static_cast<std::size_t>(i);
-}
+int PatchInputHeights::column_of(double x) const { return std::clamp(static_cast<int>((x - lo_.x()) / extent_.x() * nx_), 0, nx_ - 1); }
+
+int PatchInputHeights::row_of(double y) const { return std::clamp(static_cast<int>((y - lo_.y()) / extent_.y() * ny_), 0, ny_ - 1); }
 
 bool PatchInputHeights::height(double x, double y, double& z) const {
   if (cell_start_.empty() || !std::isfinite(x) || !std::isfinite(y)) return false;
-  const std::size_t cell = cell_of(x, y);
+  const std::size_t cell = static_cast<std::size_t>(row_of(y)) * static_cast<std::size_t>(nx_) + static_cast<std::size_t>(column_of(x));
   for (std::size_t k = cell_start_[cell]; k < cell_start_[cell + 1]; ++k) {
-    const auto& t = local_[static_cast<std::size_t>(cell_faces_[k])];
-    const double area = (t[1].x() - t[0].x()) * (t[2].y() - t[0].y()) - (t[1].y() - t[0].y()) * (t[2].x() - t[0].x());
-    if (!(std::abs(area) > 0.0)) continue;
-    const double b1 = ((x - t[0].x()) * (t[2].y() - t[0].y()) - (y - t[0].y()) * (t[2].x() - t[0].x())) / area;
+    const Face& t = faces_[static_cast<std::size_t>(cell_faces_[k])];
+    const double dx = x - t.x0, dy = y - t.y0;
+    const double b1 = (dx * t.ey2 - dy * t.ex2) / t.area;
     if (b1 < 0.0) continue;  // most candidates: the second division is not needed
-    const double b2 = ((t[1].x() - t[0].x()) * (y - t[0].y()) - (t[1].y() - t[0].y()) * (x - t[0].x())) / area;
+    const double b2 = (t.ex1 * dy - t.ey1 * dx) / t.area;
     if (b2 < 0.0 || b1 + b2 > 1.0) continue;
-    z = (1.0 - b1 - b2) * t[0].z() + b1 * t[1].z() + b2 * t[2].z();
+    z = (1.0 - b1 - b2) * t.z0 + b1 * t.z1 + b2 * t.z2;
     return true;
   }
   return false;

@@ -8,7 +8,9 @@
 #include <cmath>
 #include <map>
 #include <set>
+#include <unordered_set>
 #include <utility>
+#include <vector>
 
 #include <Eigen/Geometry>
 
@@ -21,6 +23,14 @@ namespace {
 using Edge = std::pair<int, int>;
 
 Edge key(int a, int b) { return std::minmax(a, b); }
+
+// key(a, b) of two border node ids (>= 0) in one integer, in the same order as the pairs.
+std::uint64_t packed(int a, int b) {
+  const Edge e = key(a, b);
+  return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(e.first)) << 32) | static_cast<std::uint32_t>(e.second);
+}
+
+Edge unpacked(std::uint64_t k) { return {static_cast<int>(k >> 32), static_cast<int>(k & 0xffffffffU)}; }
 
 // A point of patch `r`'s plane (frame x, y) of a node id of its triangles (>= 0: global
 // border node, < 0: inner node -(id + 1) of the patch).
@@ -79,23 +89,34 @@ double bulge(const PatchResult& r, const BorderNodes& borders, const std::array<
 }  // namespace
 
 std::size_t resolve_shared_chords(const Segmentation& seg, const BorderNodes& borders, std::vector<PatchResult>& results) {
-  std::set<Edge> taken;  // every border segment, then the chords of the patches done so far
+  // Every border segment, then the chords of the patches done so far (packed keys: only
+  // looked up and added to, never walked).
+  std::unordered_set<std::uint64_t> taken;
+  taken.reserve(2 * borders.positions.size());
   for (std::size_t c = 0; c < borders.curve_nodes.size(); ++c) {
     const std::vector<int>& nodes = borders.curve_nodes[c];
-    for (std::size_t i = 0; i + 1 < nodes.size(); ++i) taken.insert(key(nodes[i], nodes[i + 1]));
-    if (seg.curves[c].is_closed && nodes.size() > 1) taken.insert(key(nodes.back(), nodes.front()));
+    for (std::size_t i = 0; i + 1 < nodes.size(); ++i) taken.insert(packed(nodes[i], nodes[i + 1]));
+    if (seg.curves[c].is_closed && nodes.size() > 1) taken.insert(packed(nodes.back(), nodes.front()));
   }
+  std::vector<std::uint64_t> own;     // the patch's border segments, sorted
+  std::vector<std::uint64_t> chords;  // the patch's chords (repeats allowed)
   // Node-sorted triangles of border segments only -> (patch, triangle index).
   std::map<std::array<int, 3>, std::pair<std::size_t, std::size_t>> border_triangles;
   std::size_t n_changes = 0;
   for (std::size_t p = 0; p < results.size(); ++p) {
     PatchResult& r = results[p];
     if (r.report.status != PatchStatus::Ok || r.triangles.empty()) continue;
-    const PatchBorder border = patch_border(seg, static_cast<int>(p), borders);
-    std::set<Edge> own;
-    for (const auto& e : border.edges)
-      own.insert(key(border.nodes[static_cast<std::size_t>(e[0])], border.nodes[static_cast<std::size_t>(e[1])]));
-    std::set<Edge> chords, to_split;
+    // The segments of patch_border(), from the curves' nodes (the closing one of a closed
+    // curve too; a merged tiny curve's segment joins a node to itself: no triangle's edge).
+    own.clear();
+    for (const int c : seg.patches[p].curves) {
+      const std::vector<int>& nodes = borders.curve_nodes[static_cast<std::size_t>(c)];
+      for (std::size_t i = 0; i + 1 < nodes.size(); ++i) own.push_back(packed(nodes[i], nodes[i + 1]));
+      if (seg.curves[static_cast<std::size_t>(c)].is_closed && !nodes.empty()) own.push_back(packed(nodes.back(), nodes.front()));
+    }
+    std::sort(own.begin(), own.end());
+    chords.clear();
+    std::set<Edge> to_split;
     std::vector<std::pair<std::size_t, std::size_t>> to_fill;  // (patch, triangle)
     for (std::size_t t = 0; t < r.triangles.size(); ++t) {
       const std::array<int, 3>& tri = r.triangles[t];
@@ -106,11 +127,11 @@ std::size_t resolve_shared_chords(const Segmentation& seg, const BorderNodes& bo
       for (int k = 0; k < 3; ++k) {
         const int u = tri[static_cast<std::size_t>(k)], v = tri[static_cast<std::size_t>((k + 1) % 3)];
         if (u < 0 || v < 0) continue;
-        const Edge e = key(u, v);
-        if (own.count(e) != 0) continue;
+        const std::uint64_t e = packed(u, v);
+        if (std::binary_search(own.begin(), own.end(), e)) continue;
         all_border = false;
-        chords.insert(e);
-        if (taken.count(e) != 0) to_split.insert(e);
+        chords.push_back(e);
+        if (taken.count(e) != 0) to_split.insert(key(u, v));
       }
       std::array<int, 3> sorted = tri;
       std::sort(sorted.begin(), sorted.end());
@@ -136,8 +157,8 @@ std::size_t resolve_shared_chords(const Segmentation& seg, const BorderNodes& bo
       f.report.n_inner_nodes = f.inner_nodes.size();
       f.report.n_triangles = f.triangles.size();
     }
-    for (const Edge& e : chords)
-      if (to_split.count(e) == 0) taken.insert(e);
+    for (const std::uint64_t e : chords)
+      if (to_split.count(unpacked(e)) == 0) taken.insert(e);
     n_changes += to_split.size() + to_fill.size();
     r.report.n_inner_nodes = r.inner_nodes.size();
     r.report.n_triangles = r.triangles.size();

@@ -28,10 +28,22 @@ struct PatchInputHeights {
   [[nodiscard]] bool height(double x, double y, double& z) const;
 
  private:
-  [[nodiscard]] std::size_t cell_of(double x, double y) const;
-  std::vector<std::array<Eigen::Vector3d, 3>> local_;
+  [[nodiscard]] int column_of(double x) const;
+  [[nodiscard]] int row_of(double y) const;
+  // A face in the frame as height() reads it: its first corner, the edge vectors from it to
+  // the other two, the cross product of those (twice the signed area in the plane), and its
+  // corners' heights. The differences are those height() computed per candidate, so the same
+  // doubles.
+  struct Face {
+    double x0, y0;
+    double ex1, ey1;  // corner 1 - corner 0
+    double ex2, ey2;  // corner 2 - corner 0
+    double area;      // ex1 ey2 - ey1 ex2
+    double z0, z1, z2;
+  };
+  std::vector<Face> faces_;
   // Faces per grid cell, compressed: cell k holds cell_faces_[cell_start_[k] .. cell_start_[k + 1]),
-  // in increasing face order.
+  // in increasing face order; faces of zero (or NaN) area are left out (height() skips them).
   std::vector<std::size_t> cell_start_;
   std::vector<int> cell_faces_;
   Eigen::Vector2d lo_ = Eigen::Vector2d::Zero();

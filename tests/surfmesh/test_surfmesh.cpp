@@ -1545,5 +1545,195 @@ TEST(Surfmesh, BorderLookAheadLeavesNoFlatTriangleAlongTheBorder) {
   for (const auto& x : after.nodes) EXPECT_NEAR(x.z(), 0.0, 1e-9);  // on the plane
 }
 
+// PatchInputHeights as it was before its faces were stored with their edge vectors and
+// areas (main 6b33d89): the reference of InputHeightsAreTheOldOnesBitForBit.
+class OldInputHeights {
+ public:
+  OldInputHeights(const TriMesh& mesh, const std::vector<int>& faces, const PatchFrame& frame) {
+    local_.resize(faces.size());
+    lo_ = Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity());
+    Eigen::Vector2d hi = -lo_;
+    for (std::size_t i = 0; i < faces.size(); ++i) {
+      TriMesh::HalfedgeHandle h = mesh.halfedge_handle(TriMesh::FaceHandle(faces[i]));
+      for (std::size_t k = 0; k < 3; ++k, h = mesh.next_halfedge_handle(h)) {
+        local_[i][k] = frame.to_local(to_eigen(mesh.point(mesh.to_vertex_handle(h))));
+        lo_ = lo_.cwiseMin(local_[i][k].head<2>());
+        hi = hi.cwiseMax(local_[i][k].head<2>());
+      }
+    }
+    if (faces.empty()) return;
+    extent_ = (hi - lo_).cwiseMax(std::numeric_limits<double>::min());
+    const double cell = std::sqrt(extent_.x() * extent_.y() / static_cast<double>(faces.size())) + std::numeric_limits<double>::min();
+    nx_ = std::clamp(static_cast<int>(extent_.x() / cell) + 1, 1, 4096);
+    ny_ = std::clamp(static_cast<int>(extent_.y() / cell) + 1, 1, 4096);
+    const auto nx = static_cast<std::size_t>(nx_);
+    cells_.assign(nx * static_cast<std::size_t>(ny_), {});
+    for (std::size_t f = 0; f < local_.size(); ++f) {
+      const auto& t = local_[f];
+      const std::size_t c0 = cell_of(std::min({t[0].x(), t[1].x(), t[2].x()}), std::min({t[0].y(), t[1].y(), t[2].y()}));
+      const std::size_t c1 = cell_of(std::max({t[0].x(), t[1].x(), t[2].x()}), std::max({t[0].y(), t[1].y(), t[2].y()}));
+      for (std::size_t j = c0 / nx; j <= c1 / nx; ++j)
+        for (std::size_t i = c0 % nx; i <= c1 % nx; ++i) cells_[j * nx + i].push_back(f);
+    }
+  }
+  bool height(double x, double y, double& z) const {
+    if (cells_.empty() || !std::isfinite(x) || !std::isfinite(y)) return false;
+    for (const std::size_t f : cells_[cell_of(x, y)]) {
+      const auto& t = local_[f];
+      const double area = (t[1].x() - t[0].x()) * (t[2].y() - t[0].y()) - (t[1].y() - t[0].y()) * (t[2].x() - t[0].x());
+      if (!(std::abs(area) > 0.0)) continue;
+      const double b1 = ((x - t[0].x()) * (t[2].y() - t[0].y()) - (y - t[0].y()) * (t[2].x() - t[0].x())) / area;
+      if (b1 < 0.0) continue;
+      const double b2 = ((t[1].x() - t[0].x()) * (y - t[0].y()) - (t[1].y() - t[0].y()) * (x - t[0].x())) / area;
+      if (b2 < 0.0 || b1 + b2 > 1.0) continue;
+      z = (1.0 - b1 - b2) * t[0].z() + b1 * t[1].z() + b2 * t[2].z();
+      return true;
+    }
+    return false;
+  }
+
+ private:
+  std::size_t cell_of(double x, double y) const {
+    const int i = std::clamp(static_cast<int>((x - lo_.x()) / extent_.x() * nx_), 0, nx_ - 1);
+    const int j = std::clamp(static_cast<int>((y - lo_.y()) / extent_.y() * ny_), 0, ny_ - 1);
+    return static_cast<std::size_t>(j) * static_cast<std::size_t>(nx_) + static_cast<std::size_t>(i);
+  }
+  std::vector<std::array<Eigen::Vector3d, 3>> local_;
+  std::vector<std::vector<std::size_t>> cells_;
+  Eigen::Vector2d lo_ = Eigen::Vector2d::Zero(), extent_ = Eigen::Vector2d::Ones();
+  int nx_ = 1, ny_ = 1;
+};
+
+TEST(Surfmesh, InputHeightsAreTheOldOnesBitForBit) {
+  // A wavy 12 x 12 grid with two vertices pulled onto a neighbour's (x, y) (faces of zero
+  // area in the plane, skipped) and one pulled across it (folded faces: two faces over one
+  // point, the first in face order wins), in the plane frame and in a tilted one; queried at
+  // every vertex and edge midpoint (on shared edges), at random points in and beyond the
+  // box, and at NaN.
+  constexpr int kN = 12;
+  TriangleSoup soup = test::grid_patch(kN, kN);
+  for (auto& x : soup.points) x.z() = 0.1 * std::sin(5.0 * x.x()) * std::cos(3.0 * x.y());
+  const auto at = [](int i, int j) { return static_cast<std::size_t>(j * (kN + 1) + i); };
+  soup.points[at(3, 3)].head<2>() = soup.points[at(4, 3)].head<2>();
+  soup.points[at(8, 5)].head<2>() = soup.points[at(8, 6)].head<2>();
+  soup.points[at(6, 9)].x() = soup.points[at(7, 9)].x() + 0.3 / kN;
+  const TriMesh mesh = to_trimesh(soup);
+  std::vector<int> faces(mesh.n_faces());
+  std::iota(faces.begin(), faces.end(), 0);
+  std::vector<int> some;  // every third face, from the last one down
+  for (int f = static_cast<int>(mesh.n_faces()) - 1; f >= 0; f -= 3) some.push_back(f);
+  PatchFrame tilted;
+  tilted.origin = Eigen::Vector3d(0.3, -0.2, 0.05);
+  tilted.axes = Eigen::AngleAxisd(0.4, Eigen::Vector3d(1.0, 2.0, 0.5).normalized()).toRotationMatrix();
+  std::vector<Eigen::Vector2d> queries;
+  for (const auto& x : soup.points) queries.push_back(x.head<2>());
+  for (const auto& t : soup.triangles)
+    for (std::size_t k = 0; k < 3; ++k) queries.push_back(0.5 * (soup.points[t[k]] + soup.points[t[(k + 1) % 3]]).head<2>());
+  std::uint64_t state = 12345;
+  const auto uniform = [&state](double lo, double hi) {
+    state = state * 6364136223846793005ULL + 1442695040888963407ULL;
+    return lo + (hi - lo) * static_cast<double>(state >> 11) / 9007199254740992.0;
+  };
+  for (int i = 0; i < 3000; ++i) queries.emplace_back(uniform(-0.2, 1.2), uniform(-0.2, 1.2));
+  for (const PatchFrame& frame : {PatchFrame{}, tilted}) {
+    for (const std::vector<int>* list : {&faces, &some}) {
+      const PatchInputHeights heights(mesh, *list, frame);
+      const OldInputHeights old(mesh, *list, frame);
+      std::size_t n_found = 0;
+      for (const Eigen::Vector2d& q0 : queries) {
+        // In the tilted frame the queries are the world points' frame coordinates.
+        const Eigen::Vector2d q = frame.to_local(Eigen::Vector3d(q0.x(), q0.y(), 0.0)).head<2>();
+        double z_new = -7.0, z_old = -7.0;
+        const bool found = heights.height(q.x(), q.y(), z_new);
+        ASSERT_EQ(found, old.height(q.x(), q.y(), z_old)) << q.transpose();
+        EXPECT_EQ(z_new, z_old) << q.transpose();  // bit for bit (both -7 when not found)
+        n_found += found ? 1 : 0;
+      }
+      EXPECT_GT(n_found, queries.size() / (list == &faces ? 3 : 10));  // every third face: fewer
+      double z = 0.0;
+      EXPECT_FALSE(heights.height(std::numeric_limits<double>::quiet_NaN(), 0.5, z));
+    }
+  }
+  double z = 0.0;
+  EXPECT_FALSE(PatchInputHeights(mesh, {}, PatchFrame{}).height(0.5, 0.5, z));
+}
+
+// patch_border as it was before it walked the curves' node lists in place (main 6b33d89):
+// the reference of PatchBorderIsTheOldOne.
+surfmesh_detail::PatchBorder old_patch_border(const Segmentation& seg, int p, const surfmesh_detail::BorderNodes& borders) {
+  surfmesh_detail::PatchBorder out;
+  std::vector<std::array<int, 2>> global_edges;
+  for (const int c : seg.patches[static_cast<std::size_t>(p)].curves) {
+    const BorderCurve& curve = seg.curves[static_cast<std::size_t>(c)];
+    std::vector<int> chain = borders.curve_nodes[static_cast<std::size_t>(c)];
+    if (curve.is_closed) chain.push_back(chain.front());
+    if (curve.patch_left != p) std::reverse(chain.begin(), chain.end());
+    for (std::size_t i = 0; i + 1 < chain.size(); ++i) {
+      if (chain[i] == chain[i + 1]) continue;
+      global_edges.push_back({chain[i], chain[i + 1]});
+      out.edge_curve.push_back(c);
+    }
+  }
+  for (const auto& e : global_edges) out.nodes.insert(out.nodes.end(), e.begin(), e.end());
+  std::sort(out.nodes.begin(), out.nodes.end());
+  out.nodes.erase(std::unique(out.nodes.begin(), out.nodes.end()), out.nodes.end());
+  auto local = [&](int g) { return static_cast<int>(std::lower_bound(out.nodes.begin(), out.nodes.end(), g) - out.nodes.begin()); };
+  for (const auto& e : global_edges) out.edges.push_back({local(e[0]), local(e[1])});
+  return out;
+}
+
+TEST(Surfmesh, PatchBorderIsTheOldOne) {
+  // 3 x 3-cell blocks of a 12 x 12 grid with one-face hole patches (closed curves, walked
+  // backwards by the hole's surrounding patch), then two curves merged to one node (a tiny
+  // merged curve: no edge) and one shortened to its ends.
+  constexpr int kN = 12, kBlock = 3;
+  const TriMesh mesh = to_trimesh(test::grid_patch(kN, kN));
+  std::vector<int> face_patch(mesh.n_faces(), 0);
+  for (int j = 0; j < kN; ++j)
+    for (int i = 0; i < kN; ++i) {
+      const auto f = static_cast<std::size_t>(2 * (j * kN + i));
+      face_patch[f] = face_patch[f + 1] = (j / kBlock) * (kN / kBlock) + i / kBlock;
+    }
+  int n_patches = (kN / kBlock) * (kN / kBlock);
+  for (int block = 0; block < n_patches; block += 3) {
+    const int i = (block % (kN / kBlock)) * kBlock + 1, j = (block / (kN / kBlock)) * kBlock + 1;
+    face_patch[static_cast<std::size_t>(2 * (j * kN + i) + 1)] = n_patches++;
+  }
+  const Segmentation seg = labelled_segmentation(mesh, face_patch, n_patches);
+  const std::vector<surfmesh_detail::CurveSource> source(seg.curves.size(), surfmesh_detail::CurveSource::InputVertices);
+  surfmesh_detail::BorderNodes borders =
+      surfmesh_detail::discretise_borders(mesh, seg, [](const Eigen::Vector3d&) { return 1.0 / kN; }, source);
+  std::size_t n_closed = 0, n_backwards = 0;
+  for (std::size_t c = 0; c < seg.curves.size(); ++c) {
+    n_closed += seg.curves[c].is_closed ? 1 : 0;
+    n_backwards += seg.curves[c].patch_right >= 0 ? 1 : 0;
+  }
+  EXPECT_GE(n_closed, 4u);
+  EXPECT_GE(n_backwards, 10u);
+  const auto expect_same = [&](const char* what) {
+    for (int p = 0; p < static_cast<int>(seg.patches.size()); ++p) {
+      const surfmesh_detail::PatchBorder now = surfmesh_detail::patch_border(seg, p, borders);
+      const surfmesh_detail::PatchBorder old = old_patch_border(seg, p, borders);
+      EXPECT_EQ(now.nodes, old.nodes) << what << ", patch " << p;
+      EXPECT_EQ(now.edges, old.edges) << what << ", patch " << p;
+      EXPECT_EQ(now.edge_curve, old.edge_curve) << what << ", patch " << p;
+    }
+  };
+  expect_same("discretised");
+  std::size_t n_edges = 0;
+  for (int p = 0; p < static_cast<int>(seg.patches.size()); ++p) n_edges += surfmesh_detail::patch_border(seg, p, borders).edges.size();
+  EXPECT_GE(n_edges, static_cast<std::size_t>(4 * kN));  // the square's boundary alone has 4 kN
+  int merged = 0;
+  for (std::size_t c = 0; c < seg.curves.size() && merged < 2; ++c) {
+    std::vector<int>& nodes = borders.curve_nodes[c];
+    if (seg.curves[c].is_closed || nodes.size() < 3) continue;
+    if (merged == 0) nodes = {nodes.front(), nodes.front()};  // both ends one node: no edge
+    else nodes = {nodes.front(), nodes.back()};
+    ++merged;
+  }
+  ASSERT_EQ(merged, 2);
+  expect_same("merged");
+}
+
 }  // namespace
 }  // namespace nurbsfront
