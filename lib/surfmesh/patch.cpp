@@ -494,7 +494,7 @@ namespace nurbsfront {
 
 PatchInputHeights::PatchInputHeights(const TriMesh& mesh, const std::vector<int>& faces, const PatchFrame& frame) {
   // The faces in the frame, in a uniform grid of about one face per cell.
-  local_.resize(faces.size());
+  std::vector<std::array<Eigen::Vector3d, 3>> local(faces.size());
   lo_ = Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity());
   Eigen::Vector2d hi = -lo_;
   for (std::size_t i = 0; i < faces.size(); ++i) {
@@ -502,22 +502,33 @@ PatchInputHeights::PatchInputHeights(const TriMesh& mesh, const std::vector<int>
     // without its circulator.
     TriMesh::HalfedgeHandle h = mesh.halfedge_handle(TriMesh::FaceHandle(faces[i]));
     for (std::size_t k = 0; k < 3; ++k, h = mesh.next_halfedge_handle(h)) {
-      local_[i][k] = frame.to_local(to_eigen(mesh.point(mesh.to_vertex_handle(h))));
-      lo_ = lo_.cwiseMin(local_[i][k].head<2>());
-      hi = hi.cwiseMax(local_[i][k].head<2>());
+      local[i][k] = frame.to_local(to_eigen(mesh.point(mesh.to_vertex_handle(h))));
+      lo_ = lo_.cwiseMin(local[i][k].head<2>());
+      hi = hi.cwiseMax(local[i][k].head<2>());
     }
   }
   if (faces.empty()) return;
+  faces_.resize(local.size());
+  std::vector<std::uint8_t> has_area(local.size(), 0);
+  for (std::size_t f = 0; f < local.size(); ++f) {
+    const auto& t = local[f];
+    Face& face = faces_[f];
+    face = {t[0].x(), t[0].y(), t[1].x() - t[0].x(), t[1].y() - t[0].y(), t[2].x() - t[0].x(), t[2].y() - t[0].y(),
+            0.0, t[0].z(), t[1].z(), t[2].z()};
+    face.area = face.e1x * face.e2y - face.e1y * face.e2x;
+    has_area[f] = std::abs(face.area) > 0.0 ? 1 : 0;
+  }
   extent_ = (hi - lo_).cwiseMax(std::numeric_limits<double>::min());
   const double cell = std::sqrt(extent_.x() * extent_.y() / static_cast<double>(faces.size())) + std::numeric_limits<double>::min();
   nx_ = std::clamp(static_cast<int>(extent_.x() / cell) + 1, 1, 4096);
   ny_ = std::clamp(static_cast<int>(extent_.y() / cell) + 1, 1, 4096);
   // Two sweeps over the faces' cell ranges: count per cell, then fill (a counting sort).
   const std::size_t nx = static_cast<std::size_t>(nx_);
-  std::vector<std::array<std::size_t, 2>> range(local_.size());  // first and last cell
+  std::vector<std::array<std::size_t, 2>> range(local.size());  // first and last cell
   cell_start_.assign(nx * static_cast<std::size_t>(ny_) + 1, 0);
-  for (std::size_t f = 0; f < local_.size(); ++f) {
-    const auto& t = local_[f];
+  for (std::size_t f = 0; f < local.size(); ++f) {
+    if (has_area[f] == 0) continue;
+    const auto& t = local[f];
     range[f] = {cell_of(std::min({t[0].x(), t[1].x(), t[2].x()}), std::min({t[0].y(), t[1].y(), t[2].y()})),
                 cell_of(std::max({t[0].x(), t[1].x(), t[2].x()}), std::max({t[0].y(), t[1].y(), t[2].y()}))};
     for (std::size_t j = range[f][0] / nx; j <= range[f][1] / nx; ++j)
@@ -526,9 +537,11 @@ PatchInputHeights::PatchInputHeights(const TriMesh& mesh, const std::vector<int>
   for (std::size_t k = 1; k < cell_start_.size(); ++k) cell_start_[k] += cell_start_[k - 1];
   cell_faces_.resize(cell_start_.back());
   std::vector<std::size_t> fill(cell_start_.begin(), cell_start_.end() - 1);
-  for (std::size_t f = 0; f < local_.size(); ++f)
+  for (std::size_t f = 0; f < local.size(); ++f) {
+    if (has_area[f] == 0) continue;
     for (std::size_t j = range[f][0] / nx; j <= range[f][1] / nx; ++j)
       for (std::size_t i = range[f][0] % nx; i <= range[f][1] % nx; ++i) cell_faces_[fill[j * nx + i]++] = static_cast<int>(f);
+  }
 }
 
 std::size_t PatchInputHeights::cell_of(double x, double y) const {
@@ -541,14 +554,13 @@ bool PatchInputHeights::height(double x, double y, double& z) const {
   if (cell_start_.empty() || !std::isfinite(x) || !std::isfinite(y)) return false;
   const std::size_t cell = cell_of(x, y);
   for (std::size_t k = cell_start_[cell]; k < cell_start_[cell + 1]; ++k) {
-    const auto& t = local_[static_cast<std::size_t>(cell_faces_[k])];
-    const double area = (t[1].x() - t[0].x()) * (t[2].y() - t[0].y()) - (t[1].y() - t[0].y()) * (t[2].x() - t[0].x());
-    if (!(std::abs(area) > 0.0)) continue;
-    const double b1 = ((x - t[0].x()) * (t[2].y() - t[0].y()) - (y - t[0].y()) * (t[2].x() - t[0].x())) / area;
+    const Face& t = faces_[static_cast<std::size_t>(cell_faces_[k])];
+    const double dx = x - t.x0, dy = y - t.y0;
+    const double b1 = (dx * t.e2y - dy * t.e2x) / t.area;
     if (b1 < 0.0) continue;  // most candidates: the second division is not needed
-    const double b2 = ((t[1].x() - t[0].x()) * (y - t[0].y()) - (t[1].y() - t[0].y()) * (x - t[0].x())) / area;
+    const double b2 = (t.e1x * dy - t.e1y * dx) / t.area;
     if (b2 < 0.0 || b1 + b2 > 1.0) continue;
-    z = (1.0 - b1 - b2) * t[0].z() + b1 * t[1].z() + b2 * t[2].z();
+    z = (1.0 - b1 - b2) * t.z0 + b1 * t.z1 + b2 * t.z2;
     return true;
   }
   return false;

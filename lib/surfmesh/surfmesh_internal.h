@@ -29,9 +29,16 @@ struct PatchInputHeights {
 
  private:
   [[nodiscard]] std::size_t cell_of(double x, double y) const;
-  std::vector<std::array<Eigen::Vector3d, 3>> local_;
+  // A face in the frame as height() reads it: its first corner (x0, y0), its edges from that
+  // corner to the second (e1) and third (e2), twice its signed area in the plane and its
+  // corners' heights. The differences and the area are those height() computed from the
+  // corners on every call before (the same doubles), taken once here.
+  struct Face {
+    double x0, y0, e1x, e1y, e2x, e2y, area, z0, z1, z2;
+  };
+  std::vector<Face> faces_;
   // Faces per grid cell, compressed: cell k holds cell_faces_[cell_start_[k] .. cell_start_[k + 1]),
-  // in increasing face order.
+  // in increasing face order; faces without area in the plane (never a height) in none.
   std::vector<std::size_t> cell_start_;
   std::vector<int> cell_faces_;
   Eigen::Vector2d lo_ = Eigen::Vector2d::Zero();
