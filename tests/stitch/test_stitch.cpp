@@ -657,9 +657,9 @@ TEST(Stitch, SameResultForAnyThreadCount) {
 // The obtuse splits' scan takes every face's obtuse corner on the run's threads first and
 // looks again only at the faces a split or its flips changed: the same splits, flips and
 // positions at 1, 2 and 4 threads on a mesh of several scan chunks (8192 faces) with many
-// splits.
-TEST(Stitch, ObtuseSplitsSameForAnyThreadCount) {
-  const TriangleSoup soup = jittered_sphere(5, 0.6);
+// splits (slow: three stitches of 20 480 faces).
+TEST(StitchSlow, ObtuseSplitsSameForAnyThreadCount) {
+  const TriangleSoup soup = jittered_sphere(5, 0.3);
   ASSERT_GT(soup.triangles.size(), 2U * 8192U);
   const SurfaceMesh surface = cube_map_surface(soup);
   const TriMesh input = to_trimesh(soup);
