@@ -487,16 +487,24 @@ class Optimiser {
     vertex_node_ = &vertex_node;
     is_split_feature_ = &is_feature;
     const std::size_t n_faces = mesh_.n_faces();
+    // Every face's halfedge opposite its obtuse corner, taken at the start on
+    // options_.n_threads threads; a face that a split or its flips changed is looked at again
+    // when its turn comes (faces keep their halfedges and corners otherwise, and no vertex
+    // moves): the handles of the face-by-face scan, with its serial work on the threads.
+    constexpr std::size_t kFaceChunk = 8192;
+    std::vector<TriMesh::HalfedgeHandle> opposite(n_faces);
+    parallel::for_each_index(n_faces, options_.n_threads, kFaceChunk, [&](std::size_t fi) {
+      opposite[fi] = obtuse_opposite(TriMesh::FaceHandle(static_cast<int>(fi)));
+    });
+    std::vector<std::uint8_t> changed(n_faces, 0);
+    auto mark = [&](TriMesh::FaceHandle g) {
+      if (g.is_valid() && static_cast<std::size_t>(g.idx()) < n_faces) changed[static_cast<std::size_t>(g.idx())] = 1;
+    };
     SplitPlan plan, far;
     for (std::size_t fi = 0; fi < n_faces; ++fi) {
       const TriMesh::FaceHandle f(static_cast<int>(fi));
       // The halfedge (a, b) opposite the obtuse corner c.
-      TriMesh::HalfedgeHandle h;
-      for (auto g : mesh_.fh_range(f)) {
-        const Vec a = point(mesh_, mesh_.from_vertex_handle(g)), b = point(mesh_, mesh_.to_vertex_handle(g));
-        const Vec c = point(mesh_, mesh_.to_vertex_handle(mesh_.next_halfedge_handle(g)));
-        if ((a - c).dot(b - c) < 0.0) h = g;
-      }
+      const TriMesh::HalfedgeHandle h = changed[fi] != 0 ? obtuse_opposite(f) : opposite[fi];
       if (!h.is_valid()) continue;
       const Vec c = point(mesh_, mesh_.to_vertex_handle(mesh_.next_halfedge_handle(h)));
       plan_edge_split(h, c, vertex_node, is_feature, refused, plan);
@@ -521,6 +529,7 @@ class Optimiser {
       const int patch_d = plan.one_sided ? -1 : face_patch_[static_cast<std::size_t>(mesh_.face_handle(o).idx())];
       const auto vc = mesh_.to_vertex_handle(mesh_.next_halfedge_handle(plan.h));
       mesh_.split_edge(mesh_.edge_handle(plan.h), v);
+      for (auto face : mesh_.vf_range(v)) mark(face);  // the two split faces and the new ones
       face_patch_.resize(mesh_.n_faces(), -1);
       for (auto e : mesh_.vf_range(v)) {
         int& patch = face_patch_[static_cast<std::size_t>(e.idx())];
@@ -539,11 +548,25 @@ class Optimiser {
         const auto e = mesh_.edge_handle(mesh_.find_halfedge(u, w));
         if (mesh_.is_flip_ok(e)) {
           mesh_.flip(e);
+          mark(mesh_.face_handle(mesh_.halfedge_handle(e, 0)));
+          mark(mesh_.face_handle(mesh_.halfedge_handle(e, 1)));
           ++n_split_flips_;
         }
       }
     }
     return n_splits;
+  }
+
+  // The halfedge (a, b) of face f opposite its obtuse corner c ((a - c) . (b - c) < 0; the
+  // last such of fh_range's order), or an invalid handle.
+  TriMesh::HalfedgeHandle obtuse_opposite(TriMesh::FaceHandle f) const {
+    TriMesh::HalfedgeHandle h;
+    for (auto g : mesh_.fh_range(f)) {
+      const Vec a = point(mesh_, mesh_.from_vertex_handle(g)), b = point(mesh_, mesh_.to_vertex_handle(g));
+      const Vec c = point(mesh_, mesh_.to_vertex_handle(mesh_.next_halfedge_handle(g)));
+      if ((a - c).dot(b - c) < 0.0) h = g;
+    }
+    return h;
   }
 
   // The best split of h's edge (a, b) (split_sweep): at the foot of the altitude from apex

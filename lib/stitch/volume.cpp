@@ -20,15 +20,23 @@ namespace nurbsfront::stitch_detail {
 namespace {
 
 // Enclosed volume (sum of a . (b x c) / 6 over the faces), and whether the mesh is closed.
-double enclosed_volume_of(const TriMesh& mesh) {
-  double v = 0.0;
-  for (auto f : mesh.faces()) {
+// The faces' terms on n_threads threads, summed in face order on this one (the same double
+// at every thread count; DRAM 256's three calls were 0.12 G instructions on one thread).
+double enclosed_volume_of(const TriMesh& mesh, unsigned n_threads) {
+  constexpr std::size_t kFaceChunk = 8192;
+  std::vector<double> term(mesh.n_faces(), 0.0);
+  const bool face_status = mesh.has_face_status();
+  parallel::for_each_index(term.size(), n_threads, kFaceChunk, [&](std::size_t fi) {
+    const TriMesh::FaceHandle f(static_cast<int>(fi));
+    if (face_status && mesh.status(f).deleted()) return;
     auto it = mesh.cfv_iter(f);
     const Eigen::Vector3d a = to_eigen(mesh.point(*it++));
     const Eigen::Vector3d b = to_eigen(mesh.point(*it++));
     const Eigen::Vector3d c = to_eigen(mesh.point(*it));
-    v += a.dot(b.cross(c));
-  }
+    term[fi] = a.dot(b.cross(c));
+  });
+  double v = 0.0;
+  for (auto f : mesh.faces()) v += term[static_cast<std::size_t>(f.idx())];
   return v / 6.0;
 }
 
@@ -58,8 +66,8 @@ std::size_t compensate_volume(const SurfaceMesh& surface, const TriMesh* input, 
   // default: where the volume is right the moves still mend local differences (bunny's
   // Hausdorff; docs/stitch.md "The volume compensation on level sets, session 15").
   const bool check_total = input != nullptr && is_closed(mesh) && is_closed(*input);
-  const double volume_input = check_total ? enclosed_volume_of(*input) : 0.0;
-  const double volume_before = check_total ? enclosed_volume_of(mesh) : 0.0;
+  const double volume_input = check_total ? enclosed_volume_of(*input, how.n_threads) : 0.0;
+  const double volume_before = check_total ? enclosed_volume_of(mesh, how.n_threads) : 0.0;
   if (check_total && std::abs(volume_before - volume_input) <= how.skip_within * std::abs(volume_input)) {
     if (skipped != nullptr) *skipped = true;
     return 0;
@@ -255,7 +263,7 @@ std::size_t compensate_volume(const SurfaceMesh& surface, const TriMesh* input, 
     }
   }
   if (check_total && n_moved > 0) {
-    if (std::abs(enclosed_volume_of(mesh) - volume_input) >= std::abs(volume_before - volume_input)) {
+    if (std::abs(enclosed_volume_of(mesh, how.n_threads) - volume_input) >= std::abs(volume_before - volume_input)) {
       for (auto v : mesh.vertices()) mesh.set_point(v, to_openmesh(original[static_cast<std::size_t>(v.idx())]));
       return 0;
     }

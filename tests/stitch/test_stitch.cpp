@@ -654,6 +654,43 @@ TEST(Stitch, SameResultForAnyThreadCount) {
   }
 }
 
+// The obtuse splits' scan takes every face's obtuse corner on the run's threads first and
+// looks again only at the faces a split or its flips changed: the same splits, flips and
+// positions at 1, 2 and 4 threads on a mesh of several scan chunks (8192 faces) with many
+// splits (slow: three stitches of 20 480 faces).
+TEST(StitchSlow, ObtuseSplitsSameForAnyThreadCount) {
+  const TriangleSoup soup = jittered_sphere(5, 0.3);
+  ASSERT_GT(soup.triangles.size(), 2U * 8192U);
+  const SurfaceMesh surface = cube_map_surface(soup);
+  const TriMesh input = to_trimesh(soup);
+  StitchOptions options;
+  options.optimisation_passes = 0;
+  options.obtuse_repair_rounds = 0;
+  options.angle_repair_rounds = 0;
+  options.collapse_below_angle_deg = 0.0;
+  options.chord_compensation = 0.0;
+  options.volume_compensation = 0.0;
+  options.n_threads = 1;
+  const StitchResult r1 = stitch(surface, input, options);
+  EXPECT_TRUE(r1.report.ok()) << joined(r1.report.errors);
+  ASSERT_GT(r1.report.n_obtuse_splits, 20U);
+  for (const unsigned n : {2U, 4U}) {
+    options.n_threads = n;
+    const StitchResult r = stitch(surface, input, options);
+    EXPECT_EQ(r.report.n_obtuse_splits, r1.report.n_obtuse_splits) << n;
+    EXPECT_EQ(r.report.n_flips, r1.report.n_flips) << n;
+    EXPECT_EQ(r.report.n_smoothing_moves, r1.report.n_smoothing_moves) << n;
+    ASSERT_EQ(r.mesh.n_faces(), r1.mesh.n_faces());
+    ASSERT_EQ(r.mesh.n_vertices(), r1.mesh.n_vertices());
+    for (auto v : r.mesh.vertices()) ASSERT_EQ(r.mesh.point(v), r1.mesh.point(v)) << "vertex " << v.idx() << ", " << n << " threads";
+    for (auto f : r.mesh.faces()) {
+      auto a = r.mesh.fv_range(f).begin();
+      auto b = r1.mesh.fv_range(TriMesh::FaceHandle(f.idx())).begin();
+      for (int k = 0; k < 3; ++k, ++a, ++b) ASSERT_EQ((*a).idx(), (*b).idx()) << "face " << f.idx();
+    }
+  }
+}
+
 // The smoothing sweep is Gauss-Seidel in vertex order; with 2+ threads it runs on a schedule
 // (border nodes and corners, and every node before a neighbour of theirs, in order on one
 // thread; the other inner nodes in connected groups, each after the border nodes it touches).
