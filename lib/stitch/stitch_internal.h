@@ -396,6 +396,8 @@ struct FidelityCandidates {
   std::vector<std::pair<std::uint32_t, double>> samples, vertices;
   std::size_t n_walked = 0;    //!< samples the walk alone showed within the bound
   std::size_t n_searched = 0;  //!< samples searched in the output's tree
+  //! Face samples left out: their face's corners are within the bound of one output face.
+  std::size_t n_certified = 0;
 };
 
 //! The candidates move_toward_input()'s first sweep would try, without moving anything:
