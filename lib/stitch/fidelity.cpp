@@ -89,7 +89,7 @@ class FidelityMover {
     const TriangleSoup out = to_soup(mesh_);
     std::vector<std::uint32_t> all(out.triangles.size());
     std::iota(all.begin(), all.end(), 0U);
-    const quality_detail::AabbTree out_tree(out, std::move(all));
+    const quality_detail::AabbTree out_tree(out, std::move(all), options_.n_threads);
     const bool full = !incremental_ || first_sweep_;
     if (first_sweep_) select_probes(out, out_tree);
     first_sweep_ = false;
