@@ -15,6 +15,7 @@
 
 #include <Eigen/Geometry>
 
+#include "nurbsfront/core/parallel.h"
 #include "nurbsfront/core/soup.h"
 #include "nurbsfront/core/tolerances.h"
 #include "nurbsfront/quality/aabb_tree.h"
@@ -41,6 +42,9 @@ constexpr double kSplitNormalDot = 0.0;
 constexpr double kMinGain = 0.05;
 // Steps of the first sweep's walk from the last sample's face towards a sample.
 constexpr int kWalkSteps = 8;
+// Samples per chunk of the threaded queries (fixed: the walks start afresh at each chunk,
+// whatever the thread count).
+constexpr std::size_t kQueryChunk = 4096;
 
 double alpha_of(const Vec& a, const Vec& b, const Vec& c) {
   const double l2 = (b - a).squaredNorm() + (c - b).squaredNorm() + (a - c).squaredNorm();
@@ -59,25 +63,20 @@ class FidelityMover {
   FidelityMover(const TriMesh& input, const StitchOptions& options, double bound, double cell, const FinRimBound& rim,
                 bool incremental, StitchResult& result, std::vector<std::uint8_t>& is_feature,
                 std::vector<std::uint8_t> fixed)
-      : options_(options), bound_(bound), rim_(rim), incremental_(incremental), cheap_first_(incremental),
+      : options_(options), bound_(bound), cell_(cell), rim_(rim), incremental_(incremental), cheap_first_(incremental),
         mesh_(result.mesh), result_(result),
         is_feature_(is_feature), fixed_(std::move(fixed)), input_soup_(to_soup(input)) {
     std::vector<std::uint32_t> all(input_soup_.triangles.size());
     std::iota(all.begin(), all.end(), 0U);
-    input_tree_.emplace(input_soup_, std::move(all));
-    // The input's samples: its vertices, then per face its centroid and edge midpoints.
+    input_tree_.emplace(input_soup_, std::move(all), options.n_threads);
+    // The input's samples: its vertices here; the first sweep adds the centroid and edge
+    // midpoints of the faces it cannot show within the bound (select_probes()).
     probes_ = input_soup_.points;
-    for (const auto& t : input_soup_.triangles) {
-      const Vec &a = input_soup_.points[t[0]], &b = input_soup_.points[t[1]], &c = input_soup_.points[t[2]];
-      probes_.push_back((a + b + c) / 3.0);
-      probes_.push_back(0.5 * (a + b));
-      probes_.push_back(0.5 * (b + c));
-      probes_.push_back(0.5 * (c + a));
-    }
+    probe_id_.resize(probes_.size());
+    std::iota(probe_id_.begin(), probe_id_.end(), 0U);
     const double diagonal = bounding_box(mesh_).diagonal();
     min_double_area_ = 2.0 * tolerance::kDegenerateAreaRelative * diagonal * diagonal;
     sin_floor_ = std::sin(options.angle_floor_deg * std::numbers::pi / 180.0);
-    build_probe_grid(cell);
   }
 
   // One sweep: returns the number of moves and splits. The first sweep (and every sweep
@@ -90,8 +89,9 @@ class FidelityMover {
     const TriangleSoup out = to_soup(mesh_);
     std::vector<std::uint32_t> all(out.triangles.size());
     std::iota(all.begin(), all.end(), 0U);
-    const quality_detail::AabbTree out_tree(out, std::move(all));
+    const quality_detail::AabbTree out_tree(out, std::move(all), options_.n_threads);
     const bool full = !incremental_ || first_sweep_;
+    if (first_sweep_) select_probes(out, out_tree);
     first_sweep_ = false;
     const std::size_t n_v = mesh_.n_vertices(), n_in = probes_.size();
     // changed: vertices moved or made in the last sweep (all of them in a full sweep).
@@ -101,13 +101,16 @@ class FidelityMover {
     // Output nodes off the input: their closest input point (kept for unchanged vertices).
     vertex_distance_.resize(n_v, 0.0);
     vertex_target_.resize(n_v, Vec::Zero());
-    std::uint32_t input_hint = UINT32_MAX;
-    for (std::size_t i = 0; i < n_v; ++i) {
-      if (changed[i] == 0 || fixed_[i] != 0) continue;
-      const Vec p = point(mesh_, TriMesh::VertexHandle(static_cast<int>(i)));
-      vertex_target_[i] = closest_input(p, input_hint);
-      vertex_distance_[i] = (p - vertex_target_[i]).norm();
-    }
+    // (On the run's threads: each closest point is exact, whatever the hint.)
+    parallel::for_chunks(n_v, options_.n_threads, kQueryChunk, [&](std::size_t begin, std::size_t end, unsigned) {
+      std::uint32_t input_hint = UINT32_MAX;
+      for (std::size_t i = begin; i < end; ++i) {
+        if (changed[i] == 0 || fixed_[i] != 0) continue;
+        const Vec p = point(mesh_, TriMesh::VertexHandle(static_cast<int>(i)));
+        vertex_target_[i] = closest_input(p, input_hint);
+        vertex_distance_[i] = (p - vertex_target_[i]).norm();
+      }
+    });
     // dirty: the corners of the faces that changed or whose listed samples did.
     std::vector<std::uint8_t> dirty(n_v, full ? 1 : 0);
     std::vector<std::uint8_t> face_changed(out.triangles.size(), full ? 1 : 0);
@@ -120,26 +123,14 @@ class FidelityMover {
     // Input samples: their nearest output face and distance (again where it may differ).
     near_face_.resize(n_in, 0);
     near_distance_.resize(n_in, 0.0);
-    std::vector<std::uint8_t> requery(n_in, full ? 1 : 0);
+    // The first sweep measured every sample in select_probes(); a sweep that measures
+    // everything again (not incremental) searches each in the tree.
+    std::vector<std::uint8_t> requery(n_in, full && !just_selected_ ? 1 : 0);
+    just_selected_ = false;
     if (!full) mark_near_changed_faces(out, face_changed, requery);
-    // The first sweep of incremental sweeps: a sample whose walk from the last sample's face
-    // (Morton order) ends on a face within the bound is within it (an upper bound: the
-    // sample is no candidate, whatever its exact distance); only the others are searched in
-    // the tree. The walk's face and distance stand for the nearest ones.
-    const bool walk_first = cheap_first_ && full;
     std::uint32_t hint = UINT32_MAX;
     for (const std::uint32_t i : probe_order_) {
       if (requery[i] == 0) continue;
-      if (walk_first && hint != UINT32_MAX) {
-        const auto w = walk_to(out, probes_[i], hint);
-        hint = w.face;
-        if (std::sqrt(w.squared_distance) <= bound_) {
-          near_face_[i] = w.face;
-          near_distance_[i] = std::sqrt(w.squared_distance);
-          ++n_walked_;
-          continue;
-        }
-      }
       ++n_searched_;
       const auto c = out_tree.closest(probes_[i], hint);
       hint = c.face;
@@ -197,7 +188,7 @@ class FidelityMover {
     }
     if (record_only_) {
       for (const Candidate& c : candidates) {
-        if (c.input_side) recorded_samples_.push_back({c.sample, c.distance});
+        if (c.input_side) recorded_samples_.push_back({probe_id_[c.sample], c.distance});
         else recorded_vertices_.push_back({static_cast<std::uint32_t>(c.vertex), c.distance});
       }
       return 0;
@@ -249,6 +240,108 @@ class FidelityMover {
   }
 
  private:
+  // The first sweep's input samples and their distances to the output. Every input vertex
+  // is a sample (the walk first when incremental: a vertex whose walk from the last vertex's
+  // face, Morton order, ends on a face within the bound keeps that face and distance, an
+  // upper bound; else searched in the output's tree). An input face whose three corners are
+  // within the bound of one output face T (one of the corners' faces) lies within the bound
+  // of T wholly (the distance to a triangle is convex): its other samples (centroid, edge
+  // midpoints) can be no candidates and are left out; so is any other face sample within the
+  // bound of one of its face's corners' faces. The samples left are added and measured as
+  // the vertices. On the run's threads, in chunks of kQueryChunk samples
+  // whose walks start afresh: the same samples and distances for any thread count.
+  void select_probes(const TriangleSoup& out, const quality_detail::AabbTree& out_tree) {
+    const bool walk = cheap_first_;
+    const double bound2 = bound_ * bound_;
+    auto locate = [&](const std::vector<std::uint32_t>& order, std::size_t first) {
+      near_face_.resize(probes_.size(), 0);
+      near_distance_.resize(probes_.size(), 0.0);
+      std::vector<std::uint8_t> walked(order.size(), 0);
+      parallel::for_chunks(order.size(), options_.n_threads, kQueryChunk, [&](std::size_t begin, std::size_t end, unsigned) {
+        std::uint32_t hint = UINT32_MAX;
+        for (std::size_t k = begin; k < end; ++k) {
+          if (k % kQueryChunk == 0) hint = UINT32_MAX;
+          const std::size_t i = first + order[k];
+          if (walk && hint != UINT32_MAX) {
+            const auto w = walk_to(out, probes_[i], hint);
+            hint = w.face;
+            if (w.squared_distance <= bound2) {
+              near_face_[i] = w.face;
+              near_distance_[i] = std::sqrt(w.squared_distance);
+              walked[k] = 1;
+              continue;
+            }
+          }
+          const auto c = out_tree.closest(probes_[i], hint);
+          hint = c.face;
+          near_face_[i] = c.face;
+          near_distance_[i] = std::sqrt(c.squared_distance);
+        }
+      });
+      for (const std::uint8_t w : walked) (w != 0 ? n_walked_ : n_searched_) += 1;
+    };
+    const std::size_t n_vertices = probes_.size();
+    locate(quality_detail::morton_order(probes_), 0);
+    const std::size_t n_faces = input_soup_.triangles.size();
+    std::vector<std::uint8_t> certified(n_faces, 0);
+    auto to_face2 = [&](const Vec& u, std::uint32_t g) {
+      const auto& t = out.triangles[g];
+      return (quality_detail::closest_point_on_triangle(u, out.points[t[0]], out.points[t[1]], out.points[t[2]]) - u)
+          .squaredNorm();
+    };
+    parallel::for_each_index(n_faces, options_.n_threads, kQueryChunk, [&](std::size_t f) {
+      const auto& t = input_soup_.triangles[f];
+      for (int k = 0; k < 3; ++k) {
+        const std::uint32_t g = near_face_[t[static_cast<std::size_t>(k)]];
+        if (k > 0 && g == near_face_[t[0]]) continue;
+        if (k > 1 && g == near_face_[t[1]]) continue;
+        bool within = true;
+        for (int j = 0; j < 3 && within; ++j) {
+          const std::uint32_t v = t[static_cast<std::size_t>(j)];
+          within = (j == k ? near_distance_[v] * near_distance_[v] : to_face2(input_soup_.points[v], g)) <= bound2;
+        }
+        if (within) {
+          certified[f] = 1;
+          return;
+        }
+      }
+    });
+    // The other faces: a sample within the bound of one of its corners' faces is left out
+    // (bit k of kept[f]: sample k is kept).
+    auto face_samples = [&](std::size_t f) {
+      const auto& t = input_soup_.triangles[f];
+      const Vec &a = input_soup_.points[t[0]], &b = input_soup_.points[t[1]], &c = input_soup_.points[t[2]];
+      return std::array<Vec, 4>{Vec((a + b + c) / 3.0), Vec(0.5 * (a + b)), Vec(0.5 * (b + c)), Vec(0.5 * (c + a))};
+    };
+    std::vector<std::uint8_t> kept(n_faces, 0);
+    parallel::for_each_index(n_faces, options_.n_threads, kQueryChunk, [&](std::size_t f) {
+      if (certified[f] != 0) return;
+      const auto& t = input_soup_.triangles[f];
+      const auto u = face_samples(f);
+      for (std::size_t k = 0; k < u.size(); ++k) {
+        bool within = false;
+        for (std::size_t j = 0; j < 3 && !within; ++j) within = to_face2(u[k], near_face_[t[j]]) <= bound2;
+        if (!within) kept[f] = static_cast<std::uint8_t>(kept[f] | (1U << k));
+      }
+    });
+    for (std::size_t f = 0; f < n_faces; ++f) {
+      const auto u = face_samples(f);
+      for (std::size_t k = 0; k < u.size(); ++k) {
+        if ((kept[f] & (1U << k)) == 0) {
+          ++n_certified_;
+          continue;
+        }
+        probe_id_.push_back(static_cast<std::uint32_t>(n_vertices + 4 * f + k));
+        probes_.push_back(u[k]);
+      }
+    }
+    std::vector<std::uint32_t> added(probes_.size() - n_vertices);
+    std::iota(added.begin(), added.end(), 0U);
+    locate(added, n_vertices);
+    build_probe_grid(cell_);
+    just_selected_ = true;
+  }
+
   // From face f, steps to the edge neighbour nearer to u while there is one (at most
   // kWalkSteps): a face of the output and u's squared distance to it (an upper bound of
   // u's distance to the output; computed as AabbTree::closest does).
@@ -431,8 +524,11 @@ class FidelityMover {
       const double lb = nb.norm();
       if (lb <= min_double_area_) return false;
       if (nb.dot(na) <= options_.min_normal_dot * lb * na.norm()) return false;
-      old_alpha = std::min(old_alpha, alpha_of(a[0], a[1], a[2]));
-      new_alpha = std::min(new_alpha, alpha_of(b[0], b[1], b[2]));
+      const double alpha_a = alpha_of(a[0], a[1], a[2]), alpha_b = alpha_of(b[0], b[1], b[2]);
+      // Each triangle keeps min(its own alpha, fidelity_alpha_floor): the moves' quality cost.
+      if (alpha_b < std::min(alpha_a, options_.fidelity_alpha_floor)) return false;
+      old_alpha = std::min(old_alpha, alpha_a);
+      new_alpha = std::min(new_alpha, alpha_b);
       const double sine_a = smallest_angle_sine(a[0], a[1], a[2]), sine_b = smallest_angle_sine(b[0], b[1], b[2]);
       // Each triangle keeps min(its own smallest angle, the floor): none falls below issue
       // 5's bound that was not there.
@@ -521,6 +617,7 @@ class FidelityMover {
     struct Tri {
       std::array<Vec, 3> p;
       Vec parent;  // the old triangle's area vector
+      double parent_alpha;
       TriMesh::VertexHandle v1, v2;  // the corners besides the new node
     };
     std::vector<Tri> made;
@@ -548,13 +645,15 @@ class FidelityMover {
           old.push_back(across);
           old_faces.push_back(mesh_.face_handle(g));
           const Vec n_across = area(across);
-          made.push_back({{u, p0, across[2]}, n_across, s0, vx});
-          made.push_back({{u, across[2], p1}, n_across, vx, s1});
+          const double alpha_across = std::min(alpha_of(across[0], across[1], across[2]),
+                                               alpha_of(old[k / 2][0], old[k / 2][1], old[k / 2][2]));
+          made.push_back({{u, p0, across[2]}, n_across, alpha_across, s0, vx});
+          made.push_back({{u, across[2], p1}, n_across, alpha_across, vx, s1});
           flips.push_back({s0, s1});
           continue;
         }
       }
-      made.push_back({{u, p0, p1}, parent, s0, s1});
+      made.push_back({{u, p0, p1}, parent, alpha_of(old[k / 2][0], old[k / 2][1], old[k / 2][2]), s0, s1});
     }
     double old_alpha = 1.0, old_sine = 1.0, old_sine_free = 1.0, new_alpha = 1.0, new_sine = 1.0;
     int old_obtuse = 0, new_obtuse = 0;
@@ -570,7 +669,11 @@ class FidelityMover {
       const Vec n = area(t.p);
       const double l = n.norm();
       if (!(l > min_double_area_ && n.dot(t.parent) > kSplitNormalDot * l * t.parent.norm())) return -1.0;
-      new_alpha = std::min(new_alpha, alpha_of(t.p[0], t.p[1], t.p[2]));
+      const double alpha = alpha_of(t.p[0], t.p[1], t.p[2]);
+      // Each new triangle keeps min(its old triangle's alpha, fidelity_alpha_floor) (across a
+      // flipped edge: the smaller of the two old ones').
+      if (alpha < std::min(t.parent_alpha, options_.fidelity_alpha_floor)) return -1.0;
+      new_alpha = std::min(new_alpha, alpha);
       const double sine = smallest_angle_sine(t.p[0], t.p[1], t.p[2]);
       new_sine = std::min(new_sine, sine);
       // A new triangle of free vertices only (the new node is free) keeps min(the old free
@@ -679,6 +782,8 @@ class FidelityMover {
   std::size_t n_splits_ = 0;
   // Input samples measured by the first sweep's walk alone, and searched in the tree.
   std::size_t n_walked_ = 0, n_searched_ = 0;
+  // Face samples the first sweep left out (their face is within the bound of one output face).
+  std::size_t n_certified_ = 0;
   // When set, a sweep only records its candidates (fidelity_candidates()).
   bool record_only_ = false;
   std::vector<std::pair<std::uint32_t, double>> recorded_samples_, recorded_vertices_;
@@ -686,10 +791,12 @@ class FidelityMover {
  private:
   const StitchOptions& options_;
   double bound_;
+  double cell_;
   const FinRimBound& rim_;
   bool incremental_;
   bool cheap_first_;
   bool first_sweep_ = true;
+  bool just_selected_ = false;
   // Vertices moved or made in this sweep (measured again in the next one).
   std::vector<int> changed_vertices_;
   // Per vertex: its distance to the input and its closest input point (free vertices).
@@ -708,6 +815,9 @@ class FidelityMover {
   std::vector<std::uint8_t> fixed_;
   TriangleSoup input_soup_;
   std::vector<Vec> probes_;
+  // Per sample its index among all the input's samples (its vertices, then per face its
+  // centroid and edge midpoints): FidelityCandidates::samples.
+  std::vector<std::uint32_t> probe_id_;
   std::optional<quality_detail::AabbTree> input_tree_;
   double min_double_area_ = 0.0;
   double sin_floor_ = 0.0;
@@ -735,6 +845,7 @@ FidelityCandidates fidelity_candidates(const TriMesh& input, const StitchOptions
   std::sort(out.vertices.begin(), out.vertices.end());
   out.n_walked = mover.n_walked_;
   out.n_searched = mover.n_searched_;
+  out.n_certified = mover.n_certified_;
   return out;
 }
 

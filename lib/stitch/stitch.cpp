@@ -43,6 +43,7 @@ void StitchOptions::validate() const {
   if (!(collapse_below_angle_deg >= 0.0 && collapse_below_angle_deg < 60.0)) fail("collapse_below_angle_deg must be in [0, 60)");
   if (!(fidelity_distance_edges >= 0.0 && std::isfinite(fidelity_distance_edges)))
     fail("fidelity_distance_edges must be finite and >= 0");
+  if (!(fidelity_alpha_floor >= 0.0 && fidelity_alpha_floor <= 1.0)) fail("fidelity_alpha_floor must be in [0, 1]");
   if (!(fin_rim_max_move >= 0.0)) fail("fin_rim_max_move must be >= 0 (infinity: no bound)");
   if (n_threads == 0) fail("n_threads must be >= 1");
 }

@@ -143,6 +143,11 @@ struct StitchOptions {
   //! puts bunny, headsq@500 and the brain within issue 6's 2x but costs DRAM 256's stitch
   //! 2.7x: docs/stitch.md "Fidelity moves, session 15").
   double fidelity_distance_edges = 0.0;
+  //! The fidelity moves' shape floor per triangle: a move or split may not take a triangle's
+  //! alpha below min(its old alpha, this) (a split's new triangle: its old triangle's), in
+  //! [0, 1]; 0 leaves only the ring's floor (alpha_floor). Default 0 (docs/stitch.md
+  //! "Fidelity moves, session 16").
+  double fidelity_alpha_floor = 0.0;
   //! Run the exact self-intersection check on the result (the most expensive check).
   //! Default true.
   bool check_self_intersections = true;

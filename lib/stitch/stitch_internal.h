@@ -378,7 +378,12 @@ struct FidelityResult {
 //! grow. A moved vertex and its neighbours wait for the next sweep. A fin rim node (rim)
 //! moves only within its bound. When check_self_intersections, moves on triangles that
 //! cross others are put back (four rounds, then all of them). Nothing for a bound of 0 or an
-//! empty input. incremental: the first sweep searches an input sample in the output's tree
+//! empty input. The input's samples are its vertices and those of its face samples that
+//! no output face of their face's corners (the first sweep's) holds within the bound (a
+//! face whose corners are within the bound of one output face is wholly: those can be no
+//! candidates); the first sweep's queries run on options.n_threads (the same result for
+//! any count). A move or split keeps each triangle's alpha at min(old, fidelity_alpha_floor).
+//! incremental: the first sweep searches an input sample in the output's tree
 //! only when a walk over the output's faces from the last sample's face (Morton order) does
 //! not end on a face within the bound (the same candidates as a full search; the walk's face
 //! stands for the nearest one in the checks); after the first sweep only the vertices and
@@ -396,6 +401,8 @@ struct FidelityCandidates {
   std::vector<std::pair<std::uint32_t, double>> samples, vertices;
   std::size_t n_walked = 0;    //!< samples the walk alone showed within the bound
   std::size_t n_searched = 0;  //!< samples searched in the output's tree
+  //! Face samples left out: their face's corners are within the bound of one output face.
+  std::size_t n_certified = 0;
 };
 
 //! The candidates move_toward_input()'s first sweep would try, without moving anything:

@@ -213,12 +213,121 @@ TEST(StitchFidelity, WalkingFirstSweepSelectsTheFullSearchsCandidates) {
     const auto full = stitch_detail::fidelity_candidates(input, options, feature, surface.input_mean_edge, plain, false);
     const auto walk = stitch_detail::fidelity_candidates(input, options, feature, surface.input_mean_edge, plain, true);
     EXPECT_GT(full.samples.size(), 10u) << bound;
-    EXPECT_EQ(full.n_searched, n_samples);
-    EXPECT_EQ(walk.n_walked + walk.n_searched, n_samples);
-    EXPECT_GT(walk.n_walked, n_samples * 9 / 10) << bound;
+    EXPECT_EQ(full.n_walked, 0u);
+    EXPECT_EQ(full.n_searched + full.n_certified, n_samples);
+    EXPECT_EQ(walk.n_walked + walk.n_searched + walk.n_certified, n_samples);
+    EXPECT_GT(walk.n_walked + walk.n_certified, n_samples * 9 / 10) << bound;
     EXPECT_EQ(walk.samples, full.samples) << bound;
     EXPECT_EQ(walk.vertices, full.vertices) << bound;
     for (const auto& [sample, distance] : full.samples) EXPECT_GT(distance, bound * surface.input_mean_edge);
+  }
+}
+
+TEST(StitchFidelity, FacesLeftOutHoldNoCandidate) {
+  // The first sweep leaves out the samples of the input faces whose corners are within the
+  // bound of one output face, and the face samples within the bound of one of their corners'
+  // output faces. Every sample of the input (its vertices, face centroids and
+  // edge midpoints) measured in the output's tree: those farther than the bound are exactly
+  // the sweep's input-side candidates, with the same distances, and most face samples were
+  // left out unmeasured.
+  const Brain brain;
+  const auto& [input, surface, plain_options, plain] = brain;
+  ASSERT_TRUE(plain.report.ok());
+  StitchOptions options = plain_options;
+  options.fidelity_distance_edges = 0.25;
+  const double bound = 0.25 * surface.input_mean_edge;
+  const auto picked = stitch_detail::fidelity_candidates(input, options, border_nodes(surface, plain),
+                                                         surface.input_mean_edge, plain, true);
+  const TriangleSoup out = to_soup(plain.mesh), in = to_soup(input);
+  std::vector<std::uint32_t> faces(out.triangles.size());
+  std::iota(faces.begin(), faces.end(), 0U);
+  const quality_detail::AabbTree tree(out, faces);
+  std::vector<Eigen::Vector3d> samples = in.points;
+  for (const auto& t : in.triangles) {
+    const Eigen::Vector3d &a = in.points[t[0]], &b = in.points[t[1]], &c = in.points[t[2]];
+    samples.push_back((a + b + c) / 3.0);
+    samples.push_back(0.5 * (a + b));
+    samples.push_back(0.5 * (b + c));
+    samples.push_back(0.5 * (c + a));
+  }
+  std::vector<std::pair<std::uint32_t, double>> far;
+  for (std::uint32_t i = 0; i < samples.size(); ++i) {
+    const double d = std::sqrt(tree.closest(samples[i], UINT32_MAX).squared_distance);
+    if (d > bound) far.emplace_back(i, d);
+  }
+  ASSERT_GT(far.size(), 10u);
+  ASSERT_EQ(picked.samples.size(), far.size());
+  for (std::size_t k = 0; k < far.size(); ++k) {
+    EXPECT_EQ(picked.samples[k].first, far[k].first);
+    EXPECT_NEAR(picked.samples[k].second, far[k].second, 1e-12 * surface.input_mean_edge);
+  }
+  EXPECT_GT(picked.n_certified, 4 * in.triangles.size() * 4 / 5);  // 86% on the brain
+}
+
+TEST(StitchFidelitySlow, MovesDoNotDependOnTheThreadCount) {
+  // (Slow: 4 s in RelWithDebInfo.) The first sweep's threaded queries (chunks of a fixed size): the same moves and splits,
+  // point for point, with one and with two threads.
+  const Brain brain;
+  const auto& [input, surface, plain_options, plain] = brain;
+  StitchOptions options = plain_options;
+  options.fidelity_distance_edges = 0.25;
+  StitchResult one = plain, two = plain;
+  std::vector<std::uint8_t> feature_one = border_nodes(surface, plain), feature_two = feature_one;
+  options.n_threads = 1;
+  const auto a = stitch_detail::move_toward_input(input, options, feature_one, surface.input_mean_edge,
+                                                  stitch_detail::FinRimBound{}, one);
+  options.n_threads = 2;
+  const auto b = stitch_detail::move_toward_input(input, options, feature_two, surface.input_mean_edge,
+                                                  stitch_detail::FinRimBound{}, two);
+  EXPECT_GT(a.n_moved, 10u);
+  EXPECT_EQ(a.n_moved, b.n_moved);
+  EXPECT_EQ(a.n_split, b.n_split);
+  ASSERT_EQ(one.mesh.n_vertices(), two.mesh.n_vertices());
+  for (const auto v : one.mesh.vertices()) EXPECT_EQ(one.mesh.point(v), two.mesh.point(v)) << "vertex " << v.idx();
+  EXPECT_EQ(one.face_patch, two.face_patch);
+}
+
+double alpha_of(const TriMesh& mesh, TriMesh::FaceHandle f) {
+  std::vector<Eigen::Vector3d> p;
+  for (const auto v : mesh.fv_range(f)) p.push_back(to_eigen(mesh.point(v)));
+  const double l2 = (p[1] - p[0]).squaredNorm() + (p[2] - p[1]).squaredNorm() + (p[0] - p[2]).squaredNorm();
+  return 2.0 * std::sqrt(3.0) * (p[1] - p[0]).cross(p[2] - p[0]).norm() / l2;
+}
+
+TEST(StitchFidelitySlow, AlphaFloorHoldsForEveryMovedTriangle) {
+  // (Slow: 4 s in RelWithDebInfo.) fidelity_alpha_floor 0.8 on the brain: every triangle of the plain stitch still there
+  // (the same corners) keeps min(its old alpha, 0.8); without the floor some falls below.
+  const Brain brain;
+  const auto& [input, surface, plain_options, plain] = brain;
+  StitchOptions options = plain_options;
+  options.fidelity_distance_edges = 0.25;
+  // The largest min(old alpha, 0.8) - new alpha over the triangles kept, with the option at floor.
+  auto worst_drop = [&](double floor, std::size_t& n_moved) {
+    options.fidelity_alpha_floor = floor;
+    StitchResult result = plain;
+    std::vector<std::uint8_t> feature = border_nodes(surface, plain);
+    const auto r = stitch_detail::move_toward_input(input, options, feature, surface.input_mean_edge,
+                                                    stitch_detail::FinRimBound{}, result);
+    EXPECT_EQ(r.n_undone, 0u);
+    n_moved = r.n_moved;
+    double worst = -1.0;
+    for (const auto f : plain.mesh.faces()) {
+      std::vector<int> x, y;
+      for (const auto v : plain.mesh.fv_range(f)) x.push_back(v.idx());
+      for (const auto v : result.mesh.fv_range(f)) y.push_back(v.idx());
+      if (x != y) continue;
+      worst = std::max(worst, std::min(alpha_of(plain.mesh, f), 0.8) - alpha_of(result.mesh, f));
+    }
+    return worst;
+  };
+  std::size_t n_floor = 0, n_free = 0;
+  EXPECT_LE(worst_drop(0.8, n_floor), 1e-12);
+  EXPECT_GT(worst_drop(0.0, n_free), 0.01);  // the ring's floor (alpha_floor 0.5) alone
+  EXPECT_GT(n_floor, 10u);
+  StitchOptions bad;
+  for (const double b : {-0.1, 1.5, std::numeric_limits<double>::quiet_NaN()}) {
+    bad.fidelity_alpha_floor = b;
+    EXPECT_THROW(bad.validate(), InvalidInput);
   }
 }
 

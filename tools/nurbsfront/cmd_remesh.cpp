@@ -63,6 +63,7 @@ struct RemeshArgs {
   std::optional<double> obtuse_split_feature_angle;
   std::optional<int> angle_repair_rounds;
   std::optional<double> fidelity_distance;
+  std::optional<double> fidelity_alpha_floor;
   std::optional<double> border_input_distance;
   std::optional<double> corner_angle;
   std::optional<double> flat_face_edges;
@@ -141,6 +142,7 @@ void run_remesh(RemeshArgs& args) {
   if (args.obtuse_split_feature_angle) options.stitch.obtuse_split_feature_angle_deg = *args.obtuse_split_feature_angle;
   if (args.angle_repair_rounds) options.stitch.angle_repair_rounds = *args.angle_repair_rounds;
   if (args.fidelity_distance) options.stitch.fidelity_distance_edges = *args.fidelity_distance;
+  if (args.fidelity_alpha_floor) options.stitch.fidelity_alpha_floor = *args.fidelity_alpha_floor;
   if (args.border_input_distance) options.segment.border_smoothing.max_input_distance = *args.border_input_distance;
   if (args.corner_angle) options.surfmesh.corner_split_angle_deg = *args.corner_angle;
   if (args.flat_face_edges) options.surfmesh.fit.flat_face_edges = *args.flat_face_edges;
@@ -318,6 +320,9 @@ void add_remesh_command(CLI::App& app) {
                   "The stitch's fidelity moves: vertices move onto the input where the output is farther from it "
                   "than this many input mean edges (default 0 = off; 0.25 recommended for fidelity; not on label images; docs/stitch.md "
                   "\"Fidelity moves\")");
+  cmd->add_option("--fidelity-alpha-floor", args->fidelity_alpha_floor,
+                  "The fidelity moves keep each triangle's alpha at min(its old alpha, this) (in [0, 1]; default 0; "
+                  "docs/stitch.md \"Fidelity moves, session 16\")");
   cmd->add_option("--border-input-distance", args->border_input_distance,
                   "Smoothed border curves stay within this many mean curve edges of the input (>= 0; default "
                   "infinity = no bound; docs/segment.md \"Border curves near the input\")");
