@@ -223,6 +223,8 @@ void SurfMeshOptions::validate() const {
     bad_option("max_node_offset_edges must be finite and >= 0, got " + std::to_string(max_node_offset_edges));
   if (!(std::isfinite(small_patch_node_offset_edges) && small_patch_node_offset_edges >= 0.0))
     bad_option("small_patch_node_offset_edges must be finite and >= 0, got " + std::to_string(small_patch_node_offset_edges));
+  if (!(std::isfinite(polygon_node_offset_edges) && polygon_node_offset_edges >= 0.0))
+    bad_option("polygon_node_offset_edges must be finite and >= 0, got " + std::to_string(polygon_node_offset_edges));
   if (threads < 0) bad_option("threads must be >= 0, got " + std::to_string(threads));
   if (cell_grid.enabled && fit.detail_spacing_edges > 0.0)
     bad_option("fit.detail_spacing_edges refits the plain fit; with a cell grid the band fit is used instead: "
@@ -279,7 +281,8 @@ SurfaceMesh surfmesh_detail::mesh_surface(const TriMesh& input, const Segmentati
   const bool detail_fit = options.fit.detail_spacing_edges > 0.0;
   const bool fin_rims = options.fin_rim_width > 0.0;
   const bool lattice_tested = shares != nullptr || detail_fit || feature_sizing_gate || fin_rims ||
-                              options.fit.flat_face_edges > 0.0 || options.small_patch_node_offset_edges > 0.0;
+                              options.fit.flat_face_edges > 0.0 || options.small_patch_node_offset_edges > 0.0 ||
+                              options.polygon_node_offset_edges > 0.0;
   const LatticeShares lattice = shares != nullptr ? *shares : lattice_tested ? lattice_edge_shares(input) : LatticeShares{};
   if (lattice_tested) out.input_label_staircase = label_image_staircase(lattice);
   const bool marching_cubes = marching_cubes_lattice(lattice);
@@ -456,6 +459,11 @@ SurfaceMesh surfmesh_detail::mesh_surface(const TriMesh& input, const Segmentati
     const double small = marching_cubes ? 0.0 : options.small_patch_node_offset_edges;
     if (small > 0.0 && !results[p].band_fit && fits_own_vertices_only(segmentation.patches[p]))
       offset = offset > 0.0 ? std::min(offset, small) : small;
+    // On an input that is not a marching-cubes surface the vertices are the geometry: every
+    // plain-fitted patch keeps its nodes near its faces (SurfMeshOptions::polygon_node_offset_edges),
+    // where its smooth fit rounds a sharp edge below the crease angle.
+    const double polygon = marching_cubes ? 0.0 : options.polygon_node_offset_edges;
+    if (polygon > 0.0 && !results[p].band_fit) offset = offset > 0.0 ? std::min(offset, polygon) : polygon;
     if (offset > 0.0)
       results[p].report.n_clamped_nodes = clamp_inner_nodes(input, segmentation, static_cast<int>(p), offset * mean_edge, results[p]);
   });

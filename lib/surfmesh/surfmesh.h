@@ -308,6 +308,16 @@ struct SurfMeshOptions {
   //! with the fin rims of headsq@1150 unlocked it doubled the Hausdorff distance there).
   //! 0 = only max_node_offset_edges. Default 0.02.
   double small_patch_node_offset_edges = 0.02;
+  //! The same bound for the inner nodes of every plain-fitted patch of an input that the
+  //! marching-cubes lattice gate does not take (CAD meshes, scans): their vertices are the
+  //! geometry, and a smooth fit rounds the sharp edges below the crease angle that a patch
+  //! holds (fandisk's fading creases: the fit misses its own vertices by 0.36 target sizes, and
+  //! with more vertices the Hausdorff distance grew, 0.0051 at 2 687 vertices, 0.0078 at 10 656;
+  //! docs/surfmesh.md "Sharp-edged inputs, session 16"). Not on marching-cubes surfaces (their
+  //! fits smooth the staircase), not for band fits; a detail-fitted patch keeps the smaller of
+  //! this and PatchFitOptions::detail_node_offset_edges. 0 = only max_node_offset_edges; >= 0.
+  //! Default 0.05.
+  double polygon_node_offset_edges = 0.05;
   //! Worker threads for the patches; 0 = all hardware threads. The output is bit-identical
   //! for every thread count. Default 0.
   int threads = 0;

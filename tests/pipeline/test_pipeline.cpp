@@ -435,10 +435,12 @@ TEST(PipelineSlow, OccupancyDramCell128WithinOneVoxel) {
 TEST(Pipeline, ThinDiscCrossingsSettledOntoInput) {
   const TriMesh mesh = prepare_mesh(read_soup(test::test_data("meshes/rotor.off"))).mesh;
   // The rotor's long fan faces, sampled at their corners only, give fits that cross; the
-  // samples inside large faces (on by default, next test) avoid that before settle.
+  // samples inside large faces (on by default, next test) avoid that before settle, and so
+  // does the bound on the nodes of polygon inputs (polygon_node_offset_edges: no crossing left).
   RemeshOptions options = fast_options();
   options.surfmesh.fit.large_face_edges = 0.0;
   options.surfmesh.fit.flat_face_edges = 0.0;
+  options.surfmesh.polygon_node_offset_edges = 0.0;
   const RemeshResult r = remesh(mesh, options);
   const RemeshReport& rep = r.report;
   EXPECT_TRUE(rep.ok()) << errors_of(rep);
@@ -470,6 +472,7 @@ TEST(PipelineSlow, CornerClusterCrossingsCollapsed) {
   // clusters cross after moves and flips; with them there is nothing left to collapse.
   options.surfmesh.fit.large_face_edges = 0.0;
   options.surfmesh.fit.flat_face_edges = 0.0;
+  options.surfmesh.polygon_node_offset_edges = 0.0;  // the bound on polygon inputs' nodes avoids them too
   const RemeshResult r = remesh(mesh, options);
   const RemeshReport& rep = r.report;
   EXPECT_TRUE(rep.ok()) << errors_of(rep);
@@ -1353,6 +1356,7 @@ TEST(PipelineSlow, FemurCrossingsResegmented) {
   // needs one to exercise the re-segmentation.
   options.surfmesh.corner_split_angle_deg = 180.0;
   options.tiny_patch_faces = 0;  // merging femur's tiny patches also avoids it
+  options.surfmesh.polygon_node_offset_edges = 0.0;  // and so does the bound on polygon inputs' nodes
   const RemeshResult without = remesh_unrepaired(mesh, options);
   const RemeshResult with = remesh(mesh, options);
   const RemeshReport& rep = with.report;

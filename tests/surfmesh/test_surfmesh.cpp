@@ -995,6 +995,7 @@ TEST(Surfmesh, SmallPatchNodesStayOnTheirFaces) {
     const Segmentation seg = labelled_segmentation(mesh, std::vector<int>(mesh.n_faces(), 0), 1);
     SurfMeshOptions options;
     options.sizing.size = 0.3 * edge;
+    options.polygon_node_offset_edges = 0.0;  // the small-patch bound alone (polygon inputs' bound: below)
     options.small_patch_node_offset_edges = 0.0;
     const SurfaceMesh free = mesh_surface(mesh, seg, options);
     const double mean_edge = free.input_mean_edge;
@@ -1021,6 +1022,61 @@ TEST(Surfmesh, SmallPatchNodesStayOnTheirFaces) {
   }
   SurfMeshOptions bad;
   bad.small_patch_node_offset_edges = -0.1;
+  EXPECT_THROW(bad.validate(), InvalidInput);
+}
+
+TEST(Surfmesh, PolygonInputNodesStayOnTheirFacesAtASharpBend) {
+  // Issue 6 on CAD meshes (docs/surfmesh.md "Sharp-edged inputs, session 16"): a patch that
+  // holds a sharp edge below the crease angle (fandisk's fading creases) has a smooth fit that
+  // rounds it, and the nodes lifted onto that fit leave the input. Here a roof folding by
+  // 2 atan(0.4) = 43.6 deg inside one patch of 512 faces: polygon_node_offset_edges keeps every
+  // inner node within 0.05 mean edges of the faces. The grid's vertices are moved in its plane
+  // (irregularly) so that it is no marching-cubes lattice; the regular grid is one, and there
+  // the bound does not apply (its fits are to smooth a staircase).
+  constexpr int kN = 16;
+  const double edge = 1.0 / kN;
+  auto roof = [&](bool jitter) {
+    TriMesh mesh = to_trimesh(test::grid_patch(kN, kN));
+    for (const auto v : mesh.vertices()) {
+      const double k = static_cast<double>(v.idx());
+      if (jitter) {
+        mesh.point(v)[0] += 0.07 * edge * std::sin(3.1 * k);
+        mesh.point(v)[1] += 0.07 * edge * std::cos(1.7 * k);
+      }
+      mesh.point(v)[2] = 0.4 * std::abs(mesh.point(v)[0] - 0.5);
+    }
+    return mesh;
+  };
+  {
+    const TriMesh mesh = roof(true);
+    const Segmentation seg = labelled_segmentation(mesh, std::vector<int>(mesh.n_faces(), 0), 1);
+    SurfMeshOptions options;
+    options.sizing.size = 0.5 * edge;
+    options.polygon_node_offset_edges = 0.0;
+    const SurfaceMesh free = mesh_surface(mesh, seg, options);
+    const double mean_edge = free.input_mean_edge;
+    EXPECT_GT(max_inner_offset(mesh, free), 0.1 * mean_edge);  // the fit rounds the ridge
+    options.polygon_node_offset_edges = 0.05;
+    const SurfaceMesh held = mesh_surface(mesh, seg, options);
+    expect_consistent(seg, held);
+    EXPECT_LE(max_inner_offset(mesh, held), 0.05 * mean_edge * (1.0 + 1e-9));
+    EXPECT_GT(held.patches[0].n_clamped_nodes, 0u);
+    EXPECT_EQ(count_self_intersections(as_soup(held)), 0u);
+  }
+  {  // The regular grid is a marching-cubes lattice: the same nodes with and without the bound.
+    const TriMesh mesh = roof(false);
+    const Segmentation seg = labelled_segmentation(mesh, std::vector<int>(mesh.n_faces(), 0), 1);
+    SurfMeshOptions options;
+    options.sizing.size = 0.5 * edge;
+    const SurfaceMesh with = mesh_surface(mesh, seg, options);
+    options.polygon_node_offset_edges = 0.0;
+    EXPECT_EQ(with.nodes, mesh_surface(mesh, seg, options).nodes);
+    EXPECT_GT(max_inner_offset(mesh, with), 0.1 * with.input_mean_edge);
+  }
+  SurfMeshOptions bad;
+  bad.polygon_node_offset_edges = -0.1;
+  EXPECT_THROW(bad.validate(), InvalidInput);
+  bad.polygon_node_offset_edges = std::numeric_limits<double>::infinity();
   EXPECT_THROW(bad.validate(), InvalidInput);
 }
 

@@ -68,6 +68,7 @@ struct RemeshArgs {
   std::optional<double> corner_angle;
   std::optional<double> flat_face_edges;
   std::optional<double> small_patch_offset;
+  std::optional<double> polygon_offset;
   std::optional<double> chord;
   std::optional<double> max_slope;
   std::optional<double> split_above;
@@ -147,6 +148,7 @@ void run_remesh(RemeshArgs& args) {
   if (args.corner_angle) options.surfmesh.corner_split_angle_deg = *args.corner_angle;
   if (args.flat_face_edges) options.surfmesh.fit.flat_face_edges = *args.flat_face_edges;
   if (args.small_patch_offset) options.surfmesh.small_patch_node_offset_edges = *args.small_patch_offset;
+  if (args.polygon_offset) options.surfmesh.polygon_node_offset_edges = *args.polygon_offset;
   if (args.chord) options.surfmesh.sizing.chord_error = *args.chord;
   if (args.max_slope) options.segment.max_slope_deg = *args.max_slope;
   if (args.split_above) options.surfmesh.fit.split_above_edges = *args.split_above;
@@ -338,6 +340,10 @@ void add_remesh_command(CLI::App& app) {
                   "Inner nodes of patches of fewer than 40 input faces stay within this many mean edges of "
                   "their faces (default 0.02; 0 = only the 1-edge bound of every patch; docs/surfmesh.md "
                   "\"Small patches keep their nodes on their faces\")");
+  cmd->add_option("--polygon-offset", args->polygon_offset,
+                  "On inputs that are not marching-cubes surfaces (CAD meshes, scans), inner nodes stay within "
+                  "this many mean edges of their patch's faces (default 0.05; 0 = only the 1-edge bound; "
+                  "docs/surfmesh.md \"Sharp-edged inputs, session 16\")");
   cmd->add_option("--chord", args->chord, "Chord error for --adaptive (length units; default 0.05 x size)");
   cmd->add_option("--max-slope", args->max_slope, "Largest angle (deg) between a face normal and its patch axis (default 60)");
   cmd->add_option("--split-above", args->split_above,
