@@ -58,13 +58,14 @@ struct RemeshOptions {
   double tiny_patch_max_dihedral_deg = 120.0;
   //! On inputs not taken for marching cubes (nor with a cell grid), after the tiny merge,
   //! patches narrower than this many target edges (width 2 x area / border length,
-  //! segment's narrow_patches) join the neighbour sharing the longest border that is not
-  //! so narrow itself, their own faces exempt from the slope bounds (the neighbour's keep
-  //! them; the union passes the projection and cliff checks): a coarse mesh's strips folded
-  //! back between two creases, whose two border curves nearly meet, otherwise become
-  //! hairline patches whose triangles are mostly obtuse (femur 2.90 -> 2.17% obtuse;
-  //! docs/segment.md "Hairline patches"). 0 = off. Default 0.1.
-  double hairline_patch_width = 0.1;
+  //! segment's narrow_patches) that face away from every neighbour (some face's raw normal
+  //! outside each neighbour's slope cone) join the neighbour sharing the longest border that
+  //! is not so narrow itself, their own faces exempt from the slope bounds (the neighbour's
+  //! keep them; the union passes the projection and cliff checks): a coarse mesh's strips
+  //! folded back between two creases, whose two border curves nearly meet, otherwise become
+  //! hairline patches whose triangles are mostly obtuse (femur 2.90 -> 2.65% obtuse at 0.05,
+  //! 2.53% at 0.1; docs/segment.md "Hairline patches"). 0 = off. Default 0.05.
+  double hairline_patch_width = 0.05;
   //! On inputs not taken for marching cubes (nor with a cell grid), the crease angle
   //! (segment.crease_angle_deg, also surfmesh's) drops to segment's gap_crease_angle() where
   //! the input's bends leave a gap below it: a CAD mesh's machined edges at 65-80 deg become

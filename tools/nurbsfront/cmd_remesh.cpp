@@ -304,9 +304,9 @@ void add_remesh_command(CLI::App& app) {
                   "Largest bend (deg) of such a tiny patch's border (default 120)")
       ->check(CLI::Range(0.0, 180.0));
   cmd->add_option("--hairline-merge", args->hairline_merge,
-                  "On inputs not taken for marching cubes, patches narrower than this many target edges join a "
-                  "wider neighbour, their own faces exempt from the slope bound (strips folded back between two "
-                  "creases; default 0.1; 0 = off; docs/segment.md \"Hairline patches\")");
+                  "On inputs not taken for marching cubes, patches narrower than this many target edges facing away "
+                  "from every neighbour join a wider one, their own faces exempt from the slope bound (strips folded back between two "
+                  "creases; default 0.05; 0 = off; docs/segment.md \"Hairline patches\")");
   cmd->add_option("--obtuse-repair-rounds", args->obtuse_repair_rounds,
                   "Sweeps of the stitch's obtuse repair after its optimisation (default 2; 0 = off; "
                   "docs/stitch.md \"Obtuse repair\")");
