@@ -1695,9 +1695,9 @@ Segmentation segment_detail::merge_into_neighbours(Splitter& s, const Segmentati
     }
     std::sort(shared.begin(), shared.end(),
               [](const auto& x, const auto& y) { return x.first != y.first ? x.first > y.first : x.second < y.second; });
-    // A hairline is folded back: for every neighbour's axis some face of it faces away (raw
-    // normal below segment()'s raw bound). A narrow patch that faces a neighbour (a designed
-    // chamfer, fandisk's crease end) is left alone.
+    // A hairline faces away: for every neighbour's axis some face of it has its raw normal
+    // outside the slope cone. A narrow patch whose faces all lie in a neighbour's cone (a
+    // designed chamfer, fandisk's crease end) is left alone.
     if (hairlines && std::any_of(shared.begin(), shared.end(), [&](const auto& entry) {
           const Eigen::Vector3d& axis = patches.axes[static_cast<std::size_t>(entry.second)];
           return std::all_of(faces.begin(), faces.end(),
