@@ -39,6 +39,8 @@ void RemeshOptions::validate() const {
   if (!(std::isfinite(narrow_patch_merge) && narrow_patch_merge >= 0.0))
     throw InvalidInput("remesh: narrow_patch_merge must be finite and >= 0");
   if (tiny_patch_faces < 0) throw InvalidInput("remesh: tiny_patch_faces must be >= 0");
+  if (!(std::isfinite(hairline_patch_width) && hairline_patch_width >= 0.0))
+    throw InvalidInput("remesh: hairline_patch_width must be finite and >= 0");
   if (!(tiny_patch_max_dihedral_deg >= 0.0 && tiny_patch_max_dihedral_deg <= 180.0))
     throw InvalidInput("remesh: tiny_patch_max_dihedral_deg must be in [0, 180]");
 }
@@ -232,6 +234,20 @@ RemeshResult remesh(const TriMesh& input, const RemeshOptions& options) {
   if (options.tiny_patch_faces > 0 && !surfmesh_options.cell_grid.enabled &&
       !surfmesh_detail::marching_cubes_lattice(input_lattice()))
     report.n_tiny_merged = merge_tiny_patches(*splitter, input, first_segmentation, options);
+  // Hairline patches (a coarse mesh's strips folded back between two creases: their two
+  // border curves nearly meet) join a wide neighbour, their own faces exempt from the slope
+  // bounds (docs/segment.md "Hairline patches").
+  if (options.hairline_patch_width > 0.0 && !surfmesh_options.cell_grid.enabled &&
+      !surfmesh_detail::marching_cubes_lattice(input_lattice())) {
+    const double h = surfmesh_detail::uniform_size(surfmesh_options.sizing, mean_edge);
+    const std::vector<int> hairlines =
+        segment_detail::narrow_patches(input, first_segmentation, options.hairline_patch_width * h, input_threads);
+    if (!hairlines.empty()) {
+      const std::size_t n_before = first_segmentation.patches.size();
+      first_segmentation = segment_detail::merge_into_neighbours(*splitter, first_segmentation, hairlines, false, true);
+      report.n_hairline_merged = n_before - first_segmentation.patches.size();
+    }
+  }
   report.seconds_segment = watch.seconds();
 
   watch.restart();

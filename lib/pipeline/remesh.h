@@ -56,6 +56,16 @@ struct RemeshOptions {
   //! in [0, 180]. Default 120 (the crease angle + 40; femur 5.48% obtuse at 100, 4.90% at
   //! 120, 4.81% at 140).
   double tiny_patch_max_dihedral_deg = 120.0;
+  //! On inputs not taken for marching cubes (nor with a cell grid), after the tiny merge,
+  //! patches narrower than this many target edges (width 2 x area / border length,
+  //! segment's narrow_patches) that face away from every neighbour (some face's raw normal
+  //! outside each neighbour's slope cone) join the neighbour sharing the longest border that
+  //! is not so narrow itself, their own faces exempt from the slope bounds (the neighbour's
+  //! keep them; the union passes the projection and cliff checks): a coarse mesh's strips
+  //! folded back between two creases, whose two border curves nearly meet, otherwise become
+  //! hairline patches whose triangles are mostly obtuse (femur 2.90 -> 2.65% obtuse at 0.05,
+  //! 2.53% at 0.1; docs/segment.md "Hairline patches"). 0 = off. Default 0.05.
+  double hairline_patch_width = 0.05;
   //! On inputs not taken for marching cubes (nor with a cell grid), the crease angle
   //! (segment.crease_angle_deg, also surfmesh's) drops to segment's gap_crease_angle() where
   //! the input's bends leave a gap below it: a CAD mesh's machined edges at 65-80 deg become
@@ -104,6 +114,8 @@ struct RemeshReport {
   std::size_t n_narrow_merged = 0;
   //! Tiny patches joined to a neighbour after segmentation (RemeshOptions::tiny_patch_faces).
   std::size_t n_tiny_merged = 0;
+  //! Hairline patches joined to a neighbour after segmentation (RemeshOptions::hairline_patch_width).
+  std::size_t n_hairline_merged = 0;
   //! Crease curves along fins' narrow strips that stitch did not treat as features
   //! (SurfaceMesh::n_fin_rim_curves, SurfMeshOptions::fin_rim_width).
   std::size_t n_fin_rim_curves = 0;

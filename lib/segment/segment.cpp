@@ -1677,7 +1677,8 @@ Segmentation segment_detail::split(Splitter& s, const Segmentation& segmentation
 }
 
 Segmentation segment_detail::merge_into_neighbours(Splitter& s, const Segmentation& segmentation,
-                                                   const std::vector<int>& which, const bool with_borders) {
+                                                   const std::vector<int>& which, const bool with_borders,
+                                                   const bool hairlines) {
   check_edit(s, segmentation, which, "merge_patches_into_neighbours");
   if (s.mesh.n_faces() == 0 || which.empty()) return segmentation;
   s.prepare();
@@ -1686,6 +1687,9 @@ Segmentation segment_detail::merge_into_neighbours(Splitter& s, const Segmentati
   Scratch scratch(s.mesh);
   std::vector<int> island_faces = segmentation.island_faces;
   std::size_t n_merged = 0;
+  // Hairlines go only into a patch that is not listed itself (a wide one).
+  std::vector<int> listed = hairlines ? which : std::vector<int>{};
+  std::sort(listed.begin(), listed.end());
   for (const int p : which) {
     auto& faces = patches.faces[static_cast<std::size_t>(p)];
     if (faces.empty()) continue;  // merged already
@@ -1705,6 +1709,15 @@ Segmentation segment_detail::merge_into_neighbours(Splitter& s, const Segmentati
     }
     std::sort(shared.begin(), shared.end(),
               [](const auto& x, const auto& y) { return x.first != y.first ? x.first > y.first : x.second < y.second; });
+    // A hairline faces away: for every neighbour's axis some face of it has its raw normal
+    // outside the slope cone. A narrow patch whose faces all lie in a neighbour's cone (a
+    // designed chamfer, fandisk's crease end) is left alone.
+    if (hairlines && std::any_of(shared.begin(), shared.end(), [&](const auto& entry) {
+          const Eigen::Vector3d& axis = patches.axes[static_cast<std::size_t>(entry.second)];
+          return std::all_of(faces.begin(), faces.end(),
+                             [&](int f) { return s.normals.raw[f].dot(axis) >= grouping.cos_slope; });
+        }))
+      continue;
     // Joins p to q if the union fits an axis (faces joined across creases are island faces).
     const auto join = [&](int q) {
       auto& target = patches.faces[static_cast<std::size_t>(q)];
@@ -1717,7 +1730,10 @@ Segmentation segment_detail::merge_into_neighbours(Splitter& s, const Segmentati
       std::vector<Eigen::Vector3d> axes{patches.axes[static_cast<std::size_t>(q)]};
       if (mean.norm() > 0.0) axes.push_back(mean.normalized());
       for (const Eigen::Vector3d& axis : axes) {
-        if (!std::all_of(target.begin(), target.end(), [&](int f) { return grouping.fits(f, axis); })) continue;
+        // A hairline's own faces are exempt from the bounds: a strip folded back between
+        // two creases faces away from both sides (docs/segment.md "Hairline patches").
+        const auto bounded_end = target.begin() + static_cast<std::ptrdiff_t>(hairlines ? n_target : target.size());
+        if (!std::all_of(target.begin(), bounded_end, [&](int f) { return grouping.fits(f, axis); })) continue;
         if (!segment_detail::check_projection(s.graph, target, patches.face_patch, axis, scratch).is_simple) continue;
         if (segment_detail::has_cliff(s.graph, target, axis, s.mean_edge, scratch)) continue;  // segment()'s step 7, both halves
         patches.axes[static_cast<std::size_t>(q)] = axis;
@@ -1730,6 +1746,7 @@ Segmentation segment_detail::merge_into_neighbours(Splitter& s, const Segmentati
       return false;
     };
     for (const auto& entry : shared) {
+      if (std::binary_search(listed.begin(), listed.end(), entry.second)) continue;
       if (!join(entry.second)) continue;
       ++n_merged;
       break;

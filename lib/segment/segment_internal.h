@@ -197,7 +197,13 @@ using SplitterPtr = std::unique_ptr<Splitter, SplitterDeleter>;
 
 //! merge_patches_into_neighbours() on a splitter made by segment() (its graph and normals;
 //! with_borders: as segment()'s).
+//! With hairlines (the pipeline's hairline merge, docs/segment.md "Hairline patches"), only
+//! a listed patch facing away from every neighbour (for each neighbour's axis some face
+//! with raw normal . axis < cos(max_slope_deg)) is joined, only to a neighbour that is
+//! not listed itself, and its own faces need not meet the slope bounds for the union's axis
+//! (the neighbour's faces still must; the union still passes the projection and cliff checks).
 [[nodiscard]] Segmentation merge_into_neighbours(Splitter& splitter, const Segmentation& segmentation,
-                                                 const std::vector<int>& which, bool with_borders = true);
+                                                 const std::vector<int>& which, bool with_borders = true,
+                                                 bool hairlines = false);
 
 }  // namespace nurbsfront::segment_detail

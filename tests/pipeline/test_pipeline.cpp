@@ -1003,6 +1003,78 @@ TEST(Pipeline, TinyPatchesBehindMarginalCreasesJoinANeighbour) {
   EXPECT_THROW((void)remesh(mesh, options), InvalidInput);
 }
 
+// A 12 x 12 grid of side 1 (turned, off any lattice) with a pleat across it: the plane steps
+// up by 0.004 at x = 1/2 through a strip of faces that leans back by 0.001 (an overhang, as the
+// strips folded back between two creases on femur.off), forward by 0.001 at the two boundary
+// rows. The strip bends by about 104 deg to both sides (creases) and faces away from both
+// (raw normal . z = -0.24): no neighbour's slope bound takes it, and meshed on its own it is a
+// hairline patch 0.004 wide.
+TriMesh grid_with_pleat() {
+  constexpr int n = 12;
+  constexpr double kStep = 0.004, kBack = 0.001;
+  TriangleSoup soup;
+  for (int j = 0; j <= n; ++j)
+    for (int i = 0; i <= n + 1; ++i) {  // column n/2 + 1 is the strip's top edge
+      const double y = j / double(n);
+      const bool top = i > n / 2;
+      double x = (top ? i - 1 : i) / double(n);
+      if (i == n / 2 + 1) x -= (j == 0 || j == n) ? -kBack : kBack;
+      const double z = top ? kStep : 0.0;
+      soup.points.emplace_back(std::cos(0.5) * x - std::sin(0.5) * y + 0.123, std::sin(0.5) * x + std::cos(0.5) * y + 0.0456, z);
+    }
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i <= n; ++i) {
+      const auto a = static_cast<unsigned>(j * (n + 2) + i);
+      soup.triangles.push_back({a, a + 1, a + n + 3});
+      soup.triangles.push_back({a, a + n + 3, a + n + 2});
+    }
+  return to_trimesh(soup);
+}
+
+TEST(Pipeline, HairlinePatchesJoinAWideNeighbour) {
+  const TriMesh mesh = grid_with_pleat();
+  RemeshOptions options = fast_options();
+  options.compute_distances = false;
+  const Segmentation seg = segment(mesh, options.segment);
+  ASSERT_EQ(seg.patches.size(), 3u);  // the two planes and the strip
+  const double h = 1.5 * mean_edge_length(mesh);
+  ASSERT_EQ(narrow_patches(mesh, seg, options.hairline_patch_width * h).size(), 1u);
+
+  const RemeshResult with = remesh(mesh, options);
+  options.hairline_patch_width = 0.0;
+  const RemeshResult without = remesh(mesh, options);
+  EXPECT_EQ(without.report.n_hairline_merged, 0u);
+  EXPECT_EQ(without.report.n_patches, 3u);
+  const RemeshReport& rep = with.report;
+  EXPECT_TRUE(rep.ok()) << errors_of(rep);
+  EXPECT_EQ(rep.n_hairline_merged, 1u);
+  EXPECT_EQ(rep.n_patches, 2u);
+  for (const RemeshResult* r : {&with, &without}) {
+    const auto& t = r->report.output.topology;
+    EXPECT_TRUE(t.is_manifold);
+    EXPECT_EQ(t.n_boundary_loops, 1u);
+    EXPECT_EQ(t.euler_characteristic, 1);
+    EXPECT_EQ(t.n_self_intersecting_pairs.value_or(1), 0u);
+  }
+  // The strip meshed on its own leaves obtuse triangles; joined, it leaves none.
+  EXPECT_GT(without.report.output.quality.obtuse_fraction, 0.0);
+  EXPECT_EQ(rep.output.quality.obtuse_fraction, 0.0);
+  EXPECT_GT(rep.output.quality.alpha_mean, without.report.output.quality.alpha_mean);
+  // The output stays on the pleated plane: every output vertex within the step of z in [0, 0.004].
+  for (const auto v : with.mesh.vertices()) {
+    EXPECT_GE(with.mesh.point(v)[2], -0.004);
+    EXPECT_LE(with.mesh.point(v)[2], 0.008);
+  }
+
+  // A bound below the strip's width takes nothing; a bad bound is refused.
+  options.hairline_patch_width = 0.004 / h * 0.5;
+  EXPECT_EQ(remesh(mesh, options).report.n_hairline_merged, 0u);
+  options.hairline_patch_width = -1.0;
+  EXPECT_THROW((void)remesh(mesh, options), InvalidInput);
+  options.hairline_patch_width = std::numeric_limits<double>::infinity();
+  EXPECT_THROW((void)remesh(mesh, options), InvalidInput);
+}
+
 // Issue 5 on CAD meshes whose machined edges bend by less than the crease angle (cheese.off:
 // 2 422 edges at 65-80 deg): RemeshOptions::crease_gap lowers the crease angle to the gap
 // below them (segment's gap_crease_angle). A roof of two planes meeting at a 72 deg bend (8 x 8
