@@ -439,7 +439,8 @@ class Optimiser {
   // meet or pass. Each node of a feature curve (not a corner) with an obtuse triangle, in index
   // order, tries the shares kSlideStep apart and takes the one that leaves the fewest obtuse
   // triangles around it, then the smallest largest angle, when that removes an obtuse triangle
-  // or lowers the largest angle by kSlideMinCosineGain in cosine, passes the obtuse repair's
+  // (or raises the cosine of the ring's largest angle by StitchOptions::
+  // feature_slide_cosine_gain, when that is finite), passes the obtuse repair's
   // ring tests, and the curve's two edges at the node stay within kSlideMaxSag of their piece
   // from the front's polyline points between their ends (the corner a slide cuts off).
   // Serial, in vertex order. Returns the number of slides.
@@ -484,7 +485,7 @@ class Optimiser {
       }
       if (old_obtuse == 0) continue;
       std::size_t best_obtuse = old_obtuse;
-      double best_worst = old_worst + kSlideMinCosineGain;
+      double best_worst = old_worst + options_.feature_slide_cosine_gain;  // infinity: no slide by the angle alone
       Vec best = p;
       for (int step = -kSlideSteps; step <= kSlideSteps; ++step) {
         const double x = step * kSlideStep;
@@ -1203,13 +1204,11 @@ class Optimiser {
   double obtuse_sine_skip_ = 0.0;
   // slide_sweep: the shares of a piece a feature node tries (kSlideStep apart, up to
   // kSlideSteps steps either way: at most kSlideMaxShare, so neighbours stay 0.2 of a piece
-  // apart), the cosine gain of the largest angle that counts when no obtuse triangle goes, the
-  // sag bound (share of the piece) of the crease's edges from the front's polyline, and the
+  // apart), the sag bound (share of the piece) of the crease's edges from the front's polyline, and the
   // tolerance (share of the piece) of a node on its piece.
   static constexpr double kSlideStep = 0.1;
   static constexpr int kSlideSteps = 4;
   static constexpr double kSlideMaxShare = kSlideStep * kSlideSteps;
-  static constexpr double kSlideMinCosineGain = 0.01;
   static constexpr double kSlideMaxSag = 0.05;
   static constexpr double kSlideOnCurve = 1e-9;
   // The sine of StitchOptions::obtuse_split_feature_angle_deg (evaluate_split).

@@ -28,6 +28,7 @@ void StitchOptions::validate() const {
   if (angle_repair_rounds < 0) fail("angle_repair_rounds must be >= 0");
   if (obtuse_repair_rounds < 0) fail("obtuse_repair_rounds must be >= 0");
   if (feature_slide_rounds < 0) fail("feature_slide_rounds must be >= 0");
+  if (!(feature_slide_cosine_gain > 0.0)) fail("feature_slide_cosine_gain must be > 0 (infinity: off)");
   if (obtuse_split_rounds < 0) fail("obtuse_split_rounds must be >= 0");
   if (!(obtuse_split_feature_angle_deg >= 0.0 && obtuse_split_feature_angle_deg < 60.0))
     fail("obtuse_split_feature_angle_deg must be in [0, 60)");
