@@ -71,7 +71,7 @@ std::string to_json(const RemeshReport& r) {
   stitch.count("input_triangles", s.n_input_triangles).count("rejected_triangles", s.n_rejected_triangles);
   stitch.count("collapses", s.n_collapses).count("collapses_undone", s.n_collapses_undone);
   stitch.count("flips", s.n_flips).count("smoothing_moves", s.n_smoothing_moves);
-  stitch.count("smoothing_rejected", s.n_smoothing_rejected).count("chord_compensation_moves", s.n_chord_compensation_moves).count("volume_compensation_moves", s.n_volume_compensation_moves).count("obtuse_splits", s.n_obtuse_splits).count("obtuse_splits_undone", s.n_obtuse_splits_undone).count("reverted_moves", s.n_reverted_moves);
+  stitch.count("smoothing_rejected", s.n_smoothing_rejected).count("feature_slides", s.n_feature_slides).count("chord_compensation_moves", s.n_chord_compensation_moves).count("volume_compensation_moves", s.n_volume_compensation_moves).count("obtuse_splits", s.n_obtuse_splits).count("obtuse_splits_undone", s.n_obtuse_splits_undone).count("reverted_moves", s.n_reverted_moves);
   stitch.flag("volume_compensation_skipped", s.volume_compensation_skipped);
   stitch.count("reverted_flips", s.n_reverted_flips);
   stitch.flag("optimisation_undone", s.optimisation_undone);

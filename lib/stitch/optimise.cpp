@@ -431,6 +431,174 @@ class Optimiser {
     return n_flips;
   }
 
+  // Feature slides (StitchOptions::feature_slide_rounds; docs/stitch.md "Feature nodes
+  // sliding along their curves"). A node of a feature curve never leaves its curve, but it may
+  // move along it: on the polyline of the curve's nodes where the front put them
+  // (SurfaceMesh::nodes), its place is P + x (Q - P), P its own node, Q the next node along the
+  // curve (x > 0) or the previous one (x < 0), |x| <= kSlideMaxShare, so two neighbours never
+  // meet or pass. Each node of a feature curve (not a corner) with an obtuse triangle, in index
+  // order, tries the shares kSlideStep apart and takes the one that leaves the fewest obtuse
+  // triangles around it, then the smallest largest angle, when that removes an obtuse triangle
+  // (or raises the cosine of the ring's largest angle by StitchOptions::
+  // feature_slide_cosine_gain, when that is finite), passes the obtuse repair's
+  // ring tests, and the curve's two edges at the node stay within kSlideMaxSag of their piece
+  // from the front's polyline points between their ends (the corner a slide cuts off).
+  // Serial, in vertex order. Returns the number of slides.
+  std::size_t slide_sweep(const std::vector<int>& vertex_node) {
+    if (surface_.curve_nodes.size() != surface_.curve_is_feature.size()) return 0;
+    // Per node: its vertex, and its place on its curve's node list.
+    std::vector<int> vertex_of(surface_.nodes.size(), -1), place(surface_.nodes.size(), -1);
+    for (auto v : mesh_.vertices()) {
+      const int node = vertex_node[static_cast<std::size_t>(v.idx())];
+      if (node >= 0 && static_cast<std::size_t>(node) < vertex_of.size()) vertex_of[static_cast<std::size_t>(node)] = v.idx();
+    }
+    for (std::size_t c = 0; c < surface_.curve_nodes.size(); ++c) {
+      if (surface_.curve_is_feature[c] == 0) continue;
+      const std::vector<int>& list = surface_.curve_nodes[c];
+      for (std::size_t k = 0; k < list.size(); ++k) {
+        const auto node = static_cast<std::size_t>(list[k]);
+        if (surface_.node_kind[node] == NodeKind::Border) place[node] = static_cast<int>(k);
+      }
+    }
+    std::size_t n_slides = 0;
+    std::vector<std::uint8_t> candidate = obtuse_face_vertices();
+    for (auto v : mesh_.vertices()) {
+      if (candidate[static_cast<std::size_t>(v.idx())] == 0) continue;
+      const int node = vertex_node[static_cast<std::size_t>(v.idx())];
+      if (node < 0 || static_cast<std::size_t>(node) >= surface_.nodes.size()) continue;  // a split's node
+      const NodeInfo& info = nodes_[static_cast<std::size_t>(v.idx())];
+      if (info.curve < 0 || place[static_cast<std::size_t>(node)] < 0) continue;
+      SlideFrame frame;
+      if (!slide_frame(v, info.curve, place[static_cast<std::size_t>(node)], vertex_of, frame)) continue;
+      const Vec p = point(mesh_, v);
+      ring_.clear();
+      std::size_t old_obtuse = 0;
+      double old_worst = 1.0;  // the cosine of the largest angle of the ring
+      for (auto h : mesh_.voh_range(v)) {
+        if (mesh_.is_boundary(h)) continue;
+        const Vec b = point(mesh_, mesh_.to_vertex_handle(h));
+        const Vec c = point(mesh_, mesh_.to_vertex_handle(mesh_.next_halfedge_handle(h)));
+        const Vec n = area_vector(p, b, c);
+        ring_.push_back({b, c, n, n.norm()});
+        old_obtuse += triangle_is_obtuse(p, b, c) ? 1 : 0;
+        old_worst = std::min(old_worst, largest_angle_cosine(p, b, c));
+      }
+      if (old_obtuse == 0) continue;
+      std::size_t best_obtuse = old_obtuse;
+      double best_worst = old_worst + options_.feature_slide_cosine_gain;  // infinity: no slide by the angle alone
+      Vec best = p;
+      for (int step = -kSlideSteps; step <= kSlideSteps; ++step) {
+        const double x = step * kSlideStep;
+        if (x == frame.x) continue;
+        const Vec q = slide_point(frame.at, frame.before, frame.after, x);
+        std::size_t new_obtuse = 0;
+        double new_worst = 1.0;
+        for (const RingTriangle& r : ring_) {
+          new_obtuse += triangle_is_obtuse(q, r.b, r.c) ? 1 : 0;
+          new_worst = std::min(new_worst, largest_angle_cosine(q, r.b, r.c));
+        }
+        if (new_obtuse > best_obtuse || (new_obtuse == best_obtuse && !(new_worst > best_worst))) continue;
+        if (!slide_keeps_curve(frame, x) || !passes_ring_tests(p, q, sin_obtuse_floor_, obtuse_sine_skip_)) continue;
+        best_obtuse = new_obtuse;
+        best_worst = new_worst;
+        best = q;
+      }
+      if (best == p) continue;
+      mesh_.set_point(v, to_openmesh(best));
+      ++n_slides;
+      for (auto w : mesh_.vv_range(v)) candidate[static_cast<std::size_t>(w.idx())] = 1;
+    }
+    return n_slides;
+  }
+
+  // A node's piece of its feature curve for slide_sweep: the front's points of the node
+  // (at) and of its neighbours along the curve (before, after), the neighbours' shares
+  // (x_before, x_after: where they are, as the node's x below) and the node's own share x.
+  struct SlideFrame {
+    Vec at, before, after, prev_point, next_point;
+    double x = 0.0, x_before = 0.0, x_after = 0.0;
+  };
+
+  // Where x (a share of the piece to the next node, negative: to the previous one) puts the
+  // point of the node with front point `at` and neighbours' front points `before`, `after`.
+  static Vec slide_point(const Vec& at, const Vec& before, const Vec& after, double x) {
+    return x < 0.0 ? Vec(at + (-x) * (before - at)) : Vec(at + x * (after - at));
+  }
+
+  // The share x of the curve piece where p lies (slide_point), 0 at `at`; NaN when p lies on
+  // neither piece (within kSlideOnCurve of the piece's length) or beyond kSlideMaxShare.
+  static double slide_share(const Vec& p, const Vec& at, const Vec& before, const Vec& after) {
+    if (p == at) return 0.0;
+    for (const int side : {1, -1}) {
+      const Vec d = (side > 0 ? after : before) - at;
+      const double l2 = d.squaredNorm();
+      if (!(l2 > 0.0)) continue;
+      const double u = (p - at).dot(d) / l2;
+      if (u < 0.0 || u > kSlideMaxShare + kSlideOnCurve) continue;
+      if ((p - (at + u * d)).squaredNorm() <= kSlideOnCurve * kSlideOnCurve * l2) return side * u;
+    }
+    return std::numeric_limits<double>::quiet_NaN();
+  }
+
+  // The frame of vertex v, at place k of feature curve `curve` (slide_sweep): false when the
+  // curve is too short, v is its end, a neighbour along the curve is not a vertex joined to v,
+  // or v or a neighbour is not on the front's polyline (something else moved it).
+  bool slide_frame(TriMesh::VertexHandle v, int curve, int k, const std::vector<int>& vertex_of, SlideFrame& frame) const {
+    const std::vector<int>& list = surface_.curve_nodes[static_cast<std::size_t>(curve)];
+    const int n = static_cast<int>(list.size());
+    if (n < 3) return false;
+    const bool closed = surface_.node_kind[static_cast<std::size_t>(list.front())] != NodeKind::Corner;
+    if (!closed && (k == 0 || k == n - 1)) return false;
+    const int kp = (k + n - 1) % n, kn = (k + 1) % n;
+    const int vp = vertex_of[static_cast<std::size_t>(list[static_cast<std::size_t>(kp)])];
+    const int vn = vertex_of[static_cast<std::size_t>(list[static_cast<std::size_t>(kn)])];
+    if (vp < 0 || vn < 0 || vp == vn) return false;
+    const TriMesh::VertexHandle hp(vp), hn(vn);
+    if (!mesh_.find_halfedge(v, hp).is_valid() || !mesh_.find_halfedge(v, hn).is_valid()) return false;
+    auto front = [&](int i) { return surface_.nodes[static_cast<std::size_t>(list[static_cast<std::size_t>((i + n) % n)])]; };
+    frame.at = front(k);
+    frame.before = front(kp);
+    frame.after = front(kn);
+    frame.x = slide_share(point(mesh_, v), frame.at, frame.before, frame.after);
+    frame.prev_point = point(mesh_, hp);
+    frame.next_point = point(mesh_, hn);
+    // A neighbour that is a corner (an open curve's end) never moves: share 0 when it is at
+    // its front point.
+    frame.x_before = slide_share(frame.prev_point, frame.before, front(kp - 1), frame.at);
+    frame.x_after = slide_share(frame.next_point, frame.after, frame.at, front(kn + 1));
+    if (!closed && kp == 0) frame.x_before = frame.prev_point == frame.before ? 0.0 : std::numeric_limits<double>::quiet_NaN();
+    if (!closed && kn == n - 1) frame.x_after = frame.next_point == frame.after ? 0.0 : std::numeric_limits<double>::quiet_NaN();
+    return std::isfinite(frame.x) && std::isfinite(frame.x_before) && std::isfinite(frame.x_after);
+  }
+
+  // Whether the node at share x keeps the crease within kSlideMaxSag of its piece from the
+  // front's polyline: each of its two curve edges passes within that of the front's points
+  // between its ends (the node's own point when x moves away from it on the other side, a
+  // neighbour's when that neighbour moved away from it towards the far side).
+  bool slide_keeps_curve(const SlideFrame& frame, double x) const {
+    const Vec q = slide_point(frame.at, frame.before, frame.after, x);
+    auto within = [](const Vec& a, const Vec& b, const Vec& point, double bound) {
+      const Vec d = b - a;
+      const double l2 = d.squaredNorm();
+      const double u = l2 > 0.0 ? std::clamp((point - a).dot(d) / l2, 0.0, 1.0) : 0.0;
+      return (point - (a + u * d)).norm() <= bound;
+    };
+    // The edge to the previous node: the front's points strictly between are `at` (x > 0)
+    // and `before` (the previous node slid away from it backwards, x_before < 0).
+    const double before_piece = kSlideMaxSag * (frame.at - frame.before).norm();
+    if (x > 0.0 && !within(frame.prev_point, q, frame.at, before_piece)) return false;
+    if (frame.x_before < 0.0 && !within(frame.prev_point, q, frame.before, before_piece)) return false;
+    const double after_piece = kSlideMaxSag * (frame.after - frame.at).norm();
+    if (x < 0.0 && !within(q, frame.next_point, frame.at, after_piece)) return false;
+    if (frame.x_after > 0.0 && !within(q, frame.next_point, frame.after, after_piece)) return false;
+    return true;
+  }
+
+  // The cosine of the largest angle of triangle (a, b, c) (below 0: obtuse).
+  static double largest_angle_cosine(const Vec& a, const Vec& b, const Vec& c) {
+    return std::min({cosine(b - a, c - a), cosine(a - b, c - b), cosine(a - c, b - c)});
+  }
+
   // Whether face f has an angle above 90 deg (triangle_is_obtuse of its corners, which
   // gives the same answer for every rotation of them: each dot product has the same terms).
   bool is_obtuse(TriMesh::FaceHandle f) const {
@@ -1057,6 +1225,15 @@ class Optimiser {
   static constexpr double kObtuseAngleMarginDeg = 2.5;
   double sin_obtuse_floor_ = 0.0;
   double obtuse_sine_skip_ = 0.0;
+  // slide_sweep: the shares of a piece a feature node tries (kSlideStep apart, up to
+  // kSlideSteps steps either way: at most kSlideMaxShare, so neighbours stay 0.2 of a piece
+  // apart), the sag bound (share of the piece) of the crease's edges from the front's polyline, and the
+  // tolerance (share of the piece) of a node on its piece.
+  static constexpr double kSlideStep = 0.1;
+  static constexpr int kSlideSteps = 4;
+  static constexpr double kSlideMaxShare = kSlideStep * kSlideSteps;
+  static constexpr double kSlideMaxSag = 0.05;
+  static constexpr double kSlideOnCurve = 1e-9;
   // The sine of StitchOptions::obtuse_split_feature_angle_deg (evaluate_split).
   double sin_split_feature_floor_ = 0.0;
   // An obtuse split's node stays at least this share of the edge away from its ends.
@@ -1105,6 +1282,13 @@ void optimise(const SurfaceMesh& surface, const StitchOptions& options, const st
     report.n_smoothing_rejected += counts[1];
   }
   for (int round = 0; round < options.obtuse_repair_rounds; ++round) {
+    report.n_flips += optimiser.obtuse_flip_sweep();
+    report.n_smoothing_moves += optimiser.obtuse_sweep();
+  }
+  for (int round = 0; round < options.feature_slide_rounds; ++round) {
+    const std::size_t n_slides = optimiser.slide_sweep(result.vertex_node);
+    report.n_feature_slides += n_slides;
+    if (n_slides == 0) break;
     report.n_flips += optimiser.obtuse_flip_sweep();
     report.n_smoothing_moves += optimiser.obtuse_sweep();
   }

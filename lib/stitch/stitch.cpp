@@ -27,6 +27,8 @@ void StitchOptions::validate() const {
   if (optimisation_passes < 0) fail("optimisation_passes must be >= 0");
   if (angle_repair_rounds < 0) fail("angle_repair_rounds must be >= 0");
   if (obtuse_repair_rounds < 0) fail("obtuse_repair_rounds must be >= 0");
+  if (feature_slide_rounds < 0) fail("feature_slide_rounds must be >= 0");
+  if (!(feature_slide_cosine_gain > 0.0)) fail("feature_slide_cosine_gain must be > 0 (infinity: off)");
   if (obtuse_split_rounds < 0) fail("obtuse_split_rounds must be >= 0");
   if (!(obtuse_split_feature_angle_deg >= 0.0 && obtuse_split_feature_angle_deg < 60.0))
     fail("obtuse_split_feature_angle_deg must be in [0, 60)");
@@ -624,6 +626,7 @@ StitchResult stitch_impl(const SurfaceMesh& surface, const TriMesh* input, const
   // 2. Cross-border optimisation.
   watch.restart();
   const bool optimise = mesh.n_faces() > 0 && (options.optimisation_passes > 0 || options.obtuse_repair_rounds > 0 ||
+                                                options.feature_slide_rounds > 0 ||
                                                 options.chord_compensation > 0.0 || options.volume_compensation > 0.0);
   TriMesh assembled;
   std::vector<int> assembled_patch;

@@ -60,6 +60,8 @@ struct RemeshArgs {
   std::optional<double> fin_rim_gap;
   std::optional<double> fin_rim_max_move;
   std::optional<int> obtuse_repair_rounds;
+  std::optional<int> feature_slide_rounds;
+  std::optional<double> feature_slide_cosine_gain;
   std::optional<int> obtuse_split_rounds;
   std::optional<double> obtuse_split_feature_angle;
   std::optional<int> angle_repair_rounds;
@@ -141,6 +143,8 @@ void run_remesh(RemeshArgs& args) {
   if (args.fin_rim_gap) options.surfmesh.fin_rim_max_gap_edges = *args.fin_rim_gap;
   if (args.fin_rim_max_move) options.stitch.fin_rim_max_move = *args.fin_rim_max_move;
   if (args.obtuse_repair_rounds) options.stitch.obtuse_repair_rounds = *args.obtuse_repair_rounds;
+  if (args.feature_slide_rounds) options.stitch.feature_slide_rounds = *args.feature_slide_rounds;
+  if (args.feature_slide_cosine_gain) options.stitch.feature_slide_cosine_gain = *args.feature_slide_cosine_gain;
   if (args.obtuse_split_rounds) options.stitch.obtuse_split_rounds = *args.obtuse_split_rounds;
   if (args.obtuse_split_feature_angle) options.stitch.obtuse_split_feature_angle_deg = *args.obtuse_split_feature_angle;
   if (args.angle_repair_rounds) options.stitch.angle_repair_rounds = *args.angle_repair_rounds;
@@ -314,6 +318,14 @@ void add_remesh_command(CLI::App& app) {
   cmd->add_option("--obtuse-repair-rounds", args->obtuse_repair_rounds,
                   "Sweeps of the stitch's obtuse repair after its optimisation (default 2; 0 = off; "
                   "docs/stitch.md \"Obtuse repair\")");
+  cmd->add_option("--feature-slide-rounds", args->feature_slide_rounds,
+                  "Rounds of the stitch's feature slides: nodes of creases and of the boundary slide along their "
+                  "curve where that removes an obtuse triangle (default 0 = off; 2 measured; docs/stitch.md \"Feature nodes "
+                  "sliding along their curves\")");
+  cmd->add_option("--feature-slide-cosine-gain", args->feature_slide_cosine_gain,
+                  "Also slide a feature node where that raises the cosine of its ring's largest angle by this "
+                  "(> 0; default inf = only where an obtuse triangle goes; 0.01: fewer obtuse triangles on elephant, "
+                  "couplingdown, rotor, more on pinion; docs/stitch.md \"Feature nodes sliding along their curves\")");
   cmd->add_option("--obtuse-split-rounds", args->obtuse_split_rounds,
                   "Sweeps of the stitch's obtuse splits (longest edge split at the altitude's foot; default 2; "
                   "0 = off; docs/stitch.md \"Obtuse splits\")");

@@ -1,0 +1,224 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// The stitch's feature slides (StitchOptions::feature_slide_rounds; docs/stitch.md "Feature
+// nodes sliding along their curves") on a hand-made strip between two crease curves.
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <array>
+#include <cstddef>
+#include <set>
+#include <string>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "nurbsfront/core/error.h"
+#include "nurbsfront/core/soup.h"
+#include "nurbsfront/nurbs/frame.h"
+#include "nurbsfront/nurbs/mba.h"
+#include "nurbsfront/stitch/stitch.h"
+
+namespace nurbsfront {
+namespace {
+
+// A U-shaped open surface, turned by a generic rotation: a flat strip (patch 0, width 0.8)
+// between two straight crease curves A and B (90 deg to the walls) whose nodes face each other
+// one piece (1) apart, those of B shifted by +-0.1 from A's, so that each quad of the strip
+// has an angle above 90 deg on either diagonal; two walls (patches 1 and 2) hang from the
+// creases, their bottom rows staggered (acute triangles). The strip's ends and the walls'
+// bottoms are the input's boundary. Corners: the creases' ends. Every curve's node list is
+// set (SurfaceMesh::curve_nodes).
+struct Strip {
+  static constexpr int kPieces = 6;
+  TriangleSoup soup;
+  std::vector<int> face_patch;
+  SurfaceMesh surface;
+  std::vector<int> a, b, wall_a, wall_b;  // node ids: creases A and B; the walls' bottoms
+  std::vector<int> corners;
+};
+
+Strip make_strip() {
+  Strip s;
+  const Eigen::Matrix3d turn = Eigen::AngleAxisd(0.7, Eigen::Vector3d(1.0, 2.0, 3.0).normalized()).toRotationMatrix();
+  constexpr double kWidth = 0.8, kDepth = 0.87;
+  auto add = [&](double x, double y, double z) {
+    s.soup.points.push_back(turn * Eigen::Vector3d(x, y, z));
+    return static_cast<int>(s.soup.points.size()) - 1;
+  };
+  for (int i = 0; i <= Strip::kPieces; ++i) s.a.push_back(add(i, 0.0, 0.0));
+  for (int i = 0; i <= Strip::kPieces; ++i) {
+    const double shift = i == 0 || i == Strip::kPieces ? 0.0 : (i % 2 == 1 ? 0.1 : -0.1);
+    s.b.push_back(add(i + shift, kWidth, 0.0));
+  }
+  // Bottom rows: under the ends and under the middles of the creases' pieces.
+  for (const double y : {0.0, kWidth}) {
+    std::vector<int>& row = y == 0.0 ? s.wall_a : s.wall_b;
+    row.push_back(add(-0.1, y, -kDepth));
+    for (int j = 1; j <= Strip::kPieces; ++j) row.push_back(add(j - 0.5, y, -kDepth));
+    row.push_back(add(Strip::kPieces + 0.1, y, -kDepth));
+  }
+  // Triangles, each oriented along its patch's outward normal (+z, -y, +y before the turn).
+  auto tri = [&](int p, int u, int v, int w) {
+    const Eigen::Vector3d local(0.0, p == 0 ? 0.0 : (p == 1 ? -1.0 : 1.0), p == 0 ? 1.0 : 0.0);
+    const Eigen::Vector3d up = turn * local;
+    const auto& q = s.soup.points;
+    const double side = (q[static_cast<std::size_t>(v)] - q[static_cast<std::size_t>(u)])
+                            .cross(q[static_cast<std::size_t>(w)] - q[static_cast<std::size_t>(u)])
+                            .dot(up);
+    if (side < 0.0) std::swap(v, w);
+    s.soup.triangles.push_back({static_cast<std::uint32_t>(u), static_cast<std::uint32_t>(v), static_cast<std::uint32_t>(w)});
+    s.face_patch.push_back(p);
+  };
+  for (int i = 0; i < Strip::kPieces; ++i) {
+    tri(0, s.a[i], s.a[i + 1], s.b[i + 1]);
+    tri(0, s.a[i], s.b[i + 1], s.b[i]);
+  }
+  for (int p = 1; p <= 2; ++p) {
+    const std::vector<int>& top = p == 1 ? s.a : s.b;
+    const std::vector<int>& row = p == 1 ? s.wall_a : s.wall_b;
+    for (int j = 0; j <= Strip::kPieces; ++j) tri(p, top[j], row[j], row[j + 1]);
+    for (int j = 0; j < Strip::kPieces; ++j) tri(p, top[j], top[j + 1], row[j + 1]);
+  }
+  // The SurfaceMesh: curves 0 (A) and 1 (B) are creases, 2 and 3 the walls' boundaries
+  // (from a crease's end along the bottom to its other end).
+  SurfaceMesh& m = s.surface;
+  m.nodes = s.soup.points;
+  for (const auto& t : s.soup.triangles) m.triangles.push_back({int(t[0]), int(t[1]), int(t[2])});
+  m.triangle_patch = s.face_patch;
+  m.curve_is_feature = {1, 1, 1, 1};
+  m.curve_nodes = {s.a, s.b, {}, {}};
+  for (int c = 2; c <= 3; ++c) {
+    const std::vector<int>& top = c == 2 ? s.a : s.b;
+    std::vector<int>& list = m.curve_nodes[static_cast<std::size_t>(c)];
+    list.push_back(top.front());
+    const std::vector<int>& row = c == 2 ? s.wall_a : s.wall_b;
+    list.insert(list.end(), row.begin(), row.end());
+    list.push_back(top.back());
+  }
+  m.node_kind.assign(m.nodes.size(), NodeKind::Border);
+  m.node_owner.assign(m.nodes.size(), -1);
+  for (std::size_t c = 0; c < m.curve_nodes.size(); ++c) {
+    for (const int node : m.curve_nodes[c]) m.node_owner[static_cast<std::size_t>(node)] = static_cast<int>(c);
+  }
+  s.corners = {s.a.front(), s.a.back(), s.b.front(), s.b.back()};
+  for (const int node : s.corners) {
+    m.node_kind[static_cast<std::size_t>(node)] = NodeKind::Corner;
+    m.node_owner[static_cast<std::size_t>(node)] = -1;
+  }
+  m.n_border_nodes = m.nodes.size();
+  for (int p = 0; p < 3; ++p) {
+    std::vector<Eigen::Vector3d> points, centroids, normals;
+    std::set<std::uint32_t> vertices;
+    for (std::size_t t = 0; t < s.soup.triangles.size(); ++t) {
+      if (s.face_patch[t] != p) continue;
+      const auto& tr = s.soup.triangles[t];
+      const auto& q = s.soup.points;
+      normals.push_back((q[tr[1]] - q[tr[0]]).cross(q[tr[2]] - q[tr[0]]).normalized());
+      centroids.push_back((q[tr[0]] + q[tr[1]] + q[tr[2]]) / 3.0);
+      for (auto v : tr) vertices.insert(v);
+    }
+    for (auto v : vertices) points.push_back(s.soup.points[v]);
+    PatchSurface fitted;
+    fitted.frame = patch_frame(centroids, normals);
+    FitOptions fit;
+    fit.max_levels = 3;
+    fitted.field = fit_height_field(fitted.frame.to_local(points), fit).field;
+    m.surfaces.push_back(fitted);
+  }
+  m.patches.resize(3);
+  m.target_size = 1.0;
+  m.input_mean_edge = 1.0;
+  return s;
+}
+
+// Distance from p to the polyline through `points`.
+double distance_to_polyline(const Eigen::Vector3d& p, const std::vector<Eigen::Vector3d>& points) {
+  double best = (p - points.front()).norm();
+  for (std::size_t i = 0; i + 1 < points.size(); ++i) {
+    const Eigen::Vector3d d = points[i + 1] - points[i];
+    const double u = std::clamp((p - points[i]).dot(d) / d.squaredNorm(), 0.0, 1.0);
+    best = std::min(best, (p - (points[i] + u * d)).norm());
+  }
+  return best;
+}
+
+std::size_t obtuse_faces(const StitchResult& r, int only_patch = -1) {
+  std::size_t n = 0;
+  for (auto f : r.mesh.faces()) {
+    if (only_patch >= 0 && r.face_patch[static_cast<std::size_t>(f.idx())] != only_patch) continue;
+    std::array<Eigen::Vector3d, 3> p;
+    int k = 0;
+    for (auto v : r.mesh.fv_range(f)) p[static_cast<std::size_t>(k++)] = to_eigen(r.mesh.point(v));
+    for (int i = 0; i < 3; ++i) {
+      if ((p[(i + 1) % 3] - p[i]).dot(p[(i + 2) % 3] - p[i]) < 0.0) ++n;
+    }
+  }
+  return n;
+}
+
+StitchOptions strip_options(int slide_rounds) {
+  StitchOptions o;
+  o.feature_slide_rounds = slide_rounds;
+  o.obtuse_split_rounds = 0;  // the slides alone (splits would add nodes)
+  o.n_threads = 1;
+  return o;
+}
+
+// The strip's facing nodes leave obtuse triangles that no flip or move removes (all its
+// nodes are feature nodes); sliding them along their creases staggers them: no obtuse
+// triangle is left in the strip and fewer in all, every slid node lies on its curve's
+// polyline (the front's nodes), the corners stay, the surface keeps its topology.
+TEST(StitchSlide, FacingCreaseNodesSlideApartAlongTheirCurves) {
+  const Strip s = make_strip();
+  const TriMesh input = to_trimesh(s.soup);
+  const StitchResult before = stitch(s.surface, input, strip_options(0));
+  ASSERT_TRUE(before.report.ok());
+  ASSERT_GT(obtuse_faces(before, 0), 0u);  // the planted defect survives flips and repair
+  EXPECT_EQ(before.report.n_feature_slides, 0u);
+  const StitchResult r = stitch(s.surface, input, strip_options(2));
+  ASSERT_TRUE(r.report.ok());
+  EXPECT_GT(r.report.n_feature_slides, 0u);
+  EXPECT_EQ(obtuse_faces(r, 0), 0u);
+  EXPECT_LT(obtuse_faces(r), obtuse_faces(before));
+  EXPECT_TRUE(r.report.output.topology.is_manifold);
+  EXPECT_EQ(r.report.output.topology.euler_characteristic, 1);
+  EXPECT_EQ(r.report.output.topology.n_boundary_loops, 1u);
+  ASSERT_EQ(r.mesh.n_vertices(), s.soup.points.size());
+  const double scale = 1e-12 * Strip::kPieces;
+  std::size_t n_moved = 0;
+  for (auto v : r.mesh.vertices()) {
+    const auto node = static_cast<std::size_t>(r.vertex_node[static_cast<std::size_t>(v.idx())]);
+    const Eigen::Vector3d p = to_eigen(r.mesh.point(v));
+    if (std::find(s.corners.begin(), s.corners.end(), static_cast<int>(node)) != s.corners.end()) {
+      EXPECT_EQ(p, s.soup.points[node]) << "corner " << node;
+      continue;
+    }
+    if (p == s.soup.points[node]) continue;
+    ++n_moved;
+    const int curve = s.surface.node_owner[node];
+    ASSERT_GE(curve, 0);
+    std::vector<Eigen::Vector3d> polyline;
+    for (const int g : s.surface.curve_nodes[static_cast<std::size_t>(curve)]) polyline.push_back(s.soup.points[static_cast<std::size_t>(g)]);
+    EXPECT_LT(distance_to_polyline(p, polyline), scale) << "node " << node;
+    // Not past the middle of a piece: the node stays nearer its own front point than the
+    // neighbours' (its curve's order is kept).
+    EXPECT_LT((p - s.soup.points[node]).norm(), 0.5 * 1.2) << "node " << node;
+  }
+  EXPECT_GT(n_moved, 0u);
+  // The same for any thread count.
+  StitchOptions two = strip_options(2);
+  two.n_threads = 3;
+  const StitchResult r3 = stitch(s.surface, input, two);
+  ASSERT_EQ(r3.mesh.n_vertices(), r.mesh.n_vertices());
+  for (auto v : r.mesh.vertices()) EXPECT_EQ(to_eigen(r3.mesh.point(v)), to_eigen(r.mesh.point(v)));
+}
+
+TEST(StitchSlide, NegativeRoundsAreRefused) {
+  StitchOptions o;
+  o.feature_slide_rounds = -1;
+  EXPECT_THROW(o.validate(), InvalidInput);
+}
+
+}  // namespace
+}  // namespace nurbsfront
