@@ -268,7 +268,7 @@ RemeshResult remesh(const TriMesh& input, const RemeshOptions& options) {
   // alone would start its optimisation).
   if (lattice && surfmesh_detail::label_image_staircase(*lattice) &&
       (stitch_options.optimisation_passes > 0 || stitch_options.obtuse_repair_rounds > 0 ||
-       stitch_options.feature_slide_rounds > 0 || stitch_options.chord_compensation > 0.0))
+       stitch_options.chord_compensation > 0.0))
     stitch_options.volume_compensation = 0.0;
   SurfaceMesh surface = surfmesh_detail::mesh_surface(input, segmentation, surfmesh_options, mean_edge, shares);
   report.seconds_surfmesh = watch.seconds();

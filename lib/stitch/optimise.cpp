@@ -1285,7 +1285,8 @@ void optimise(const SurfaceMesh& surface, const StitchOptions& options, const st
     report.n_flips += optimiser.obtuse_flip_sweep();
     report.n_smoothing_moves += optimiser.obtuse_sweep();
   }
-  for (int round = 0; round < options.feature_slide_rounds; ++round) {
+  // The slides are part of the obtuse repair: none without it.
+  for (int round = 0; options.obtuse_repair_rounds > 0 && round < options.feature_slide_rounds; ++round) {
     const std::size_t n_slides = optimiser.slide_sweep(result.vertex_node);
     report.n_feature_slides += n_slides;
     if (n_slides == 0) break;

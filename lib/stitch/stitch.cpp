@@ -626,7 +626,6 @@ StitchResult stitch_impl(const SurfaceMesh& surface, const TriMesh* input, const
   // 2. Cross-border optimisation.
   watch.restart();
   const bool optimise = mesh.n_faces() > 0 && (options.optimisation_passes > 0 || options.obtuse_repair_rounds > 0 ||
-                                                options.feature_slide_rounds > 0 ||
                                                 options.chord_compensation > 0.0 || options.volume_compensation > 0.0);
   TriMesh assembled;
   std::vector<int> assembled_patch;

@@ -94,10 +94,9 @@ struct StitchOptions {
   //! leaves stays within 0.05 of a piece of the front's;
   //! each round ends with the obtuse repair's flips and moves (counted in
   //! StitchReport::n_feature_slides, n_flips and n_smoothing_moves; docs/stitch.md
-  //! "Feature nodes sliding along their curves"). Default 0 (opt-in; 2 measured: elephant
-  //! 1.095 -> 0.912% obtuse; with 2 as the default two fast tests of StitchFidelity failed,
-  //! not diagnosed).
-  int feature_slide_rounds = 0;
+  //! "Feature nodes sliding along their curves"). They belong to the obtuse repair: none run
+  //! when obtuse_repair_rounds is 0. Default 2 (elephant 1.095 -> 0.912% obtuse; 0 = off).
+  int feature_slide_rounds = 2;
   //! A feature slide that removes no obtuse triangle is also taken when it raises the cosine
   //! of the largest angle of the node's triangles by at least this (> 0; infinity: never).
   //! Default infinity: at 0.01 elephant, couplingdown and rotor lose more obtuse triangles
