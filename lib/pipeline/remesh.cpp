@@ -219,17 +219,19 @@ RemeshResult remesh(const TriMesh& input, const RemeshOptions& options) {
   // merges cost one crossing repair and twice the run's CPU (2.8 -> 5.4 s) for no bound it
   // did not meet already (docs/segment.md, "Narrow patches"). The gate first: the search for
   // narrow patches is a serial pass over every face (0.15 G instructions on the liver).
-  if (options.narrow_patch_merge > 0.0 && surfmesh_detail::marching_cubes_lattice(input_lattice()) &&
-      !surfmesh_detail::label_image_staircase(input_lattice())) {
+  // The patches narrower than width target edges join a neighbour (hairlines: their own
+  // faces exempt from the slope bounds); the number of patches merged away.
+  auto merge_narrower_than = [&](double width, bool hairlines) -> std::size_t {
     const double h = surfmesh_detail::uniform_size(surfmesh_options.sizing, mean_edge);
-    const std::vector<int> narrow =
-        segment_detail::narrow_patches(input, first_segmentation, options.narrow_patch_merge * h, input_threads);
-    if (!narrow.empty()) {
-      const std::size_t n_before = first_segmentation.patches.size();
-      first_segmentation = segment_detail::merge_into_neighbours(*splitter, first_segmentation, narrow, false);
-      report.n_narrow_merged = n_before - first_segmentation.patches.size();
-    }
-  }
+    const std::vector<int> narrow = segment_detail::narrow_patches(input, first_segmentation, width * h, input_threads);
+    if (narrow.empty()) return 0;
+    const std::size_t n_before = first_segmentation.patches.size();
+    first_segmentation = segment_detail::merge_into_neighbours(*splitter, first_segmentation, narrow, false, hairlines);
+    return n_before - first_segmentation.patches.size();
+  };
+  if (options.narrow_patch_merge > 0.0 && surfmesh_detail::marching_cubes_lattice(input_lattice()) &&
+      !surfmesh_detail::label_image_staircase(input_lattice()))
+    report.n_narrow_merged = merge_narrower_than(options.narrow_patch_merge, false);
   // Tiny patches behind marginal creases (a coarse CAD-like mesh's bends) join a neighbour.
   if (options.tiny_patch_faces > 0 && !surfmesh_options.cell_grid.enabled &&
       !surfmesh_detail::marching_cubes_lattice(input_lattice()))
@@ -238,16 +240,8 @@ RemeshResult remesh(const TriMesh& input, const RemeshOptions& options) {
   // border curves nearly meet) join a wide neighbour, their own faces exempt from the slope
   // bounds (docs/segment.md "Hairline patches").
   if (options.hairline_patch_width > 0.0 && !surfmesh_options.cell_grid.enabled &&
-      !surfmesh_detail::marching_cubes_lattice(input_lattice())) {
-    const double h = surfmesh_detail::uniform_size(surfmesh_options.sizing, mean_edge);
-    const std::vector<int> hairlines =
-        segment_detail::narrow_patches(input, first_segmentation, options.hairline_patch_width * h, input_threads);
-    if (!hairlines.empty()) {
-      const std::size_t n_before = first_segmentation.patches.size();
-      first_segmentation = segment_detail::merge_into_neighbours(*splitter, first_segmentation, hairlines, false, true);
-      report.n_hairline_merged = n_before - first_segmentation.patches.size();
-    }
-  }
+      !surfmesh_detail::marching_cubes_lattice(input_lattice()))
+    report.n_hairline_merged = merge_narrower_than(options.hairline_patch_width, true);
   report.seconds_segment = watch.seconds();
 
   watch.restart();

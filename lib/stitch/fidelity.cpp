@@ -101,7 +101,9 @@ class FidelityMover {
     // Output nodes off the input: their closest input point (kept for unchanged vertices).
     vertex_distance_.resize(n_v, 0.0);
     vertex_target_.resize(n_v, Vec::Zero());
-    // (On the run's threads: each closest point is exact, whatever the hint.)
+    // (On the run's threads: each closest distance is exact whatever the hint; where faces tie
+    // (a shared edge or vertex) the hint picks the face, the same for any thread count because
+    // the chunks are fixed.)
     parallel::for_chunks(n_v, options_.n_threads, kQueryChunk, [&](std::size_t begin, std::size_t end, unsigned) {
       std::uint32_t input_hint = UINT32_MAX;
       for (std::size_t i = begin; i < end; ++i) {
@@ -260,7 +262,6 @@ class FidelityMover {
       parallel::for_chunks(order.size(), options_.n_threads, kQueryChunk, [&](std::size_t begin, std::size_t end, unsigned) {
         std::uint32_t hint = UINT32_MAX;
         for (std::size_t k = begin; k < end; ++k) {
-          if (k % kQueryChunk == 0) hint = UINT32_MAX;
           const std::size_t i = first + order[k];
           if (walk && hint != UINT32_MAX) {
             const auto w = walk_to(out, probes_[i], hint);

@@ -16,6 +16,7 @@
 #include <Eigen/Geometry>
 
 #include "nurbsfront/core/disjoint_sets.h"
+#include "nurbsfront/core/error.h"
 #include "nurbsfront/core/parallel.h"
 #include "nurbsfront/core/tolerances.h"
 #include "nurbsfront/surfmesh/surfmesh_internal.h"
@@ -673,6 +674,7 @@ class Optimiser {
       const TriMesh::FaceHandle f(static_cast<int>(fi));
       // The halfedge (a, b) opposite the obtuse corner c.
       const TriMesh::HalfedgeHandle h = changed[fi] != 0 ? obtuse_opposite(f) : opposite[fi];
+      NURBSFRONT_DEBUG_ASSERT(changed[fi] != 0 || h == obtuse_opposite(f));  // the cache is never stale
       if (!h.is_valid()) continue;
       const Vec c = point(mesh_, mesh_.to_vertex_handle(mesh_.next_halfedge_handle(h)));
       plan_edge_split(h, c, vertex_node, is_feature, refused, plan);

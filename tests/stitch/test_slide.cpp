@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <array>
 #include <cstddef>
+#include <limits>
 #include <set>
 #include <string>
 #include <vector>
@@ -218,6 +219,30 @@ TEST(StitchSlide, NegativeRoundsAreRefused) {
   StitchOptions o;
   o.feature_slide_rounds = -1;
   EXPECT_THROW(o.validate(), InvalidInput);
+}
+
+// The slides are part of the obtuse repair: with the repair off they do not run, even on
+// the strip whose planted defect they remove.
+TEST(StitchSlide, NoSlidesWithoutTheObtuseRepair) {
+  const Strip s = make_strip();
+  const TriMesh input = to_trimesh(s.soup);
+  StitchOptions o = strip_options(2);
+  o.obtuse_repair_rounds = 0;
+  const StitchResult r = stitch(s.surface, input, o);
+  ASSERT_TRUE(r.report.ok());
+  EXPECT_EQ(r.report.n_feature_slides, 0u);
+  EXPECT_GT(obtuse_faces(r, 0), 0u);
+}
+
+TEST(StitchSlide, CosineGainMustBePositive) {
+  StitchOptions o;
+  EXPECT_NO_THROW(o.validate());  // default: infinity (off)
+  for (const double bad : {0.0, -0.01, std::numeric_limits<double>::quiet_NaN()}) {
+    o.feature_slide_cosine_gain = bad;
+    EXPECT_THROW(o.validate(), InvalidInput) << bad;
+  }
+  o.feature_slide_cosine_gain = 0.01;
+  EXPECT_NO_THROW(o.validate());
 }
 
 }  // namespace

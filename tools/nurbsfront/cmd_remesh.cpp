@@ -320,7 +320,8 @@ void add_remesh_command(CLI::App& app) {
                   "docs/stitch.md \"Obtuse repair\")");
   cmd->add_option("--feature-slide-rounds", args->feature_slide_rounds,
                   "Rounds of the stitch's feature slides: nodes of creases and of the boundary slide along their "
-                  "curve where that removes an obtuse triangle (default 0 = off; 2 measured; docs/stitch.md \"Feature nodes "
+                  "curve where that removes an obtuse triangle (default 2; 0 = off; part of the obtuse repair: none when "
+                  "--obtuse-repair-rounds is 0; docs/stitch.md \"Feature nodes "
                   "sliding along their curves\")");
   cmd->add_option("--feature-slide-cosine-gain", args->feature_slide_cosine_gain,
                   "Also slide a feature node where that raises the cosine of its ring's largest angle by this "
