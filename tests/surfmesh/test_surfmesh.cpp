@@ -1637,8 +1637,9 @@ TEST(Surfmesh, PatchBorderIsTheOldOne) {
       const auto f = static_cast<std::size_t>(2 * (j * kN + i));
       face_patch[f] = face_patch[f + 1] = (j / kBlock) * (kN / kBlock) + i / kBlock;
     }
-  int n_patches = (kN / kBlock) * (kN / kBlock);
-  for (int block = 0; block < n_patches; block += 3) {
+  constexpr int kBlocks = (kN / kBlock) * (kN / kBlock);
+  int n_patches = kBlocks;
+  for (int block = 0; block < kBlocks; block += 3) {  // (not n_patches: it grows in the loop)
     const int i = (block % (kN / kBlock)) * kBlock + 1, j = (block / (kN / kBlock)) * kBlock + 1;
     face_patch[static_cast<std::size_t>(2 * (j * kN + i) + 1)] = n_patches++;
   }
