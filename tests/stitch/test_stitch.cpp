@@ -29,6 +29,16 @@
 namespace nurbsfront {
 namespace {
 
+// A stitch with no optimisation passes, no obtuse repair (and so no feature slides) and no
+// chord compensation: the tests' common start, each switching off what else it needs.
+StitchOptions without_optimisation() {
+  StitchOptions o;
+  o.optimisation_passes = 0;
+  o.obtuse_repair_rounds = 0;
+  o.chord_compensation = 0.0;
+  return o;
+}
+
 Eigen::Vector3d face_normal(const TriangleSoup& s, std::size_t t) {
   const auto& tri = s.triangles[t];
   return (s.points[tri[1]] - s.points[tri[0]]).cross(s.points[tri[2]] - s.points[tri[0]]).normalized();
@@ -213,10 +223,7 @@ TEST(Stitch, OptimisationImprovesAJitteredSphereAcrossBorders) {
     EXPECT_NEAR(p.norm(), 1.0, 0.02);
   }
   // Without optimisation and collapses the quality stays that of the assembly.
-  StitchOptions none;
-  none.optimisation_passes = 0;
-  none.obtuse_repair_rounds = 0;
-  none.chord_compensation = 0.0;
+  StitchOptions none = without_optimisation();
   none.collapse_below_angle_deg = 0.0;
   none.obtuse_split_rounds = 0;
   none.angle_repair_rounds = 0;
@@ -412,10 +419,7 @@ TEST(Stitch, AnObtuseSplitThroughANearbySheetIsUndone) {
   const double local_z = surface.surfaces[0].frame.to_local(Eigen::Vector3d(0.5, 0.0, 0.1)).z();
   for (double& c : surface.surfaces[0].field.mutable_coefficients()) c = local_z;
   const TriMesh input = to_trimesh(soup);
-  StitchOptions options;
-  options.optimisation_passes = 0;
-  options.obtuse_repair_rounds = 0;
-  options.chord_compensation = 0.0;
+  StitchOptions options = without_optimisation();
   // The planted defect works: unchecked, the split is made and crosses the sheet.
   StitchOptions unchecked = options;
   unchecked.check_self_intersections = false;
@@ -663,12 +667,9 @@ TEST(StitchSlow, ObtuseSplitsSameForAnyThreadCount) {
   ASSERT_GT(soup.triangles.size(), 2U * 8192U);
   const SurfaceMesh surface = cube_map_surface(soup);
   const TriMesh input = to_trimesh(soup);
-  StitchOptions options;
-  options.optimisation_passes = 0;
-  options.obtuse_repair_rounds = 0;
+  StitchOptions options = without_optimisation();
   options.angle_repair_rounds = 0;
   options.collapse_below_angle_deg = 0.0;
-  options.chord_compensation = 0.0;
   options.volume_compensation = 0.0;
   options.n_threads = 1;
   const StitchResult r1 = stitch(surface, input, options);
@@ -790,11 +791,8 @@ TEST(Stitch, CollapsesAPlantedShortEdge) {
 // The stitch with only the small-angle repair (rounds) after the assembly: the collapse
 // before the optimisation, the sweeps, the chord compensation and the splits are off.
 StitchResult stitch_with_angle_repair(const SurfaceMesh& surface, const TriangleSoup& soup, int rounds) {
-  StitchOptions options;
+  StitchOptions options = without_optimisation();
   options.collapse_below_angle_deg = 0.0;
-  options.optimisation_passes = 0;
-  options.obtuse_repair_rounds = 0;
-  options.chord_compensation = 0.0;
   options.obtuse_split_rounds = 0;
   options.angle_repair_rounds = rounds;
   return stitch(surface, to_trimesh(soup), options);
@@ -1104,10 +1102,7 @@ TEST(Stitch, SmoothingMakesNoNewTriangleBelowTheAngleFloor) {
   unguarded.angle_repair_rounds = 0;  // the smoothing's floor alone (the repair would mend them)
   const StitchResult bad = stitch(surface, input, unguarded);
   EXPECT_GT(bad.report.n_small_angle_away_from_features, 0u);  // the planted defect works
-  StitchOptions assembled_only;
-  assembled_only.optimisation_passes = 0;
-  assembled_only.obtuse_repair_rounds = 0;
-  assembled_only.chord_compensation = 0.0;
+  StitchOptions assembled_only = without_optimisation();
   const StitchResult assembled = stitch(surface, input, assembled_only);
   ASSERT_EQ(assembled.report.n_small_angle_away_from_features, 0u);
   const StitchResult r = stitch(surface, input);
@@ -1323,10 +1318,7 @@ TEST(Stitch, SettleFlipsAValleyOutOfASmallSheet) {
   ASSERT_EQ(n_replaced, 2u);
   ASSERT_EQ(count_self_intersections(ridge), 0u);
   ASSERT_GT(count_self_intersections(valley), 0u);
-  StitchOptions options;
-  options.optimisation_passes = 0;
-  options.obtuse_repair_rounds = 0;
-  options.chord_compensation = 0.0;
+  StitchOptions options = without_optimisation();
   options.collapse_below_angle_deg = 0.0;
   const StitchResult r = stitch(make_surface(valley, face_patch, 2), to_trimesh(ridge), options);
   EXPECT_TRUE(r.report.ok()) << joined(r.report.errors);
@@ -1509,10 +1501,7 @@ TEST(Stitch, TrianglesAtFinRimNodesAreNotAwayFromFeatures) {
   ASSERT_EQ(surface.curve_is_feature[static_cast<std::size_t>(rim_curve)], 0);
   ASSERT_EQ(surface.curve_nodes[static_cast<std::size_t>(rim_curve)].size(), 9u);
   const TriMesh input = to_trimesh(sheet);
-  StitchOptions as_assembled;  // no stage moves, flips, collapses or splits
-  as_assembled.optimisation_passes = 0;
-  as_assembled.obtuse_repair_rounds = 0;
-  as_assembled.chord_compensation = 0.0;
+  StitchOptions as_assembled = without_optimisation();  // no stage moves, flips, collapses or splits
   as_assembled.volume_compensation = 0.0;
   as_assembled.obtuse_split_rounds = 0;
   as_assembled.angle_repair_rounds = 0;
