@@ -10,6 +10,7 @@
 #include <limits>
 #include <numbers>
 #include <numeric>
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -370,8 +371,8 @@ class Optimiser {
       // Not all the way: whole steps moved border nodes far along their two fits' mean
       // (Hausdorff up 13% on the liver) and left smaller smallest angles, for no fewer
       // obtuse triangles.
+      bool moved = false;
       for (const double t : {0.5, 0.25, 0.125, 0.0625}) {
-        bool moved = false;
         for (const auto& apex : apexes) {
           const Vec q = project(info, p + t * (apex.second - p));
           if (!q.allFinite()) continue;
@@ -386,8 +387,98 @@ class Optimiser {
         }
         if (moved) break;
       }
+      if (moved || options_.obtuse_search_steps == 0) continue;
+      // No apex step helps: search the tangent plane for a place with fewer obtuse triangles.
+      const Vec q = project(info, search_obtuse_place(p, old_obtuse));
+      if (!q.allFinite() || q == p) continue;
+      std::size_t new_obtuse = 0;
+      for (const RingTriangle& r : ring_) new_obtuse += triangle_is_obtuse(q, r.b, r.c) ? 1 : 0;
+      if (new_obtuse >= old_obtuse || !passes_ring_tests(p, q, sin_obtuse_floor_, obtuse_sine_skip_)) continue;
+      mesh_.set_point(v, to_openmesh(q));
+      ++n_moves;
+      for (auto w : mesh_.vv_range(v)) candidate[static_cast<std::size_t>(w.idx())] = 1;
     }
     return n_moves;
+  }
+
+  // The obtuse repair's search (StitchOptions::obtuse_search_steps; docs/stitch.md "Obtuse
+  // repair: a search"): a compass search for the node at p (its triangles in ring_, old_obtuse
+  // of them obtuse) in the plane through p normal to the ring's area vector. From p, steps
+  // of a quarter of the shortest ring edge in eight directions (the plane's axes and
+  // diagonals); the best neighbour by (obtuse triangles, then the cosine of the largest
+  // angle: larger is better) is taken while it is better, else the step halves,
+  // obtuse_search_steps times. A place is allowed only where every ring triangle keeps its
+  // orientation and its smallest angle's sine at least min(the ring's old one,
+  // sin_obtuse_floor_). Returns p when no place has fewer obtuse triangles; the caller
+  // projects the place and tests it as every move.
+  Vec search_obtuse_place(const Vec& p, std::size_t old_obtuse) const {
+    Vec normal = Vec::Zero();
+    double shortest = std::numeric_limits<double>::infinity();
+    double old_sine = 1.0;
+    for (const RingTriangle& r : ring_) {
+      normal += r.n_old;
+      shortest = std::min(shortest, (r.b - p).norm());
+      old_sine = std::min(old_sine, alpha_and_min_angle_sine(p, r.b, r.c, r.l_old)[1]);
+    }
+    const double normal_norm = normal.norm();
+    if (!(normal_norm > 0.0) || !(shortest > 0.0)) return p;
+    normal /= normal_norm;
+    // Two axes of the plane: the cross product with the coordinate axis least along the normal.
+    Vec axis = Vec::Zero();
+    int least = 0;
+    for (int k = 1; k < 3; ++k) {
+      if (std::abs(normal[k]) < std::abs(normal[least])) least = k;
+    }
+    axis[least] = 1.0;
+    const Vec u = normal.cross(axis).normalized();
+    const Vec w = normal.cross(u);
+    const double sine_floor = std::min(old_sine, sin_obtuse_floor_);
+    // (obtuse triangles, -cosine of the largest angle) of q, or nothing when q is not allowed.
+    auto score = [&](const Vec& q) -> std::optional<std::pair<std::size_t, double>> {
+      std::size_t n_obtuse = 0;
+      double worst = 1.0;
+      for (const RingTriangle& r : ring_) {
+        const Vec n = area_vector(q, r.b, r.c);
+        const double l = n.norm();
+        if (l <= min_double_area_ || !(n.dot(r.n_old) > 0.0)) return std::nullopt;
+        if (alpha_and_min_angle_sine(q, r.b, r.c, l)[1] < sine_floor) return std::nullopt;
+        n_obtuse += triangle_is_obtuse(q, r.b, r.c) ? 1 : 0;
+        worst = std::min(worst, largest_angle_cosine(q, r.b, r.c));
+      }
+      return std::pair<std::size_t, double>(n_obtuse, -worst);
+    };
+    const auto start = score(p);
+    if (!start) return p;
+    std::pair<std::size_t, double> best = *start;
+    Vec at = p;
+    double step = 0.25 * shortest;
+    constexpr std::array<std::array<double, 2>, 8> kDirections{
+        {{1.0, 0.0}, {-1.0, 0.0}, {0.0, 1.0}, {0.0, -1.0}, {1.0, 1.0}, {1.0, -1.0}, {-1.0, 1.0}, {-1.0, -1.0}}};
+    // A step that improves is taken again before the step halves; bounded so that the search
+    // always ends (each improvement lowers the score, but take no chances).
+    constexpr int kMaxMoves = 64;
+    int halvings = 0, moves = 0;
+    while (halvings < options_.obtuse_search_steps && moves < kMaxMoves) {
+      std::optional<std::pair<std::size_t, double>> best_here;
+      Vec best_q = at;
+      for (const auto& [du, dw] : kDirections) {
+        const Vec q = at + (step * du) * u + (step * dw) * w;
+        const auto s = score(q);
+        if (s && *s < best && (!best_here || *s < *best_here)) {
+          best_here = s;
+          best_q = q;
+        }
+      }
+      if (best_here) {
+        best = *best_here;
+        at = best_q;
+        ++moves;
+      } else {
+        step *= 0.5;
+        ++halvings;
+      }
+    }
+    return best.first < old_obtuse ? at : p;
   }
 
   // Flips of the edges of obtuse triangles, in edge order, when the two new triangles

@@ -27,6 +27,7 @@ void StitchOptions::validate() const {
   if (optimisation_passes < 0) fail("optimisation_passes must be >= 0");
   if (angle_repair_rounds < 0) fail("angle_repair_rounds must be >= 0");
   if (obtuse_repair_rounds < 0) fail("obtuse_repair_rounds must be >= 0");
+  if (obtuse_search_steps < 0 || obtuse_search_steps > 30) fail("obtuse_search_steps must be in [0, 30]");
   if (feature_slide_rounds < 0) fail("feature_slide_rounds must be >= 0");
   if (!(feature_slide_cosine_gain > 0.0)) fail("feature_slide_cosine_gain must be > 0 (infinity: off)");
   if (obtuse_split_rounds < 0) fail("obtuse_split_rounds must be >= 0");

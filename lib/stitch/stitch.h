@@ -84,6 +84,11 @@ struct StitchOptions {
   //! sweep follows it (docs/stitch.md "The CAD meshes' obtuse triangles, session 13").
   //! Default 2.
   int obtuse_repair_rounds = 2;
+  //! The obtuse repair's search (in [0, 30]; 0 switches it off): a node the apex steps above
+  //! do not help searches the plane of its triangles for a place with fewer obtuse triangles
+  //! (a compass search from a quarter of its shortest edge, the step halved this many
+  //! times; docs/stitch.md "Obtuse repair: a search in the plane, session 17"). Default 0.
+  int obtuse_search_steps = 0;
   //! Rounds of feature slides after the obtuse repair (>= 0; 0 switches them off): a node of
   //! a feature curve (crease or input boundary; not a corner) that has an obtuse triangle
   //! slides along its curve, on the polyline of the curve's nodes as the front placed them

@@ -60,6 +60,7 @@ struct RemeshArgs {
   std::optional<double> fin_rim_gap;
   std::optional<double> fin_rim_max_move;
   std::optional<int> obtuse_repair_rounds;
+  std::optional<int> obtuse_search_steps;
   std::optional<int> feature_slide_rounds;
   std::optional<double> feature_slide_cosine_gain;
   std::optional<int> obtuse_split_rounds;
@@ -143,6 +144,7 @@ void run_remesh(RemeshArgs& args) {
   if (args.fin_rim_gap) options.surfmesh.fin_rim_max_gap_edges = *args.fin_rim_gap;
   if (args.fin_rim_max_move) options.stitch.fin_rim_max_move = *args.fin_rim_max_move;
   if (args.obtuse_repair_rounds) options.stitch.obtuse_repair_rounds = *args.obtuse_repair_rounds;
+  if (args.obtuse_search_steps) options.stitch.obtuse_search_steps = *args.obtuse_search_steps;
   if (args.feature_slide_rounds) options.stitch.feature_slide_rounds = *args.feature_slide_rounds;
   if (args.feature_slide_cosine_gain) options.stitch.feature_slide_cosine_gain = *args.feature_slide_cosine_gain;
   if (args.obtuse_split_rounds) options.stitch.obtuse_split_rounds = *args.obtuse_split_rounds;
@@ -318,6 +320,9 @@ void add_remesh_command(CLI::App& app) {
   cmd->add_option("--obtuse-repair-rounds", args->obtuse_repair_rounds,
                   "Sweeps of the stitch's obtuse repair after its optimisation (default 2; 0 = off; "
                   "docs/stitch.md \"Obtuse repair\")");
+  cmd->add_option("--obtuse-search", args->obtuse_search_steps,
+                  "Halvings of the obtuse repair's search in the plane for nodes the apex steps do not help "
+                  "(in [0, 30]; default 0 = off; docs/stitch.md \"Obtuse repair: a search in the plane, session 17\")");
   cmd->add_option("--feature-slide-rounds", args->feature_slide_rounds,
                   "Rounds of the stitch's feature slides: nodes of creases and of the boundary slide along their "
                   "curve where that removes an obtuse triangle (default 2; 0 = off; part of the obtuse repair: none when "
