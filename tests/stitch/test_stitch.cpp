@@ -531,6 +531,58 @@ TEST(Stitch, AStraightBorderNodeWithTwoTrianglesGetsAThirdOne) {
   }
 }
 
+// Issue 5, the obtuse repair's search in the plane (docs/stitch.md "Obtuse repair: a search in
+// the plane, session 17"): a flat fan of six triangles around one inner node W = (-0.2, 0),
+// its ring fixed (the input's boundary). W's triangle (W, (-1, 0), (-0.5, -1.1)) is obtuse at
+// W (103.1 deg); no step towards the apexes over the far edges of W's obtuse triangle (1/2 ...
+// 1/16 of the way) leaves fewer obtuse triangles with the smallest angle kept, so without
+// the search the defect stays; a place near (0, 0) has none. The optimisation passes and the
+// splits are off: the repair alone.
+TEST(Stitch, ObtuseRepairSearchFindsAPlaceTheApexStepsMiss) {
+  TriangleSoup fan;
+  fan.points = {{0.6, 0.0, 0.0}, {0.5, 1.2, 0.0}, {-0.4, 0.7, 0.0}, {-1.0, 0.0, 0.0},
+                {-0.5, -1.1, 0.0}, {0.6, -0.8, 0.0}, {-0.2, 0.0, 0.0}};
+  constexpr int kW = 6;
+  fan.triangles = {{0, 1, 6}, {1, 2, 6}, {2, 3, 6}, {3, 4, 6}, {4, 5, 6}, {5, 0, 6}};
+  const SurfaceMesh surface = make_surface(fan, std::vector<int>(fan.triangles.size(), 0), 1);
+  const TriMesh input = to_trimesh(fan);
+  auto options_with = [](int steps, unsigned n_threads) {
+    StitchOptions o;
+    o.optimisation_passes = 0;
+    o.obtuse_split_rounds = 0;
+    o.obtuse_search_steps = steps;
+    o.n_threads = n_threads;
+    return o;
+  };
+  const StitchResult before = stitch(surface, input, options_with(0, 1));
+  ASSERT_TRUE(before.report.ok()) << joined(before.report.errors);
+  EXPECT_GT(before.report.output.quality.obtuse_fraction, 0.0);  // the planted defect survives
+  const StitchResult after = stitch(surface, input, options_with(5, 1));
+  ASSERT_TRUE(after.report.ok()) << joined(after.report.errors);
+  EXPECT_EQ(after.report.output.quality.obtuse_fraction, 0.0);
+  EXPECT_EQ(after.report.output.topology.euler_characteristic, 1);
+  EXPECT_EQ(after.report.output.topology.n_boundary_loops, 1u);
+  EXPECT_TRUE(after.report.output.topology.is_manifold);
+  EXPECT_GE(after.report.output.quality.alpha_min, std::min(before.report.output.quality.alpha_min, StitchOptions{}.alpha_floor));
+  EXPECT_GE(after.report.output.quality.min_angle_deg, std::min(before.report.output.quality.min_angle_deg, 27.5) - 1e-9);
+  ASSERT_EQ(after.mesh.n_vertices(), fan.points.size());
+  for (auto v : after.mesh.vertices()) {
+    const int node = after.vertex_node[static_cast<std::size_t>(v.idx())];
+    const Eigen::Vector3d p = to_eigen(after.mesh.point(v));
+    if (node == kW) {
+      EXPECT_NEAR(p.z(), 0.0, 1e-9);  // on the patch's (flat) surface
+      EXPECT_GT((p - fan.points[kW]).norm(), 0.05);  // it moved
+    } else {
+      EXPECT_EQ(p, fan.points[static_cast<std::size_t>(node)]);  // the ring is fixed
+    }
+  }
+  // The same places for any thread count.
+  const StitchResult two = stitch(surface, input, options_with(5, 2));
+  ASSERT_EQ(two.mesh.n_vertices(), after.mesh.n_vertices());
+  for (auto v : after.mesh.vertices()) EXPECT_EQ(to_eigen(two.mesh.point(v)), to_eigen(after.mesh.point(v)));
+  for (const int bad : {-1, 31}) EXPECT_THROW((void)stitch(surface, input, options_with(bad, 1)), InvalidInput) << bad;
+}
+
 // Issue 5, a strip's far piece (docs/stitch.md "Far pieces of strips"): a flat strip one
 // triangle wide between two straight feature borders (both the input's boundary, y = 0 and
 // y = 0.8) whose far border has fewer nodes: the node V = (1, 0) has two triangles, both
