@@ -19,6 +19,7 @@
 #include "nurbsfront/core/soup.h"
 #include "nurbsfront/core/tolerances.h"
 #include "nurbsfront/quality/aabb_tree.h"
+#include "nurbsfront/quality/internal.h"
 #include "nurbsfront/quality/report.h"
 #include "nurbsfront/stitch/stitch_internal.h"
 
@@ -380,8 +381,7 @@ class FidelityMover {
 
   // The left-out samples vouched for by a changed output face: those it no longer holds
   // within the bound (its corners where they are now) become samples (appended; searched in
-  // the output's tree by the caller, tested against every changed face in later sweeps: they
-  // are in no grid cell); the others stay vouched for by it (an unchanged face holds its
+  // the output's tree by the caller; their grid cells in extra_cells_); the others stay vouched for by it (an unchanged face holds its
   // samples as before). Serial, in face and sample order: the same for any thread count.
   void recheck_left_out(const TriangleSoup& out, const std::vector<std::uint8_t>& face_changed) {
     const double bound2 = bound_ * bound_;
@@ -399,12 +399,14 @@ class FidelityMover {
             (quality_detail::closest_point_on_triangle(u, out.points[t[0]], out.points[t[1]], out.points[t[2]]) - u).squaredNorm();
         if (d2 <= bound2) continue;
         probe_order_.push_back(static_cast<std::uint32_t>(probes_.size()));
+        extra_cells_.emplace_back(grid_key(cell_of(u)), static_cast<std::uint32_t>(probes_.size()));
         probe_id_.push_back(static_cast<std::uint32_t>(n_vertices + item));
         probes_.push_back(u);
         item = UINT32_MAX;
         ++n_promoted_;
       }
     }
+    std::sort(extra_cells_.begin(), extra_cells_.end());
   }
 
   // From face f, steps to the edge neighbour nearer to u while there is one (at most
@@ -438,18 +440,21 @@ class FidelityMover {
     grid_origin_ = probes_[0];
     for (const Vec& p : probes_) grid_origin_ = grid_origin_.cwiseMin(p);
     grid_cell_ = cell > 0.0 ? cell : 1.0;
-    std::vector<std::pair<std::uint64_t, std::uint32_t>> keyed(probes_.size());
-    for (std::uint32_t i = 0; i < probes_.size(); ++i) keyed[i] = {grid_key(cell_of(probes_[i])), i};
-    std::sort(keyed.begin(), keyed.end());
-    grid_items_.resize(keyed.size());
-    for (std::size_t k = 0; k < keyed.size(); ++k) {
-      grid_items_[k] = keyed[k].second;
-      if (k == 0 || keyed[k].first != keyed[k - 1].first) {
-        grid_keys_.push_back(keyed[k].first);
+    // By cell key, then sample (a stable radix sort of the samples in order).
+    std::vector<std::uint64_t> keys(probes_.size());
+    grid_items_.resize(probes_.size());
+    for (std::uint32_t i = 0; i < probes_.size(); ++i) {
+      keys[i] = grid_key(cell_of(probes_[i]));
+      grid_items_[i] = i;
+    }
+    quality_detail::radix_sort(keys, grid_items_);
+    for (std::size_t k = 0; k < keys.size(); ++k) {
+      if (k == 0 || keys[k] != keys[k - 1]) {
+        grid_keys_.push_back(keys[k]);
         grid_start_.push_back(static_cast<std::uint32_t>(k));
       }
     }
-    grid_start_.push_back(static_cast<std::uint32_t>(keyed.size()));
+    grid_start_.push_back(static_cast<std::uint32_t>(keys.size()));
   }
 
   static constexpr std::int64_t kGridAxis = std::int64_t{1} << 21;
@@ -476,7 +481,7 @@ class FidelityMover {
     std::vector<std::uint32_t> far;
     for (std::uint32_t i = 0; i < probes_.size(); ++i) {
       if (face_changed[near_face_[i]] != 0) requery[i] = 1;
-      if (near_distance_[i] > reach || i >= n_gridded_) far.push_back(i);
+      if (near_distance_[i] > reach) far.push_back(i);
     }
     for (std::size_t f = 0; f < face_changed.size(); ++f) {
       if (face_changed[f] == 0) continue;
@@ -499,6 +504,9 @@ class FidelityMover {
         for (std::int64_t y = a[1]; y <= b[1]; ++y) {
           for (std::int64_t z = a[2]; z <= b[2]; ++z) {
             const std::uint64_t key = grid_key({x, y, z});
+            const auto extra = std::equal_range(extra_cells_.begin(), extra_cells_.end(), std::pair{key, std::uint32_t{0}},
+                                                [](const auto& a, const auto& b) { return a.first < b.first; });
+            for (auto e = extra.first; e != extra.second; ++e) test(e->second);
             const auto it = std::lower_bound(grid_keys_.begin(), grid_keys_.end(), key);
             if (it == grid_keys_.end() || *it != key) continue;
             const auto k = static_cast<std::size_t>(it - grid_keys_.begin());
@@ -880,8 +888,10 @@ class FidelityMover {
   // The input samples in Morton order, and in a grid: cell keys (sorted), the start of each
   // cell's samples in grid_items_ (one more at the end).
   std::vector<std::uint32_t> probe_order_;
-  // The samples in the grid (the first ones; those made later by recheck_left_out() are not).
+  // The samples in the grid (the first ones; those made later by recheck_left_out() are in
+  // extra_cells_: (cell key, sample), sorted).
   std::size_t n_gridded_ = 0;
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> extra_cells_;
   // The first sweep's left-out face samples (4 f + k, UINT32_MAX once made a sample) by the
   // output face that vouched for them (its start in vouched_items_; one more at the end).
   std::vector<std::uint32_t> vouched_start_, vouched_items_;
