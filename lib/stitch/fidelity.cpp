@@ -19,6 +19,7 @@
 #include "nurbsfront/core/soup.h"
 #include "nurbsfront/core/tolerances.h"
 #include "nurbsfront/quality/aabb_tree.h"
+#include "nurbsfront/quality/internal.h"
 #include "nurbsfront/quality/report.h"
 #include "nurbsfront/stitch/stitch_internal.h"
 
@@ -91,9 +92,10 @@ class FidelityMover {
     std::iota(all.begin(), all.end(), 0U);
     const quality_detail::AabbTree out_tree(out, std::move(all), options_.n_threads);
     const bool full = !incremental_ || first_sweep_;
+    const bool first = first_sweep_;
     if (first_sweep_) select_probes(out, out_tree);
     first_sweep_ = false;
-    const std::size_t n_v = mesh_.n_vertices(), n_in = probes_.size();
+    const std::size_t n_v = mesh_.n_vertices();
     // changed: vertices moved or made in the last sweep (all of them in a full sweep).
     std::vector<std::uint8_t> changed(n_v, full ? 1 : 0);
     for (const int v : changed_vertices_) changed[static_cast<std::size_t>(v)] = 1;
@@ -123,13 +125,18 @@ class FidelityMover {
       }
     }
     // Input samples: their nearest output face and distance (again where it may differ).
-    near_face_.resize(n_in, 0);
-    near_distance_.resize(n_in, 0.0);
     // The first sweep measured every sample in select_probes(); a sweep that measures
     // everything again (not incremental) searches each in the tree.
-    std::vector<std::uint8_t> requery(n_in, full && !just_selected_ ? 1 : 0);
+    std::vector<std::uint8_t> requery(probes_.size(), full && !just_selected_ ? 1 : 0);
     just_selected_ = false;
     if (!full) mark_near_changed_faces(out, face_changed, requery);
+    // The samples the first sweep left out whose vouching face changed and no longer holds
+    // them within the bound: samples from now on, searched below.
+    if (!first) recheck_left_out(out, face_changed);
+    const std::size_t n_in = probes_.size();
+    requery.resize(n_in, 1);
+    near_face_.resize(n_in, UINT32_MAX);
+    near_distance_.resize(n_in, 0.0);
     std::uint32_t hint = UINT32_MAX;
     for (const std::uint32_t i : probe_order_) {
       if (requery[i] == 0) continue;
@@ -189,9 +196,13 @@ class FidelityMover {
       candidates.push_back({near_distance_[i], best, u, u, true, near_face_[i], i});
     }
     if (record_only_) {
-      for (const Candidate& c : candidates) {
-        if (c.input_side) recorded_samples_.push_back({probe_id_[c.sample], c.distance});
-        else recorded_vertices_.push_back({static_cast<std::uint32_t>(c.vertex), c.distance});
+      // Every sample and vertex farther than the bound (later sweeps try only those near
+      // the last sweep's changes).
+      for (std::uint32_t i = 0; i < n_in; ++i) {
+        if (near_distance_[i] > bound_) recorded_samples_.push_back({probe_id_[i], near_distance_[i]});
+      }
+      for (std::size_t i = 0; i < n_v; ++i) {
+        if (fixed_[i] == 0 && vertex_distance_[i] > bound_) recorded_vertices_.push_back({static_cast<std::uint32_t>(i), vertex_distance_[i]});
       }
       return 0;
     }
@@ -284,7 +295,8 @@ class FidelityMover {
     const std::size_t n_vertices = probes_.size();
     locate(quality_detail::morton_order(probes_), 0);
     const std::size_t n_faces = input_soup_.triangles.size();
-    std::vector<std::uint8_t> certified(n_faces, 0);
+    // Per input face the output face that holds it wholly within the bound (UINT32_MAX: none).
+    std::vector<std::uint32_t> certified(n_faces, UINT32_MAX);
     auto to_face2 = [&](const Vec& u, std::uint32_t g) {
       const auto& t = out.triangles[g];
       return (quality_detail::closest_point_on_triangle(u, out.points[t[0]], out.points[t[1]], out.points[t[2]]) - u)
@@ -302,38 +314,55 @@ class FidelityMover {
           within = (j == k ? near_distance_[v] * near_distance_[v] : to_face2(input_soup_.points[v], g)) <= bound2;
         }
         if (within) {
-          certified[f] = 1;
+          certified[f] = g;
           return;
         }
       }
     });
     // The other faces: a sample within the bound of one of its corners' faces is left out
     // (bit k of kept[f]: sample k is kept).
-    auto face_samples = [&](std::size_t f) {
-      const auto& t = input_soup_.triangles[f];
-      const Vec &a = input_soup_.points[t[0]], &b = input_soup_.points[t[1]], &c = input_soup_.points[t[2]];
-      return std::array<Vec, 4>{Vec((a + b + c) / 3.0), Vec(0.5 * (a + b)), Vec(0.5 * (b + c)), Vec(0.5 * (c + a))};
-    };
-    std::vector<std::uint8_t> kept(n_faces, 0);
+    // Per face sample its vouching output face (UINT32_MAX: kept as a sample).
+    std::vector<std::array<std::uint32_t, 4>> vouch(n_faces);
     parallel::for_each_index(n_faces, options_.n_threads, kQueryChunk, [&](std::size_t f) {
-      if (certified[f] != 0) return;
+      if (certified[f] != UINT32_MAX) {
+        vouch[f].fill(certified[f]);
+        return;
+      }
       const auto& t = input_soup_.triangles[f];
       const auto u = face_samples(f);
       for (std::size_t k = 0; k < u.size(); ++k) {
-        bool within = false;
-        for (std::size_t j = 0; j < 3 && !within; ++j) within = to_face2(u[k], near_face_[t[j]]) <= bound2;
-        if (!within) kept[f] = static_cast<std::uint8_t>(kept[f] | (1U << k));
+        vouch[f][k] = UINT32_MAX;
+        for (std::size_t j = 0; j < 3; ++j) {
+          if (to_face2(u[k], near_face_[t[j]]) <= bound2) {
+            vouch[f][k] = near_face_[t[j]];
+            break;
+          }
+        }
       }
     });
+    // The left-out samples by vouching face (face_samples() index 4 f + k): a later sweep
+    // checks them again where that face changed (recheck_left_out()).
+    vouched_start_.assign(out.triangles.size() + 1, 0);
     for (std::size_t f = 0; f < n_faces; ++f) {
       const auto u = face_samples(f);
       for (std::size_t k = 0; k < u.size(); ++k) {
-        if ((kept[f] & (1U << k)) == 0) {
+        if (vouch[f][k] != UINT32_MAX) {
           ++n_certified_;
+          ++vouched_start_[vouch[f][k] + 1];
           continue;
         }
         probe_id_.push_back(static_cast<std::uint32_t>(n_vertices + 4 * f + k));
         probes_.push_back(u[k]);
+      }
+    }
+    std::partial_sum(vouched_start_.begin(), vouched_start_.end(), vouched_start_.begin());
+    vouched_items_.assign(vouched_start_.back(), 0);
+    {
+      std::vector<std::uint32_t> at(vouched_start_.begin(), vouched_start_.end() - 1);
+      for (std::size_t f = 0; f < n_faces; ++f) {
+        for (std::size_t k = 0; k < 4; ++k) {
+          if (vouch[f][k] != UINT32_MAX) vouched_items_[at[vouch[f][k]]++] = static_cast<std::uint32_t>(4 * f + k);
+        }
       }
     }
     std::vector<std::uint32_t> added(probes_.size() - n_vertices);
@@ -341,6 +370,43 @@ class FidelityMover {
     locate(added, n_vertices);
     build_probe_grid(cell_);
     just_selected_ = true;
+  }
+
+  // Input face f's samples besides its corners: its centroid and edge midpoints.
+  std::array<Vec, 4> face_samples(std::size_t f) const {
+    const auto& t = input_soup_.triangles[f];
+    const Vec &a = input_soup_.points[t[0]], &b = input_soup_.points[t[1]], &c = input_soup_.points[t[2]];
+    return {Vec((a + b + c) / 3.0), Vec(0.5 * (a + b)), Vec(0.5 * (b + c)), Vec(0.5 * (c + a))};
+  }
+
+  // The left-out samples vouched for by a changed output face: those it no longer holds
+  // within the bound (its corners where they are now) become samples (appended; searched in
+  // the output's tree by the caller; their grid cells in extra_cells_); the others stay vouched for by it (an unchanged face holds its
+  // samples as before). Serial, in face and sample order: the same for any thread count.
+  void recheck_left_out(const TriangleSoup& out, const std::vector<std::uint8_t>& face_changed) {
+    const double bound2 = bound_ * bound_;
+    const std::size_t n_vertices = input_soup_.points.size();
+    const std::size_t n_vouching = vouched_start_.empty() ? 0 : vouched_start_.size() - 1;
+    for (std::size_t g = 0; g < n_vouching; ++g) {
+      if (face_changed[g] == 0) continue;
+      const auto& t = out.triangles[g];
+      for (std::uint32_t k = vouched_start_[g]; k < vouched_start_[g + 1]; ++k) {
+        std::uint32_t& item = vouched_items_[k];
+        if (item == UINT32_MAX) continue;
+        ++n_rechecked_;
+        const Vec u = face_samples(item / 4)[item % 4];
+        const double d2 =
+            (quality_detail::closest_point_on_triangle(u, out.points[t[0]], out.points[t[1]], out.points[t[2]]) - u).squaredNorm();
+        if (d2 <= bound2) continue;
+        probe_order_.push_back(static_cast<std::uint32_t>(probes_.size()));
+        extra_cells_.emplace_back(grid_key(cell_of(u)), static_cast<std::uint32_t>(probes_.size()));
+        probe_id_.push_back(static_cast<std::uint32_t>(n_vertices + item));
+        probes_.push_back(u);
+        item = UINT32_MAX;
+        ++n_promoted_;
+      }
+    }
+    std::sort(extra_cells_.begin(), extra_cells_.end());
   }
 
   // From face f, steps to the edge neighbour nearer to u while there is one (at most
@@ -369,22 +435,26 @@ class FidelityMover {
   // do not move).
   void build_probe_grid(double cell) {
     probe_order_ = quality_detail::morton_order(probes_);
+    n_gridded_ = probes_.size();
     if (probes_.empty()) return;
     grid_origin_ = probes_[0];
     for (const Vec& p : probes_) grid_origin_ = grid_origin_.cwiseMin(p);
     grid_cell_ = cell > 0.0 ? cell : 1.0;
-    std::vector<std::pair<std::uint64_t, std::uint32_t>> keyed(probes_.size());
-    for (std::uint32_t i = 0; i < probes_.size(); ++i) keyed[i] = {grid_key(cell_of(probes_[i])), i};
-    std::sort(keyed.begin(), keyed.end());
-    grid_items_.resize(keyed.size());
-    for (std::size_t k = 0; k < keyed.size(); ++k) {
-      grid_items_[k] = keyed[k].second;
-      if (k == 0 || keyed[k].first != keyed[k - 1].first) {
-        grid_keys_.push_back(keyed[k].first);
+    // By cell key, then sample (a stable radix sort of the samples in order).
+    std::vector<std::uint64_t> keys(probes_.size());
+    grid_items_.resize(probes_.size());
+    for (std::uint32_t i = 0; i < probes_.size(); ++i) {
+      keys[i] = grid_key(cell_of(probes_[i]));
+      grid_items_[i] = i;
+    }
+    quality_detail::radix_sort(keys, grid_items_);
+    for (std::size_t k = 0; k < keys.size(); ++k) {
+      if (k == 0 || keys[k] != keys[k - 1]) {
+        grid_keys_.push_back(keys[k]);
         grid_start_.push_back(static_cast<std::uint32_t>(k));
       }
     }
-    grid_start_.push_back(static_cast<std::uint32_t>(keyed.size()));
+    grid_start_.push_back(static_cast<std::uint32_t>(keys.size()));
   }
 
   static constexpr std::int64_t kGridAxis = std::int64_t{1} << 21;
@@ -434,6 +504,9 @@ class FidelityMover {
         for (std::int64_t y = a[1]; y <= b[1]; ++y) {
           for (std::int64_t z = a[2]; z <= b[2]; ++z) {
             const std::uint64_t key = grid_key({x, y, z});
+            const auto extra = std::equal_range(extra_cells_.begin(), extra_cells_.end(), std::pair{key, std::uint32_t{0}},
+                                                [](const auto& a, const auto& b) { return a.first < b.first; });
+            for (auto e = extra.first; e != extra.second; ++e) test(e->second);
             const auto it = std::lower_bound(grid_keys_.begin(), grid_keys_.end(), key);
             if (it == grid_keys_.end() || *it != key) continue;
             const auto k = static_cast<std::size_t>(it - grid_keys_.begin());
@@ -785,6 +858,15 @@ class FidelityMover {
   std::size_t n_walked_ = 0, n_searched_ = 0;
   // Face samples the first sweep left out (their face is within the bound of one output face).
   std::size_t n_certified_ = 0;
+  // Left-out samples checked again (their vouching face changed), and of them those made
+  // samples (no longer within the bound of it).
+  std::size_t n_rechecked_ = 0, n_promoted_ = 0;
+  // The sample numbers (probe_id_) of the samples recheck_left_out() made, sorted.
+  std::vector<std::uint32_t> promoted_ids() const {
+    std::vector<std::uint32_t> ids(probe_id_.begin() + static_cast<std::ptrdiff_t>(n_gridded_), probe_id_.end());
+    std::sort(ids.begin(), ids.end());
+    return ids;
+  }
   // When set, a sweep only records its candidates (fidelity_candidates()).
   bool record_only_ = false;
   std::vector<std::pair<std::uint32_t, double>> recorded_samples_, recorded_vertices_;
@@ -806,6 +888,13 @@ class FidelityMover {
   // The input samples in Morton order, and in a grid: cell keys (sorted), the start of each
   // cell's samples in grid_items_ (one more at the end).
   std::vector<std::uint32_t> probe_order_;
+  // The samples in the grid (the first ones; those made later by recheck_left_out() are in
+  // extra_cells_: (cell key, sample), sorted).
+  std::size_t n_gridded_ = 0;
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> extra_cells_;
+  // The first sweep's left-out face samples (4 f + k, UINT32_MAX once made a sample) by the
+  // output face that vouched for them (its start in vouched_items_; one more at the end).
+  std::vector<std::uint32_t> vouched_start_, vouched_items_;
   Vec grid_origin_ = Vec::Zero();
   double grid_cell_ = 1.0;
   std::vector<std::uint64_t> grid_keys_;
@@ -831,15 +920,20 @@ class FidelityMover {
 
 FidelityCandidates fidelity_candidates(const TriMesh& input, const StitchOptions& options,
                                        std::vector<std::uint8_t> is_feature, double reference_edge, StitchResult result,
-                                       bool walk) {
+                                       bool walk, int sweeps_before) {
   FidelityCandidates out;
   const double bound = options.fidelity_distance_edges * reference_edge;
   if (!(bound > 0.0) || input.n_faces() == 0 || result.mesh.n_faces() == 0) return out;
   const FinRimBound rim;
   FidelityMover mover(input, options, bound, reference_edge, rim, walk, result, is_feature,
                       fixed_vertices(result.mesh, result.vertex_node, is_feature));
+  for (int k = 0; k < sweeps_before; ++k) out.n_changed_before += mover.sweep();
   mover.record_only_ = true;
   (void)mover.sweep();
+  out.mesh = result.mesh;
+  out.n_rechecked = mover.n_rechecked_;
+  out.n_promoted = mover.n_promoted_;
+  out.promoted = mover.promoted_ids();
   out.samples = std::move(mover.recorded_samples_);
   out.vertices = std::move(mover.recorded_vertices_);
   std::sort(out.samples.begin(), out.samples.end());
@@ -868,6 +962,8 @@ FidelityResult move_toward_input(const TriMesh& input, const StitchOptions& opti
     ++out.n_sweeps_changing;
   }
   out.n_split = mover.n_splits_;
+  out.n_rechecked = mover.n_rechecked_;
+  out.n_promoted = mover.n_promoted_;
   auto moved = [&](TriMesh::VertexHandle v) {
     const auto i = static_cast<std::size_t>(v.idx());
     return i >= n_vertices || point(mesh, v) != start[i];

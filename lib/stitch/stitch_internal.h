@@ -362,6 +362,9 @@ struct FidelityResult {
   std::size_t n_split = 0;   //!< new vertices on input vertices (edge splits)
   std::size_t n_undone = 0;  //!< moves put back because their triangles crossed others
   std::size_t n_sweeps_changing = 0;  //!< sweeps that moved or split something
+  //! Face samples the first sweep left out, checked again by a later sweep (their vouching
+  //! output face changed), and of them those no longer within the bound of it (made samples).
+  std::size_t n_rechecked = 0, n_promoted = 0;
 };
 
 //! StitchOptions::fidelity_distance_edges (times reference_edge, the input's mean edge): up
@@ -403,15 +406,23 @@ struct FidelityCandidates {
   std::size_t n_searched = 0;  //!< samples searched in the output's tree
   //! Face samples left out: their face's corners are within the bound of one output face.
   std::size_t n_certified = 0;
+  //! With sweeps_before > 0: the moves and splits of those sweeps, the left-out samples
+  //! checked again and made samples by them (and by the recorded sweep), and the output the
+  //! recorded sweep measured.
+  std::size_t n_changed_before = 0, n_rechecked = 0, n_promoted = 0;
+  std::vector<std::uint32_t> promoted;  //!< the samples made so (sorted; numbered as samples)
+  TriMesh mesh;
 };
 
-//! The candidates move_toward_input()'s first sweep would try, without moving anything:
-//! walk = true is its incremental way (a sample is searched in the output's tree only when a
-//! walk over the output from the last sample's face does not end within the bound), false
-//! searches every sample.
+//! The samples and vertices farther than the bound that move_toward_input()'s sweep number
+//! sweeps_before + 1 measures (after sweeps_before sweeps that move), without moving
+//! anything in it: walk = true is its incremental way (the first sweep searches a sample in
+//! the output's tree only when a walk over the output from the last sample's face does not
+//! end within the bound; later sweeps measure again only near the changes), false searches
+//! every sample in every sweep.
 FidelityCandidates fidelity_candidates(const TriMesh& input, const StitchOptions& options,
                                        std::vector<std::uint8_t> is_feature, double reference_edge, StitchResult result,
-                                       bool walk);
+                                       bool walk, int sweeps_before = 0);
 
 //! The old index of every kept element after collect_garbage() (vertices, faces).
 struct GarbageMaps {

@@ -264,6 +264,64 @@ TEST(StitchFidelity, FacesLeftOutHoldNoCandidate) {
   EXPECT_GT(picked.n_certified, 4 * in.triangles.size() * 4 / 5);  // 86% on the brain
 }
 
+// Every input sample (its vertices, then per face its centroid and edge midpoints, as
+// FidelityCandidates::samples numbers them) farther than bound from `output`, with its
+// distance, by index (a search of each in the output's tree).
+std::vector<std::pair<std::uint32_t, double>> far_samples(const TriMesh& input, const TriMesh& output, double bound) {
+  const TriangleSoup out = to_soup(output), in = to_soup(input);
+  std::vector<std::uint32_t> faces(out.triangles.size());
+  std::iota(faces.begin(), faces.end(), 0U);
+  const quality_detail::AabbTree tree(out, faces);
+  std::vector<Eigen::Vector3d> samples = in.points;
+  for (const auto& t : in.triangles) {
+    const Eigen::Vector3d &a = in.points[t[0]], &b = in.points[t[1]], &c = in.points[t[2]];
+    samples.push_back((a + b + c) / 3.0);
+    samples.push_back(0.5 * (a + b));
+    samples.push_back(0.5 * (b + c));
+    samples.push_back(0.5 * (c + a));
+  }
+  std::vector<std::pair<std::uint32_t, double>> far;
+  for (std::uint32_t i = 0; i < samples.size(); ++i) {
+    const double d = std::sqrt(tree.closest(samples[i], UINT32_MAX).squared_distance);
+    if (d > bound) far.emplace_back(i, d);
+  }
+  return far;
+}
+
+TEST(StitchFidelitySlow, LeftOutSamplesAreCheckedAgainAfterLaterMoves) {
+  // The first sweep leaves out the face samples some output face holds within the bound;
+  // the moves of a sweep may then push the output away from such a sample (its own input
+  // vertices stay near). The brain at 0.25 mean edges: after one and after two sweeps that
+  // move, the samples the next sweep measures farther than the bound are exactly those a
+  // search of every sample in the output's tree finds, with the same distances, and some of
+  // them were left out by the first sweep (checked again because their vouching face
+  // changed). Without the re-check those are missed.
+  const Brain brain;
+  const auto& [input, surface, plain_options, plain] = brain;
+  ASSERT_TRUE(plain.report.ok());
+  StitchOptions options = plain_options;
+  options.fidelity_distance_edges = 0.25;
+  const double bound = 0.25 * surface.input_mean_edge;
+  std::size_t n_promoted_far = 0;
+  for (const int before : {1, 2}) {
+    const auto picked = stitch_detail::fidelity_candidates(input, options, border_nodes(surface, plain),
+                                                           surface.input_mean_edge, plain, true, before);
+    ASSERT_GT(picked.n_changed_before, 0u) << before;
+    EXPECT_GT(picked.n_rechecked, 0u) << before;
+    const auto far = far_samples(input, picked.mesh, bound);
+    ASSERT_EQ(picked.samples.size(), far.size()) << before;
+    for (std::size_t k = 0; k < far.size(); ++k) {
+      EXPECT_EQ(picked.samples[k].first, far[k].first) << before;
+      EXPECT_NEAR(picked.samples[k].second, far[k].second, 1e-12 * surface.input_mean_edge) << before;
+    }
+    // Far samples the first sweep had left out.
+    for (const auto& [sample, distance] : far) {
+      if (std::binary_search(picked.promoted.begin(), picked.promoted.end(), sample)) ++n_promoted_far;
+    }
+  }
+  EXPECT_GT(n_promoted_far, 0u);
+}
+
 TEST(StitchFidelitySlow, MovesDoNotDependOnTheThreadCount) {
   // (Slow: 4 s in RelWithDebInfo.) The first sweep's threaded queries (chunks of a fixed size): the same moves and splits,
   // point for point, with one and with two threads.
