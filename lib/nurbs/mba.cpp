@@ -15,6 +15,112 @@
 
 #include "nurbsfront/core/error.h"
 #include "nurbsfront/core/tolerances.h"
+#include "nurbsfront/nurbs/mba_internal.h"
+
+namespace nurbsfront::mba_detail {
+namespace {
+
+// The terms of one element (i, j) of mu D^T D x + eps x, added to o in the order in which
+// the pass-by-pass product added them: the xx differences at i, i - 1 and i - 2 of the row;
+// the yy differences of rows j - 2, j - 1 and j (ya, yb, yc; null where a row has none);
+// the mixed ones of rows j - 1 (md) and j (me) at i and i - 1; then eps x. kAll: i is inside
+// (2 <= i <= nx - 3), so every term of the row exists.
+template <bool kAll>
+inline double element(double o, std::size_t i, std::size_t nx, const double* xx, const double* ya, const double* yb,
+                      const double* yc, const double* md, const double* me, double eps, double x) {
+  if (kAll || i + 2 < nx) o += xx[i];
+  if (kAll || (i >= 1 && i + 1 < nx)) o -= 2.0 * xx[i - 1];
+  if (kAll || i >= 2) o += xx[i - 2];
+  if (ya != nullptr) o += ya[i];
+  if (yb != nullptr) o -= 2.0 * yb[i];
+  if (yc != nullptr) o += yc[i];
+  if (md != nullptr) {
+    if (kAll || i + 1 < nx) o -= md[i];
+    if (kAll || i >= 1) o += md[i - 1];
+  }
+  if (me != nullptr) {
+    if (kAll || i + 1 < nx) o += me[i];
+    if (kAll || i >= 1) o -= me[i - 1];
+  }
+  return o + eps * x;
+}
+
+// The inside elements 2 <= i <= nx - 3 of one row, the rows' terms known at compile time
+// (a loop that vectorises); the same terms as element<true>.
+template <bool kA, bool kB, bool kC, bool kD, bool kE>
+void inside_row(double* o, const double* x, std::size_t nx, const double* xx, const double* ya, const double* yb,
+                const double* yc, const double* md, const double* me, double eps) {
+  for (std::size_t i = 2; i + 2 < nx; ++i) {
+    double v = o[i];
+    v += xx[i];
+    v -= 2.0 * xx[i - 1];
+    v += xx[i - 2];
+    if constexpr (kA) v += ya[i];
+    if constexpr (kB) v -= 2.0 * yb[i];
+    if constexpr (kC) v += yc[i];
+    if constexpr (kD) {
+      v -= md[i];
+      v += md[i - 1];
+    }
+    if constexpr (kE) {
+      v += me[i];
+      v -= me[i - 1];
+    }
+    o[i] = v + eps * x[i];
+  }
+}
+
+}  // namespace
+
+double add_thin_plate_product(const std::vector<double>& x, std::size_t nx, std::size_t ny, double mu, double eps,
+                              std::vector<double>& out, std::vector<double>& scratch) {
+  NURBSFRONT_ASSERT(nx >= 4 && ny >= 4 && x.size() == nx * ny && out.size() == nx * ny);
+  // Rows of differences: xx of the current row, yy of the last three rows, mixed of the last two.
+  scratch.resize(6 * nx);
+  double* xx = scratch.data();
+  double* yy[3] = {xx + nx, xx + 2 * nx, xx + 3 * nx};
+  double* mixed[2] = {xx + 4 * nx, xx + 5 * nx};
+  const double mu2 = 2.0 * mu;
+  double dot = 0.0;
+  for (std::size_t j = 0; j < ny; ++j) {
+    const double* x0 = x.data() + j * nx;
+    for (std::size_t i = 0; i + 2 < nx; ++i) xx[i] = mu * (x0[i] - 2.0 * x0[i + 1] + x0[i + 2]);
+    if (j + 2 < ny) {
+      const double *x1 = x0 + nx, *x2 = x1 + nx;
+      double* d = yy[j % 3];
+      for (std::size_t i = 0; i < nx; ++i) d[i] = mu * (x0[i] - 2.0 * x1[i] + x2[i]);
+    }
+    if (j + 1 < ny) {
+      const double* x1 = x0 + nx;
+      double* d = mixed[j % 2];
+      for (std::size_t i = 0; i + 1 < nx; ++i) d[i] = mu2 * (x0[i] - x0[i + 1] - x1[i] + x1[i + 1]);
+    }
+    // The yy rows j - 2, j - 1, j and the mixed rows j - 1, j that have a difference.
+    const double* ya = j >= 2 ? yy[(j - 2) % 3] : nullptr;
+    const double* yb = j >= 1 && j + 1 < ny ? yy[(j - 1) % 3] : nullptr;
+    const double* yc = j + 2 < ny ? yy[j % 3] : nullptr;
+    const double* md = j >= 1 ? mixed[(j - 1) % 2] : nullptr;
+    const double* me = j + 1 < ny ? mixed[j % 2] : nullptr;
+    double* o = out.data() + j * nx;
+    for (const std::size_t i : {std::size_t{0}, std::size_t{1}}) o[i] = element<false>(o[i], i, nx, xx, ya, yb, yc, md, me, eps, x0[i]);
+    if (j == 0) {
+      inside_row<false, false, true, false, true>(o, x0, nx, xx, ya, yb, yc, md, me, eps);
+    } else if (j == 1) {
+      inside_row<false, true, true, true, true>(o, x0, nx, xx, ya, yb, yc, md, me, eps);
+    } else if (j + 2 < ny) {
+      inside_row<true, true, true, true, true>(o, x0, nx, xx, ya, yb, yc, md, me, eps);
+    } else if (j + 2 == ny) {
+      inside_row<true, true, false, true, true>(o, x0, nx, xx, ya, yb, yc, md, me, eps);
+    } else {
+      inside_row<true, false, false, true, false>(o, x0, nx, xx, ya, yb, yc, md, me, eps);
+    }
+    for (const std::size_t i : {nx - 2, nx - 1}) o[i] = element<false>(o[i], i, nx, xx, ya, yb, yc, md, me, eps, x0[i]);
+    for (std::size_t i = 0; i < nx; ++i) dot += x0[i] * o[i];
+  }
+  return dot;
+}
+
+}  // namespace nurbsfront::mba_detail
 
 namespace nurbsfront {
 namespace {
@@ -374,43 +480,6 @@ class NormalMatrix {
   std::vector<double> padded_;
 };
 
-// out += mu * D^T D x (add_thin_plate_diagonal's D) by whole lattice rows: each second
-// difference into a scratch row first, then its three or four spreads (loops that vectorise).
-void add_thin_plate_product(const std::vector<double>& x, std::size_t nx, std::size_t ny, double mu, std::vector<double>& out,
-                            std::vector<double>& d) {
-  d.resize(nx);
-  if (nx >= 3) {  // xx differences
-    for (std::size_t j = 0; j < ny; ++j) {
-      const double* xr = x.data() + j * nx;
-      double* o = out.data() + j * nx;
-      const std::size_t n = nx - 2;
-      for (std::size_t i = 0; i < n; ++i) d[i] = mu * (xr[i] - 2.0 * xr[i + 1] + xr[i + 2]);
-      for (std::size_t i = 0; i < n; ++i) o[i] += d[i];
-      for (std::size_t i = 0; i < n; ++i) o[i + 1] -= 2.0 * d[i];
-      for (std::size_t i = 0; i < n; ++i) o[i + 2] += d[i];
-    }
-  }
-  for (std::size_t j = 0; j + 2 < ny; ++j) {  // yy differences
-    const double *x0 = x.data() + j * nx, *x1 = x0 + nx, *x2 = x1 + nx;
-    double *o0 = out.data() + j * nx, *o1 = o0 + nx, *o2 = o1 + nx;
-    for (std::size_t i = 0; i < nx; ++i) d[i] = mu * (x0[i] - 2.0 * x1[i] + x2[i]);
-    for (std::size_t i = 0; i < nx; ++i) o0[i] += d[i];
-    for (std::size_t i = 0; i < nx; ++i) o1[i] -= 2.0 * d[i];
-    for (std::size_t i = 0; i < nx; ++i) o2[i] += d[i];
-  }
-  if (nx < 2) return;
-  for (std::size_t j = 0; j + 1 < ny; ++j) {  // mixed differences, weight 2
-    const double *x0 = x.data() + j * nx, *x1 = x0 + nx;
-    double *o0 = out.data() + j * nx, *o1 = o0 + nx;
-    const std::size_t n = nx - 1;
-    for (std::size_t i = 0; i < n; ++i) d[i] = 2.0 * mu * (x0[i] - x0[i + 1] - x1[i] + x1[i + 1]);
-    for (std::size_t i = 0; i < n; ++i) o0[i] += d[i];
-    for (std::size_t i = 0; i < n; ++i) o0[i + 1] -= d[i];
-    for (std::size_t i = 0; i < n; ++i) o1[i] -= d[i];
-    for (std::size_t i = 0; i < n; ++i) o1[i + 1] += d[i];
-  }
-}
-
 // The least-squares polish (FitOptions::least_squares_iterations): the change delta of the
 // n_x x n_y lattice's coefficients minimising |B delta - r|^2 + mu |D delta|^2 + eps |delta|^2
 // by Jacobi-preconditioned conjugate gradients on the normal equations (matrix-free: B is
@@ -449,14 +518,13 @@ Lattice least_squares_polish(const PointWeights& weights, const std::vector<doub
   }
   const bool banded = normal->built();
   std::vector<double> scratch;
-  auto apply = [&](const std::vector<double>& x, std::vector<double>& out) {  // out = A x
+  auto apply = [&](const std::vector<double>& x, std::vector<double>& out) {  // out = A x; returns x . out
     if (banded) {
       normal->apply(x, out);
     } else {
       scatter_points(weights, nullptr, &x, nx, out, nullptr);
     }
-    add_thin_plate_product(x, nx, ny, mu, out, scratch);
-    for (std::size_t k = 0; k < size; ++k) out[k] += eps * x[k];
+    return mba_detail::add_thin_plate_product(x, nx, ny, mu, eps, out, scratch);
   };
   for (std::size_t k = 0; k < size; ++k) z[k] = residual[k] / diagonal[k];
   std::vector<double> p = z;
@@ -467,23 +535,19 @@ Lattice least_squares_polish(const PointWeights& weights, const std::vector<doub
   }
   constexpr double kRelativeStop = 1e-8;
   for (int it = 0; it < iterations && rz > 0.0; ++it) {
-    apply(p, a_p);
-    double p_ap = 0.0;
-    for (std::size_t k = 0; k < size; ++k) p_ap += p[k] * a_p[k];
+    const double p_ap = apply(p, a_p);
     if (!(p_ap > 0.0)) break;
     const double alpha = rz / p_ap;
-    double r_norm = 0.0;
+    // The preconditioned residual in the same loop (unused when the loop stops here).
+    double r_norm = 0.0, rz_next = 0.0;
     for (std::size_t k = 0; k < size; ++k) {
       delta.phi[k] += alpha * p[k];
       residual[k] -= alpha * a_p[k];
       r_norm += residual[k] * residual[k];
-    }
-    if (r_norm <= kRelativeStop * kRelativeStop * b_norm) break;
-    double rz_next = 0.0;
-    for (std::size_t k = 0; k < size; ++k) {
       z[k] = residual[k] / diagonal[k];
       rz_next += residual[k] * z[k];
     }
+    if (r_norm <= kRelativeStop * kRelativeStop * b_norm) break;
     const double beta = rz_next / rz;
     rz = rz_next;
     for (std::size_t k = 0; k < size; ++k) p[k] = z[k] + beta * p[k];
