@@ -198,6 +198,7 @@ class PointWeights {
     for (std::size_t b = 0; b < blocks_.size(); ++b) block_weights(pts.data() + b * kBlock, size(b), scale, shape_, blocks_[b]);
   }
   [[nodiscard]] std::size_t n_blocks() const { return (pts_.size() + kBlock - 1) / kBlock; }
+  [[nodiscard]] bool cached() const { return !blocks_.empty(); }
   [[nodiscard]] std::size_t size(std::size_t b) const { return std::min(kBlock, pts_.size() - b * kBlock); }
   //! Block b: the stored one, or computed into `scratch`.
   [[nodiscard]] const WeightBlock& block(std::size_t b, WeightBlock& scratch) const {
@@ -230,8 +231,16 @@ inline double block_value(const double* phi, std::size_t stride, const WeightBlo
 // of w^2 phi_c are made (the final passes on one lattice share it: half the scatter's
 // products), else it is made here beside them and stored. The same sums in the same order
 // either way, so the same lattice bit for bit.
+//
+// With omega known and the weights stored, the per-point products that do not depend on r
+// (bx_k^3, by_l^3 and sum w^2) are made once, in `cubes`, for all the passes on that lattice.
+struct CubeBlock {
+  double bx3[4][kBlock];
+  double by3[4][kBlock];
+  double sum_sq[kBlock];  // sum of w^2: (sum_k bx_k^2) (sum_l by_l^2)
+};
 Lattice approximate_level(const PointWeights& weights, const std::vector<double>& r, int n_x, int n_y,
-                          std::vector<double>& omega) {
+                          std::vector<double>& omega, std::vector<CubeBlock>& cubes) {
   Lattice lattice{n_x, n_y, {}};
   const std::size_t size = lattice.stride() * (static_cast<std::size_t>(n_y) + 3);
   const std::size_t stride = lattice.stride();
@@ -245,9 +254,38 @@ Lattice approximate_level(const PointWeights& weights, const std::vector<double>
   using Row = Eigen::Array<double, 8, 1>;
   double factor[kBlock];
   WeightBlock scratch;
+  if (known && weights.cached() && cubes.empty()) {
+    cubes.resize(weights.n_blocks());
+    for (std::size_t b = 0; b < weights.n_blocks(); ++b) {
+      const WeightBlock& w = weights.block(b, scratch);
+      CubeBlock& c = cubes[b];
+      const std::size_t n = weights.size(b);
+      for (std::size_t k = 0; k < 4; ++k)
+        for (std::size_t q = 0; q < n; ++q) c.bx3[k][q] = (w.bx[k][q] * w.bx[k][q]) * w.bx[k][q];
+      for (std::size_t l = 0; l < 4; ++l)
+        for (std::size_t q = 0; q < n; ++q) c.by3[l][q] = (w.by[l][q] * w.by[l][q]) * w.by[l][q];
+      for (std::size_t q = 0; q < n; ++q) {
+        const double sx = w.bx[0][q] * w.bx[0][q] + w.bx[1][q] * w.bx[1][q] + w.bx[2][q] * w.bx[2][q] + w.bx[3][q] * w.bx[3][q];
+        const double sy = w.by[0][q] * w.by[0][q] + w.by[1][q] * w.by[1][q] + w.by[2][q] * w.by[2][q] + w.by[3][q] * w.by[3][q];
+        c.sum_sq[q] = sx * sy;
+      }
+    }
+  }
   for (std::size_t b = 0; b < weights.n_blocks(); ++b) {
     const WeightBlock& w = weights.block(b, scratch);
     const std::size_t first = b * kBlock, n = weights.size(b);
+    if (known && !cubes.empty()) {
+      const CubeBlock& c = cubes[b];
+      for (std::size_t q = 0; q < n; ++q) factor[q] = r[first + q] / c.sum_sq[q];
+      for (std::size_t q = 0; q < n; ++q) {
+        const Eigen::Array4d x(c.bx3[0][q], c.bx3[1][q], c.bx3[2][q], c.bx3[3][q]);
+        for (std::size_t l = 0; l < 4; ++l) {
+          Eigen::Map<Eigen::Array4d> a(acc.data() + w.offset[q] + l * stride);
+          a += x * (c.by3[l][q] * factor[q]);
+        }
+      }
+      continue;
+    }
     for (std::size_t q = 0; q < n; ++q) {
       const double sx = w.bx[0][q] * w.bx[0][q] + w.bx[1][q] * w.bx[1][q] + w.bx[2][q] * w.bx[2][q] + w.bx[3][q] * w.bx[3][q];
       const double sy = w.by[0][q] * w.by[0][q] + w.by[1][q] * w.by[1][q] + w.by[2][q] * w.by[2][q] + w.by[3][q] * w.by[3][q];
@@ -272,6 +310,7 @@ Lattice approximate_level(const PointWeights& weights, const std::vector<double>
         x[2 * k] = b2 * w.bx[k][q];
         x[2 * k + 1] = b2;
       }
+
       for (int l = 0; l < 4; ++l) {
         const double b2 = w.by[l][q] * w.by[l][q];
         Eigen::Map<Row> a(acc.data() + 2 * (w.offset[q] + static_cast<std::size_t>(l) * stride));
@@ -759,6 +798,7 @@ FitResult fit_height_field(const std::vector<Eigen::Vector3d>& points, const Fit
   // passes and the polishes run on that lattice and reuse them.
   std::optional<PointWeights> finest;
   std::vector<double> omega;
+  std::vector<CubeBlock> cubes;
   for (int level = 0;; ++level) {
     const double scale = std::ldexp(1.0, level);
     const double n_xd = n_x0 * scale;  // doubles: no int overflow before the size check
@@ -784,8 +824,9 @@ FitResult fit_height_field(const std::vector<Eigen::Vector3d>& points, const Fit
     const int n_x = static_cast<int>(n_xd);
     const int n_y = static_cast<int>(n_yd);
     omega.clear();
+    cubes.clear();
     const PointWeights& weights = finest.emplace(pts, scale, n_x, n_y, pts.size() <= PointWeights::kMaxCachedPoints);
-    const Lattice lattice = approximate_level(weights, r, n_x, n_y, omega);
+    const Lattice lattice = approximate_level(weights, r, n_x, n_y, omega, cubes);
     double sum_sq = 0.0;
     std::tie(max_residual, sum_sq) = subtract_level(lattice, weights, r);
     FitLevel report;
@@ -822,7 +863,7 @@ FitResult fit_height_field(const std::vector<Eigen::Vector3d>& points, const Fit
                       result.levels.back().n_cells_y == n_y);
     const PointWeights& weights = *finest;
     for (int pass = 0; pass < options.final_passes && max_residual > result.tolerance; ++pass) {
-      const Lattice lattice = approximate_level(weights, r, n_x, n_y, omega);
+      const Lattice lattice = approximate_level(weights, r, n_x, n_y, omega, cubes);
       max_residual = subtract_level(lattice, weights, r).first;
       auto& coefficients = field.mutable_coefficients();
       for (std::size_t k = 0; k < coefficients.size(); ++k) coefficients[k] += lattice.phi[k];
