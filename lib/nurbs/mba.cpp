@@ -15,6 +15,112 @@
 
 #include "nurbsfront/core/error.h"
 #include "nurbsfront/core/tolerances.h"
+#include "nurbsfront/nurbs/mba_internal.h"
+
+namespace nurbsfront::mba_detail {
+namespace {
+
+// The terms of one element (i, j) of mu D^T D x + eps x, added to o in the order in which
+// the pass-by-pass product added them: the xx differences at i, i - 1 and i - 2 of the row;
+// the yy differences of rows j - 2, j - 1 and j (ya, yb, yc; null where a row has none);
+// the mixed ones of rows j - 1 (md) and j (me) at i and i - 1; then eps x. kAll: i is inside
+// (2 <= i <= nx - 3), so every term of the row exists.
+template <bool kAll>
+inline double element(double o, std::size_t i, std::size_t nx, const double* xx, const double* ya, const double* yb,
+                      const double* yc, const double* md, const double* me, double eps, double x) {
+  if (kAll || i + 2 < nx) o += xx[i];
+  if (kAll || (i >= 1 && i + 1 < nx)) o -= 2.0 * xx[i - 1];
+  if (kAll || i >= 2) o += xx[i - 2];
+  if (ya != nullptr) o += ya[i];
+  if (yb != nullptr) o -= 2.0 * yb[i];
+  if (yc != nullptr) o += yc[i];
+  if (md != nullptr) {
+    if (kAll || i + 1 < nx) o -= md[i];
+    if (kAll || i >= 1) o += md[i - 1];
+  }
+  if (me != nullptr) {
+    if (kAll || i + 1 < nx) o += me[i];
+    if (kAll || i >= 1) o -= me[i - 1];
+  }
+  return o + eps * x;
+}
+
+// The inside elements 2 <= i <= nx - 3 of one row, the rows' terms known at compile time
+// (a loop that vectorises); the same terms as element<true>.
+template <bool kA, bool kB, bool kC, bool kD, bool kE>
+void inside_row(double* o, const double* x, std::size_t nx, const double* xx, const double* ya, const double* yb,
+                const double* yc, const double* md, const double* me, double eps) {
+  for (std::size_t i = 2; i + 2 < nx; ++i) {
+    double v = o[i];
+    v += xx[i];
+    v -= 2.0 * xx[i - 1];
+    v += xx[i - 2];
+    if constexpr (kA) v += ya[i];
+    if constexpr (kB) v -= 2.0 * yb[i];
+    if constexpr (kC) v += yc[i];
+    if constexpr (kD) {
+      v -= md[i];
+      v += md[i - 1];
+    }
+    if constexpr (kE) {
+      v += me[i];
+      v -= me[i - 1];
+    }
+    o[i] = v + eps * x[i];
+  }
+}
+
+}  // namespace
+
+double add_thin_plate_product(const std::vector<double>& x, std::size_t nx, std::size_t ny, double mu, double eps,
+                              std::vector<double>& out, std::vector<double>& scratch) {
+  NURBSFRONT_ASSERT(nx >= 4 && ny >= 4 && x.size() == nx * ny && out.size() == nx * ny);
+  // Rows of differences: xx of the current row, yy of the last three rows, mixed of the last two.
+  scratch.resize(6 * nx);
+  double* xx = scratch.data();
+  double* yy[3] = {xx + nx, xx + 2 * nx, xx + 3 * nx};
+  double* mixed[2] = {xx + 4 * nx, xx + 5 * nx};
+  const double mu2 = 2.0 * mu;
+  double dot = 0.0;
+  for (std::size_t j = 0; j < ny; ++j) {
+    const double* x0 = x.data() + j * nx;
+    for (std::size_t i = 0; i + 2 < nx; ++i) xx[i] = mu * (x0[i] - 2.0 * x0[i + 1] + x0[i + 2]);
+    if (j + 2 < ny) {
+      const double *x1 = x0 + nx, *x2 = x1 + nx;
+      double* d = yy[j % 3];
+      for (std::size_t i = 0; i < nx; ++i) d[i] = mu * (x0[i] - 2.0 * x1[i] + x2[i]);
+    }
+    if (j + 1 < ny) {
+      const double* x1 = x0 + nx;
+      double* d = mixed[j % 2];
+      for (std::size_t i = 0; i + 1 < nx; ++i) d[i] = mu2 * (x0[i] - x0[i + 1] - x1[i] + x1[i + 1]);
+    }
+    // The yy rows j - 2, j - 1, j and the mixed rows j - 1, j that have a difference.
+    const double* ya = j >= 2 ? yy[(j - 2) % 3] : nullptr;
+    const double* yb = j >= 1 && j + 1 < ny ? yy[(j - 1) % 3] : nullptr;
+    const double* yc = j + 2 < ny ? yy[j % 3] : nullptr;
+    const double* md = j >= 1 ? mixed[(j - 1) % 2] : nullptr;
+    const double* me = j + 1 < ny ? mixed[j % 2] : nullptr;
+    double* o = out.data() + j * nx;
+    for (const std::size_t i : {std::size_t{0}, std::size_t{1}}) o[i] = element<false>(o[i], i, nx, xx, ya, yb, yc, md, me, eps, x0[i]);
+    if (j == 0) {
+      inside_row<false, false, true, false, true>(o, x0, nx, xx, ya, yb, yc, md, me, eps);
+    } else if (j == 1) {
+      inside_row<false, true, true, true, true>(o, x0, nx, xx, ya, yb, yc, md, me, eps);
+    } else if (j + 2 < ny) {
+      inside_row<true, true, true, true, true>(o, x0, nx, xx, ya, yb, yc, md, me, eps);
+    } else if (j + 2 == ny) {
+      inside_row<true, true, false, true, true>(o, x0, nx, xx, ya, yb, yc, md, me, eps);
+    } else {
+      inside_row<true, false, false, true, false>(o, x0, nx, xx, ya, yb, yc, md, me, eps);
+    }
+    for (const std::size_t i : {nx - 2, nx - 1}) o[i] = element<false>(o[i], i, nx, xx, ya, yb, yc, md, me, eps, x0[i]);
+    for (std::size_t i = 0; i < nx; ++i) dot += x0[i] * o[i];
+  }
+  return dot;
+}
+
+}  // namespace nurbsfront::mba_detail
 
 namespace nurbsfront {
 namespace {
@@ -92,6 +198,7 @@ class PointWeights {
     for (std::size_t b = 0; b < blocks_.size(); ++b) block_weights(pts.data() + b * kBlock, size(b), scale, shape_, blocks_[b]);
   }
   [[nodiscard]] std::size_t n_blocks() const { return (pts_.size() + kBlock - 1) / kBlock; }
+  [[nodiscard]] bool cached() const { return !blocks_.empty(); }
   [[nodiscard]] std::size_t size(std::size_t b) const { return std::min(kBlock, pts_.size() - b * kBlock); }
   //! Block b: the stored one, or computed into `scratch`.
   [[nodiscard]] const WeightBlock& block(std::size_t b, WeightBlock& scratch) const {
@@ -124,8 +231,16 @@ inline double block_value(const double* phi, std::size_t stride, const WeightBlo
 // of w^2 phi_c are made (the final passes on one lattice share it: half the scatter's
 // products), else it is made here beside them and stored. The same sums in the same order
 // either way, so the same lattice bit for bit.
+//
+// With omega known and the weights stored, the per-point products that do not depend on r
+// (bx_k^3, by_l^3 and sum w^2) are made once, in `cubes`, for all the passes on that lattice.
+struct CubeBlock {
+  double bx3[4][kBlock];
+  double by3[4][kBlock];
+  double sum_sq[kBlock];  // sum of w^2: (sum_k bx_k^2) (sum_l by_l^2)
+};
 Lattice approximate_level(const PointWeights& weights, const std::vector<double>& r, int n_x, int n_y,
-                          std::vector<double>& omega) {
+                          std::vector<double>& omega, std::vector<CubeBlock>& cubes) {
   Lattice lattice{n_x, n_y, {}};
   const std::size_t size = lattice.stride() * (static_cast<std::size_t>(n_y) + 3);
   const std::size_t stride = lattice.stride();
@@ -139,9 +254,38 @@ Lattice approximate_level(const PointWeights& weights, const std::vector<double>
   using Row = Eigen::Array<double, 8, 1>;
   double factor[kBlock];
   WeightBlock scratch;
+  if (known && weights.cached() && cubes.empty()) {
+    cubes.resize(weights.n_blocks());
+    for (std::size_t b = 0; b < weights.n_blocks(); ++b) {
+      const WeightBlock& w = weights.block(b, scratch);
+      CubeBlock& c = cubes[b];
+      const std::size_t n = weights.size(b);
+      for (std::size_t k = 0; k < 4; ++k)
+        for (std::size_t q = 0; q < n; ++q) c.bx3[k][q] = (w.bx[k][q] * w.bx[k][q]) * w.bx[k][q];
+      for (std::size_t l = 0; l < 4; ++l)
+        for (std::size_t q = 0; q < n; ++q) c.by3[l][q] = (w.by[l][q] * w.by[l][q]) * w.by[l][q];
+      for (std::size_t q = 0; q < n; ++q) {
+        const double sx = w.bx[0][q] * w.bx[0][q] + w.bx[1][q] * w.bx[1][q] + w.bx[2][q] * w.bx[2][q] + w.bx[3][q] * w.bx[3][q];
+        const double sy = w.by[0][q] * w.by[0][q] + w.by[1][q] * w.by[1][q] + w.by[2][q] * w.by[2][q] + w.by[3][q] * w.by[3][q];
+        c.sum_sq[q] = sx * sy;
+      }
+    }
+  }
   for (std::size_t b = 0; b < weights.n_blocks(); ++b) {
     const WeightBlock& w = weights.block(b, scratch);
     const std::size_t first = b * kBlock, n = weights.size(b);
+    if (known && !cubes.empty()) {
+      const CubeBlock& c = cubes[b];
+      for (std::size_t q = 0; q < n; ++q) factor[q] = r[first + q] / c.sum_sq[q];
+      for (std::size_t q = 0; q < n; ++q) {
+        const Eigen::Array4d x(c.bx3[0][q], c.bx3[1][q], c.bx3[2][q], c.bx3[3][q]);
+        for (std::size_t l = 0; l < 4; ++l) {
+          Eigen::Map<Eigen::Array4d> a(acc.data() + w.offset[q] + l * stride);
+          a += x * (c.by3[l][q] * factor[q]);
+        }
+      }
+      continue;
+    }
     for (std::size_t q = 0; q < n; ++q) {
       const double sx = w.bx[0][q] * w.bx[0][q] + w.bx[1][q] * w.bx[1][q] + w.bx[2][q] * w.bx[2][q] + w.bx[3][q] * w.bx[3][q];
       const double sy = w.by[0][q] * w.by[0][q] + w.by[1][q] * w.by[1][q] + w.by[2][q] * w.by[2][q] + w.by[3][q] * w.by[3][q];
@@ -166,6 +310,7 @@ Lattice approximate_level(const PointWeights& weights, const std::vector<double>
         x[2 * k] = b2 * w.bx[k][q];
         x[2 * k + 1] = b2;
       }
+
       for (int l = 0; l < 4; ++l) {
         const double b2 = w.by[l][q] * w.by[l][q];
         Eigen::Map<Row> a(acc.data() + 2 * (w.offset[q] + static_cast<std::size_t>(l) * stride));
@@ -374,43 +519,6 @@ class NormalMatrix {
   std::vector<double> padded_;
 };
 
-// out += mu * D^T D x (add_thin_plate_diagonal's D) by whole lattice rows: each second
-// difference into a scratch row first, then its three or four spreads (loops that vectorise).
-void add_thin_plate_product(const std::vector<double>& x, std::size_t nx, std::size_t ny, double mu, std::vector<double>& out,
-                            std::vector<double>& d) {
-  d.resize(nx);
-  if (nx >= 3) {  // xx differences
-    for (std::size_t j = 0; j < ny; ++j) {
-      const double* xr = x.data() + j * nx;
-      double* o = out.data() + j * nx;
-      const std::size_t n = nx - 2;
-      for (std::size_t i = 0; i < n; ++i) d[i] = mu * (xr[i] - 2.0 * xr[i + 1] + xr[i + 2]);
-      for (std::size_t i = 0; i < n; ++i) o[i] += d[i];
-      for (std::size_t i = 0; i < n; ++i) o[i + 1] -= 2.0 * d[i];
-      for (std::size_t i = 0; i < n; ++i) o[i + 2] += d[i];
-    }
-  }
-  for (std::size_t j = 0; j + 2 < ny; ++j) {  // yy differences
-    const double *x0 = x.data() + j * nx, *x1 = x0 + nx, *x2 = x1 + nx;
-    double *o0 = out.data() + j * nx, *o1 = o0 + nx, *o2 = o1 + nx;
-    for (std::size_t i = 0; i < nx; ++i) d[i] = mu * (x0[i] - 2.0 * x1[i] + x2[i]);
-    for (std::size_t i = 0; i < nx; ++i) o0[i] += d[i];
-    for (std::size_t i = 0; i < nx; ++i) o1[i] -= 2.0 * d[i];
-    for (std::size_t i = 0; i < nx; ++i) o2[i] += d[i];
-  }
-  if (nx < 2) return;
-  for (std::size_t j = 0; j + 1 < ny; ++j) {  // mixed differences, weight 2
-    const double *x0 = x.data() + j * nx, *x1 = x0 + nx;
-    double *o0 = out.data() + j * nx, *o1 = o0 + nx;
-    const std::size_t n = nx - 1;
-    for (std::size_t i = 0; i < n; ++i) d[i] = 2.0 * mu * (x0[i] - x0[i + 1] - x1[i] + x1[i + 1]);
-    for (std::size_t i = 0; i < n; ++i) o0[i] += d[i];
-    for (std::size_t i = 0; i < n; ++i) o0[i + 1] -= d[i];
-    for (std::size_t i = 0; i < n; ++i) o1[i] -= d[i];
-    for (std::size_t i = 0; i < n; ++i) o1[i + 1] += d[i];
-  }
-}
-
 // The least-squares polish (FitOptions::least_squares_iterations): the change delta of the
 // n_x x n_y lattice's coefficients minimising |B delta - r|^2 + mu |D delta|^2 + eps |delta|^2
 // by Jacobi-preconditioned conjugate gradients on the normal equations (matrix-free: B is
@@ -449,14 +557,13 @@ Lattice least_squares_polish(const PointWeights& weights, const std::vector<doub
   }
   const bool banded = normal->built();
   std::vector<double> scratch;
-  auto apply = [&](const std::vector<double>& x, std::vector<double>& out) {  // out = A x
+  auto apply = [&](const std::vector<double>& x, std::vector<double>& out) {  // out = A x; returns x . out
     if (banded) {
       normal->apply(x, out);
     } else {
       scatter_points(weights, nullptr, &x, nx, out, nullptr);
     }
-    add_thin_plate_product(x, nx, ny, mu, out, scratch);
-    for (std::size_t k = 0; k < size; ++k) out[k] += eps * x[k];
+    return mba_detail::add_thin_plate_product(x, nx, ny, mu, eps, out, scratch);
   };
   for (std::size_t k = 0; k < size; ++k) z[k] = residual[k] / diagonal[k];
   std::vector<double> p = z;
@@ -467,23 +574,19 @@ Lattice least_squares_polish(const PointWeights& weights, const std::vector<doub
   }
   constexpr double kRelativeStop = 1e-8;
   for (int it = 0; it < iterations && rz > 0.0; ++it) {
-    apply(p, a_p);
-    double p_ap = 0.0;
-    for (std::size_t k = 0; k < size; ++k) p_ap += p[k] * a_p[k];
+    const double p_ap = apply(p, a_p);
     if (!(p_ap > 0.0)) break;
     const double alpha = rz / p_ap;
-    double r_norm = 0.0;
+    // The preconditioned residual in the same loop (unused when the loop stops here).
+    double r_norm = 0.0, rz_next = 0.0;
     for (std::size_t k = 0; k < size; ++k) {
       delta.phi[k] += alpha * p[k];
       residual[k] -= alpha * a_p[k];
       r_norm += residual[k] * residual[k];
-    }
-    if (r_norm <= kRelativeStop * kRelativeStop * b_norm) break;
-    double rz_next = 0.0;
-    for (std::size_t k = 0; k < size; ++k) {
       z[k] = residual[k] / diagonal[k];
       rz_next += residual[k] * z[k];
     }
+    if (r_norm <= kRelativeStop * kRelativeStop * b_norm) break;
     const double beta = rz_next / rz;
     rz = rz_next;
     for (std::size_t k = 0; k < size; ++k) p[k] = z[k] + beta * p[k];
@@ -695,6 +798,7 @@ FitResult fit_height_field(const std::vector<Eigen::Vector3d>& points, const Fit
   // passes and the polishes run on that lattice and reuse them.
   std::optional<PointWeights> finest;
   std::vector<double> omega;
+  std::vector<CubeBlock> cubes;
   for (int level = 0;; ++level) {
     const double scale = std::ldexp(1.0, level);
     const double n_xd = n_x0 * scale;  // doubles: no int overflow before the size check
@@ -720,8 +824,9 @@ FitResult fit_height_field(const std::vector<Eigen::Vector3d>& points, const Fit
     const int n_x = static_cast<int>(n_xd);
     const int n_y = static_cast<int>(n_yd);
     omega.clear();
+    cubes.clear();
     const PointWeights& weights = finest.emplace(pts, scale, n_x, n_y, pts.size() <= PointWeights::kMaxCachedPoints);
-    const Lattice lattice = approximate_level(weights, r, n_x, n_y, omega);
+    const Lattice lattice = approximate_level(weights, r, n_x, n_y, omega, cubes);
     double sum_sq = 0.0;
     std::tie(max_residual, sum_sq) = subtract_level(lattice, weights, r);
     FitLevel report;
@@ -758,7 +863,7 @@ FitResult fit_height_field(const std::vector<Eigen::Vector3d>& points, const Fit
                       result.levels.back().n_cells_y == n_y);
     const PointWeights& weights = *finest;
     for (int pass = 0; pass < options.final_passes && max_residual > result.tolerance; ++pass) {
-      const Lattice lattice = approximate_level(weights, r, n_x, n_y, omega);
+      const Lattice lattice = approximate_level(weights, r, n_x, n_y, omega, cubes);
       max_residual = subtract_level(lattice, weights, r).first;
       auto& coefficients = field.mutable_coefficients();
       for (std::size_t k = 0; k < coefficients.size(); ++k) coefficients[k] += lattice.phi[k];

@@ -1,7 +1,9 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include <gtest/gtest.h>
 
+#include <bit>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <functional>
 #include <random>
@@ -9,6 +11,7 @@
 #include "nurbsfront/core/error.h"
 #include "nurbsfront/nurbs/height_field.h"
 #include "nurbsfront/nurbs/mba.h"
+#include "nurbsfront/nurbs/mba_internal.h"
 
 namespace nurbsfront {
 namespace {
@@ -151,6 +154,73 @@ TEST(HeightField, NurbsConversionAgreesToRoundOff) {
     }
   }
   EXPECT_LE(max_err, 1e-12);
+}
+
+// The least-squares polish's product out += mu D^T D x + eps x and the dot product x . out as
+// they were made before session 17: pass by pass over whole lattice rows (xx, then yy, then
+// mixed differences, then eps), the dot product in a last pass.
+double thin_plate_product_by_passes(const std::vector<double>& x, std::size_t nx, std::size_t ny, double mu, double eps,
+                                    std::vector<double>& out) {
+  std::vector<double> d(nx);
+  for (std::size_t j = 0; j < ny; ++j) {
+    const double* xr = x.data() + j * nx;
+    double* o = out.data() + j * nx;
+    const std::size_t n = nx - 2;
+    for (std::size_t i = 0; i < n; ++i) d[i] = mu * (xr[i] - 2.0 * xr[i + 1] + xr[i + 2]);
+    for (std::size_t i = 0; i < n; ++i) o[i] += d[i];
+    for (std::size_t i = 0; i < n; ++i) o[i + 1] -= 2.0 * d[i];
+    for (std::size_t i = 0; i < n; ++i) o[i + 2] += d[i];
+  }
+  for (std::size_t j = 0; j + 2 < ny; ++j) {
+    const double *x0 = x.data() + j * nx, *x1 = x0 + nx, *x2 = x1 + nx;
+    double *o0 = out.data() + j * nx, *o1 = o0 + nx, *o2 = o1 + nx;
+    for (std::size_t i = 0; i < nx; ++i) d[i] = mu * (x0[i] - 2.0 * x1[i] + x2[i]);
+    for (std::size_t i = 0; i < nx; ++i) o0[i] += d[i];
+    for (std::size_t i = 0; i < nx; ++i) o1[i] -= 2.0 * d[i];
+    for (std::size_t i = 0; i < nx; ++i) o2[i] += d[i];
+  }
+  for (std::size_t j = 0; j + 1 < ny; ++j) {
+    const double *x0 = x.data() + j * nx, *x1 = x0 + nx;
+    double *o0 = out.data() + j * nx, *o1 = o0 + nx;
+    const std::size_t n = nx - 1;
+    for (std::size_t i = 0; i < n; ++i) d[i] = 2.0 * mu * (x0[i] - x0[i + 1] - x1[i] + x1[i + 1]);
+    for (std::size_t i = 0; i < n; ++i) o0[i] += d[i];
+    for (std::size_t i = 0; i < n; ++i) o0[i + 1] -= d[i];
+    for (std::size_t i = 0; i < n; ++i) o1[i] -= d[i];
+    for (std::size_t i = 0; i < n; ++i) o1[i + 1] += d[i];
+  }
+  for (std::size_t k = 0; k < out.size(); ++k) out[k] += eps * x[k];
+  double dot = 0.0;
+  for (std::size_t k = 0; k < out.size(); ++k) dot += x[k] * out[k];
+  return dot;
+}
+
+TEST(Mba, ThinPlateProductInOnePassIsThePassByPassOneBitForBit) {
+  std::mt19937 rng(17);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  std::vector<double> scratch;
+  // Every row and column case: the smallest lattice (4 x 4, no inside element), narrow and
+  // wide ones; values of mixed magnitudes so that the order of the additions shows.
+  for (const auto& [nx, ny] : std::vector<std::pair<std::size_t, std::size_t>>{{4, 4}, {4, 9}, {5, 4}, {6, 7}, {13, 5}, {21, 18}}) {
+    std::vector<double> x(nx * ny), base(nx * ny);
+    for (std::size_t k = 0; k < x.size(); ++k) {
+      x[k] = u(rng) * std::pow(10.0, 6.0 * u(rng));
+      base[k] = u(rng) * std::pow(10.0, 6.0 * u(rng));
+    }
+    const double mu = 1e-3 * std::abs(u(rng)) + 1e-6, eps = 1e-9;
+    std::vector<double> expected = base, got = base;
+    const double expected_dot = thin_plate_product_by_passes(x, nx, ny, mu, eps, expected);
+    const double got_dot = mba_detail::add_thin_plate_product(x, nx, ny, mu, eps, got, scratch);
+    for (std::size_t k = 0; k < x.size(); ++k) ASSERT_EQ(std::bit_cast<std::uint64_t>(got[k]), std::bit_cast<std::uint64_t>(expected[k])) << nx << " x " << ny << " at " << k;
+    EXPECT_EQ(std::bit_cast<std::uint64_t>(got_dot), std::bit_cast<std::uint64_t>(expected_dot)) << nx << " x " << ny;
+    // And a real product: the thin plate annihilates a plane (the second differences of a
+    // linear function are zero), so only eps x is left.
+    for (std::size_t j = 0; j < ny; ++j)
+      for (std::size_t i = 0; i < nx; ++i) x[j * nx + i] = 0.5 + 0.25 * static_cast<double>(i) - 0.125 * static_cast<double>(j);
+    std::vector<double> plane(nx * ny, 0.0);
+    mba_detail::add_thin_plate_product(x, nx, ny, mu, 0.0, plane, scratch);
+    for (const double v : plane) EXPECT_NEAR(v, 0.0, 1e-15);
+  }
 }
 
 TEST(Mba, PlaneAndBilinearDataAreReproducedToRoundOff) {
