@@ -390,7 +390,7 @@ SurfaceMesh surfmesh_detail::mesh_surface(const TriMesh& input, const Segmentati
   const SizeAt border_size = varying && options.sizing.border_lookahead > 0.0
                                  ? looked_ahead_sizing(size_at, options.sizing.border_lookahead)
                                  : size_at;
-  BorderNodes borders = discretise_borders(input, segmentation, border_size, source, corner_target);
+  BorderNodes borders = discretise_borders(input, segmentation, border_size, source, corner_target, threads);
   for (bool changed = true; changed;) {
     changed = false;
     std::vector<int> bad = crossing_curves(segmentation, borders, threads);
@@ -414,7 +414,7 @@ SurfaceMesh surfmesh_detail::mesh_surface(const TriMesh& input, const Segmentati
       s = s == CurveSource::Smoothed ? CurveSource::Input : CurveSource::InputVertices;
       changed = true;
     }
-    if (changed) borders = discretise_borders(input, segmentation, border_size, source, corner_target);
+    if (changed) borders = discretise_borders(input, segmentation, border_size, source, corner_target, threads);
   }
   report_progress(options.progress, "surfmesh: borders", 1.0);
 
