@@ -553,7 +553,8 @@ Segmentation surfmesh_detail::split_unfitted_patches(const TriMesh& input, const
     for (const int p : bad) was_bad[static_cast<std::size_t>(p)] = 1;
     const std::size_t n_before = seg.patches.size();
     if (splitter == nullptr && !own_splitter) own_splitter = segment_detail::make_splitter(input, segment_options);
-    Segmentation next = segment_detail::split(splitter != nullptr ? *splitter : *own_splitter, seg, bad, false);
+    // seg is the validated input or the last round's result; bad lists its patch ids.
+    Segmentation next = segment_detail::split(splitter != nullptr ? *splitter : *own_splitter, seg, bad, false, true);
     split_any = true;
     if (n_split != nullptr) *n_split += next.patches.size() - n_before;
     candidates.clear();
