@@ -1420,10 +1420,28 @@ void attach_borders(const TriMesh& mesh, const SegmentOptions& options, Segmenta
   result.corners = std::move(borders.corners);
 }
 
+// The segmentation's face counts that depend only on the face graph (its creases) and the
+// normals: the same for every result of one splitter.
+struct FaceCounts {
+  std::size_t n_crease_edges = 0, n_degenerate_faces = 0, n_slope_exceptions = 0;
+};
+
+FaceCounts face_counts(const FaceGraph& graph, const FaceNormals& normals) {
+  FaceCounts counts;
+  for (int f = 0; f < graph.n_faces(); ++f) {
+    for (int i = 0; i < 3; ++i)
+      if (graph.is_crease(f, i) && graph.vertices[f][i] < graph.vertices[f][(i + 1) % 3]) ++counts.n_crease_edges;
+    counts.n_degenerate_faces += normals.degenerate[f];
+    counts.n_slope_exceptions += normals.exception[f];
+  }
+  return counts;
+}
+
 // Step 8 of segment(): border curves of the final (renumbered) patches (unless
-// `with_borders` is false: segment_detail::with_borders() adds them later), and the result.
-void finish_segmentation(const TriMesh& mesh, const FaceGraph& graph, const FaceNormals& normals, Patches& patches,
-                         const SegmentOptions& options, Segmentation& result, bool with_borders) {
+// `with_borders` is false: segment_detail::with_borders() adds them later), and the result
+// with `counts` (face_counts() of the graph and normals).
+void finish_segmentation(const TriMesh& mesh, const FaceCounts& counts, Patches& patches, const SegmentOptions& options,
+                         Segmentation& result, bool with_borders) {
   result.face_patch = std::move(patches.face_patch);
   result.patches.assign(patches.faces.size(), Patch{});
   for (std::size_t p = 0; p < patches.faces.size(); ++p) {
@@ -1433,13 +1451,9 @@ void finish_segmentation(const TriMesh& mesh, const FaceGraph& graph, const Face
   result.curves.clear();
   result.corners.clear();
   if (with_borders) attach_borders(mesh, options, result);
-  result.n_crease_edges = result.n_degenerate_faces = result.n_slope_exceptions = 0;
-  for (int f = 0; f < graph.n_faces(); ++f) {
-    for (int i = 0; i < 3; ++i)
-      if (graph.is_crease(f, i) && graph.vertices[f][i] < graph.vertices[f][(i + 1) % 3]) ++result.n_crease_edges;
-    result.n_degenerate_faces += normals.degenerate[f];
-    result.n_slope_exceptions += normals.exception[f];
-  }
+  result.n_crease_edges = counts.n_crease_edges;
+  result.n_degenerate_faces = counts.n_degenerate_faces;
+  result.n_slope_exceptions = counts.n_slope_exceptions;
 }
 
 }  // namespace
@@ -1454,6 +1468,8 @@ struct segment_detail::Splitter {
   FaceNormals normals;
   std::size_t n_bevel_crease_edges = 0;
   std::vector<int> sharp_crease_edges;
+  // face_counts() of graph and normals (every result's counts: a pass over the faces once).
+  FaceCounts counts;
   double mean_edge = 0.0;
   // The last result: each of its patches passed split_folds' checks with its axis.
   std::vector<int> last_face_patch;
@@ -1470,6 +1486,7 @@ struct segment_detail::Splitter {
     normals = prepare_normals(graph, options, counts);
     n_bevel_crease_edges = counts.n_bevel_crease_edges;
     sharp_crease_edges = std::move(counts.sharp_crease_edges);
+    this->counts = face_counts(graph, normals);
     mean_edge = mean_edge_length(mesh);
     prepared = true;
   }
@@ -1534,7 +1551,7 @@ Segmentation finish_edit(const segment_detail::Splitter& s, Patches& patches,
   island_faces.erase(std::unique(island_faces.begin(), island_faces.end()), island_faces.end());
   result.island_faces = std::move(island_faces);
   renumber(patches);
-  finish_segmentation(s.mesh, s.graph, s.normals, patches, s.options, result, with_borders);
+  finish_segmentation(s.mesh, s.counts, patches, s.options, result, with_borders);
   return result;
 }
 
@@ -1579,7 +1596,8 @@ Segmentation segment_detail::segment(const TriMesh& mesh, const SegmentOptions& 
   renumber(patches);
   report_progress(options.progress, kStage, 0.7);
 
-  finish_segmentation(mesh, graph, normals, patches, options, result, with_borders);
+  const FaceCounts counts = face_counts(graph, normals);
+  finish_segmentation(mesh, counts, patches, options, result, with_borders);
   if (splitter != nullptr) {
     splitter->reset(new Splitter(mesh, options));
     Splitter& kept = **splitter;
@@ -1587,6 +1605,7 @@ Segmentation segment_detail::segment(const TriMesh& mesh, const SegmentOptions& 
     kept.normals = std::move(normals);
     kept.n_bevel_crease_edges = result.n_bevel_crease_edges;
     kept.sharp_crease_edges = result.sharp_crease_edges;
+    kept.counts = counts;
     kept.mean_edge = mean_edge;
     kept.prepared = true;
     kept.scratch = std::move(own_scratch);
@@ -1612,10 +1631,10 @@ Segmentation PatchSplitter::split(const Segmentation& segmentation, const std::v
 }
 
 Segmentation segment_detail::split(Splitter& s, const Segmentation& segmentation, const std::vector<int>& which,
-                                   const bool with_borders) {
+                                   const bool with_borders, const bool checked_input) {
   const auto n_faces = static_cast<int>(s.mesh.n_faces());
   const auto n_patches = static_cast<int>(segmentation.patches.size());
-  check_edit(s, segmentation, which, "split_patches");
+  if (!checked_input) check_edit(s, segmentation, which, "split_patches");
   Segmentation result;
   result.n_fold_splits = segmentation.n_fold_splits;
   if (n_faces == 0 || which.empty()) return segmentation;
@@ -1669,7 +1688,7 @@ Segmentation segment_detail::split(Splitter& s, const Segmentation& segmentation
   result.n_fold_splits += split_folds(grouping, s.mean_edge, scratch, patches, std::move(work),
                                       segment_detail::worker_count(s.options.threads), s.worker_scratch);
   renumber(patches);
-  finish_segmentation(s.mesh, s.graph, s.normals, patches, s.options, result, with_borders);
+  finish_segmentation(s.mesh, s.counts, patches, s.options, result, with_borders);
   s.last_face_patch = result.face_patch;
   s.last_axes.clear();
   for (const Patch& patch : result.patches) s.last_axes.push_back(patch.axis);

@@ -188,8 +188,12 @@ using SplitterPtr = std::unique_ptr<Splitter, SplitterDeleter>;
 [[nodiscard]] SplitterPtr make_splitter(const TriMesh& mesh, const SegmentOptions& options);
 
 //! PatchSplitter::split() on a splitter made by segment() (with_borders: as segment()'s).
+//! With checked_input, the caller vouches for what split_patches checks (face labels and
+//! patch lists of the splitter's mesh, valid patch ids in `which`; surfmesh's
+//! split_unfitted_patches validates its input once and then passes split()'s own results):
+//! the pass over every face is not made again.
 [[nodiscard]] Segmentation split(Splitter& splitter, const Segmentation& segmentation, const std::vector<int>& which,
-                                 bool with_borders = true);
+                                 bool with_borders = true, bool checked_input = false);
 
 //! Each listed patch bisected (bisect_patch), the parts checked as segment()'s step 7.
 [[nodiscard]] Segmentation bisect_patches(Splitter& splitter, const Segmentation& segmentation,

@@ -60,6 +60,9 @@ constexpr int kCreaseRings = 3;
 constexpr std::size_t kCreaseCurveChunk = 16;
 // Patches per chunk of the parallel per-patch border checks.
 constexpr std::size_t kPatchChunk = 8;
+// Curves per chunk of discretise_borders' parallel resampling (a curve costs tens of
+// microseconds: a chunk amortises the shared counter).
+constexpr std::size_t kDiscretiseCurveChunk = 16;
 
 // The sorted, distinct curve ids that curves_of(p, out) appends to `out` for the patches p
 // of [0, n_patches), the patches taken on `threads` workers: the same list for any count
@@ -330,7 +333,8 @@ std::vector<int> corner_cluster_merges(const TriMesh& mesh, const Segmentation& 
 }
 
 BorderNodes discretise_borders(const TriMesh& mesh, const Segmentation& seg, const SizeAt& size_at,
-                               const std::vector<CurveSource>& source, const std::vector<int>& corner_target) {
+                               const std::vector<CurveSource>& source, const std::vector<int>& corner_target,
+                               const unsigned threads) {
   BorderNodes out;
   for (const int v : seg.corners) {
     out.positions.push_back(point(mesh, v));
@@ -359,35 +363,48 @@ BorderNodes discretise_borders(const TriMesh& mesh, const Segmentation& seg, con
     if (!curve.is_closed)
       ends.emplace_back(std::minmax(end_node(curve.vertices.front()), end_node(curve.vertices.back())));
   std::sort(ends.begin(), ends.end());
+  // A merged tiny curve: no piece left (its two ends are the survivor).
+  auto is_merged_away = [&](const BorderCurve& curve) {
+    return !curve.is_closed && curve.vertices.front() != curve.vertices.back() &&
+           end_node(curve.vertices.front()) == end_node(curve.vertices.back());
+  };
+  // Each curve's samples depend only on the curve (and the read-only inputs above): they are
+  // computed per curve on the threads, and numbered in curve order below (the same nodes
+  // for any thread count).
+  std::vector<std::vector<Eigen::Vector3d>> curve_samples(seg.curves.size());
+  parallel::for_chunks(seg.curves.size(), threads, kDiscretiseCurveChunk, [&](std::size_t begin, std::size_t end, unsigned) {
+    for (std::size_t c = begin; c < end; ++c) {
+      const BorderCurve& curve = seg.curves[c];
+      if (is_merged_away(curve)) continue;
+      int min_pieces = 1;
+      if (curve.is_closed || curve.vertices.front() == curve.vertices.back()) {
+        min_pieces = 3;
+      } else {
+        const std::pair<int, int> key = std::minmax(end_node(curve.vertices.front()), end_node(curve.vertices.back()));
+        const auto range = std::equal_range(ends.begin(), ends.end(), std::pair<int, int>(key));
+        if (range.second - range.first > 1) min_pieces = 2;
+      }
+      // Smoothing a short loop (closed, or from a corner to itself) can collapse it: such a
+      // loop keeps its input positions.
+      std::vector<Eigen::Vector3d> polyline = curve.smoothed;
+      if (source[c] != CurveSource::Smoothed || (min_pieces == 3 && curve.vertices.size() < kMinSmoothedLoopVertices))
+        for (std::size_t i = 0; i < polyline.size(); ++i) polyline[i] = point(mesh, curve.vertices[i]);
+      if (source[c] == CurveSource::InputVertices)
+        curve_samples[c].assign(polyline.begin() + (curve.is_closed ? 0 : 1), polyline.end() - (curve.is_closed ? 0 : 1));
+      else
+        curve_samples[c] = resample(polyline, curve.is_closed, min_pieces, size_at);
+    }
+  });
   out.curve_nodes.resize(seg.curves.size());
   for (std::size_t c = 0; c < seg.curves.size(); ++c) {
     const BorderCurve& curve = seg.curves[c];
     std::vector<int>& nodes = out.curve_nodes[c];
-    if (!curve.is_closed && curve.vertices.front() != curve.vertices.back() &&
-        end_node(curve.vertices.front()) == end_node(curve.vertices.back())) {
-      nodes.assign(2, end_node(curve.vertices.front()));  // a merged tiny curve: no piece left
+    if (is_merged_away(curve)) {
+      nodes.assign(2, end_node(curve.vertices.front()));
       continue;
     }
-    int min_pieces = 1;
-    if (curve.is_closed || curve.vertices.front() == curve.vertices.back()) {
-      min_pieces = 3;
-    } else {
-      const std::pair<int, int> key = std::minmax(end_node(curve.vertices.front()), end_node(curve.vertices.back()));
-      const auto range = std::equal_range(ends.begin(), ends.end(), std::pair<int, int>(key));
-      if (range.second - range.first > 1) min_pieces = 2;
-    }
-    // Smoothing a short loop (closed, or from a corner to itself) can collapse it: such a
-    // loop keeps its input positions.
-    std::vector<Eigen::Vector3d> polyline = curve.smoothed;
-    if (source[c] != CurveSource::Smoothed || (min_pieces == 3 && curve.vertices.size() < kMinSmoothedLoopVertices))
-      for (std::size_t i = 0; i < polyline.size(); ++i) polyline[i] = point(mesh, curve.vertices[i]);
-    std::vector<Eigen::Vector3d> samples;
-    if (source[c] == CurveSource::InputVertices)
-      samples.assign(polyline.begin() + (curve.is_closed ? 0 : 1), polyline.end() - (curve.is_closed ? 0 : 1));
-    else
-      samples = resample(polyline, curve.is_closed, min_pieces, size_at);
     if (!curve.is_closed) nodes.push_back(end_node(curve.vertices.front()));
-    for (const auto& q : samples) {
+    for (const auto& q : curve_samples[c]) {
       nodes.push_back(static_cast<int>(out.positions.size()));
       out.positions.push_back(q);
       out.kind.push_back(NodeKind::Border);

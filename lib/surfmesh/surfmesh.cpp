@@ -390,7 +390,7 @@ SurfaceMesh surfmesh_detail::mesh_surface(const TriMesh& input, const Segmentati
   const SizeAt border_size = varying && options.sizing.border_lookahead > 0.0
                                  ? looked_ahead_sizing(size_at, options.sizing.border_lookahead)
                                  : size_at;
-  BorderNodes borders = discretise_borders(input, segmentation, border_size, source, corner_target);
+  BorderNodes borders = discretise_borders(input, segmentation, border_size, source, corner_target, threads);
   for (bool changed = true; changed;) {
     changed = false;
     std::vector<int> bad = crossing_curves(segmentation, borders, threads);
@@ -414,7 +414,7 @@ SurfaceMesh surfmesh_detail::mesh_surface(const TriMesh& input, const Segmentati
       s = s == CurveSource::Smoothed ? CurveSource::Input : CurveSource::InputVertices;
       changed = true;
     }
-    if (changed) borders = discretise_borders(input, segmentation, border_size, source, corner_target);
+    if (changed) borders = discretise_borders(input, segmentation, border_size, source, corner_target, threads);
   }
   report_progress(options.progress, "surfmesh: borders", 1.0);
 
@@ -553,7 +553,8 @@ Segmentation surfmesh_detail::split_unfitted_patches(const TriMesh& input, const
     for (const int p : bad) was_bad[static_cast<std::size_t>(p)] = 1;
     const std::size_t n_before = seg.patches.size();
     if (splitter == nullptr && !own_splitter) own_splitter = segment_detail::make_splitter(input, segment_options);
-    Segmentation next = segment_detail::split(splitter != nullptr ? *splitter : *own_splitter, seg, bad, false);
+    // seg is the validated input or the last round's result; bad lists its patch ids.
+    Segmentation next = segment_detail::split(splitter != nullptr ? *splitter : *own_splitter, seg, bad, false, true);
     split_any = true;
     if (n_split != nullptr) *n_split += next.patches.size() - n_before;
     candidates.clear();

@@ -96,9 +96,11 @@ enum class CurveSource : std::uint8_t {
 //! from the smoothed ones. `corner_target` (empty: none) merges corners (tiny_curve_merges):
 //! a merged corner's curves end at its survivor, which sits at the middle of the two, and
 //! the curve between them becomes the one degenerate piece {survivor, survivor}.
+//! The curves are resampled on `threads` threads (size_at is called from them; the nodes
+//! are numbered in curve order afterwards: the same result for any count).
 [[nodiscard]] BorderNodes discretise_borders(const TriMesh& mesh, const Segmentation& segmentation,
                                              const SizeAt& size_at, const std::vector<CurveSource>& source,
-                                             const std::vector<int>& corner_target = {});
+                                             const std::vector<int>& corner_target = {}, unsigned threads = 1);
 
 //! Per corner (index into Segmentation::corners): the corner it merges into, itself when
 //! none. Two corners merge when a curve of one input edge joins them, shorter than

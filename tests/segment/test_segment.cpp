@@ -323,6 +323,44 @@ TEST(SplitPatches, SplitterFromSegmentMatchesPatchSplitter) {
   segment_test::expect_contracts(mesh, second, options, 10.0);
 }
 
+// The splitter's results take segment()'s face counts (creases, degenerate faces, slope
+// exceptions: computed once per splitter), and a split whose caller vouches for its input
+// (checked_input, surfmesh's split rounds) is the checked split: on a ridge whose crest is
+// a crease, through two rounds, against a PatchSplitter made afresh.
+TEST(SplitPatches, SplitterCountsAndCheckedInputAreTheFreshSplitters) {
+  SegmentOptions options;
+  options.min_patch_faces = 20;
+  TriangleSoup soup = test::grid_patch(24, 24);
+  const double rise = std::tan(50.0 * std::numbers::pi / 180.0);  // 100 deg between the sides' normals
+  for (auto& p : soup.points) p.z() = rise * (0.5 - std::abs(p.x() - 0.5)) + 0.05 * std::sin(9.0 * p.y());
+  const TriMesh mesh = to_trimesh(soup);
+  segment_detail::SplitterPtr kept;
+  const Segmentation seg = segment_detail::segment(mesh, options, mean_edge_length(mesh), &kept, false);
+  ASSERT_TRUE(kept);
+  EXPECT_EQ(seg.n_crease_edges, 24u);  // the crest: one edge per row of cells
+  ASSERT_GE(seg.patches.size(), 2u);
+  PatchSplitter fresh(mesh, options);
+  const Segmentation first = segment_detail::split(*kept, seg, {0, 1}, false, true);
+  const Segmentation first_fresh = fresh.split(seg, {0, 1});
+  ASSERT_GT(first.patches.size(), seg.patches.size());
+  const Segmentation second = segment_detail::split(*kept, first, {0, 2}, false, true);
+  const Segmentation second_fresh = fresh.split(first_fresh, {0, 2});
+  for (const auto& [a, b] : {std::pair{&first, &first_fresh}, std::pair{&second, &second_fresh}}) {
+    EXPECT_EQ(a->face_patch, b->face_patch);
+    ASSERT_EQ(a->patches.size(), b->patches.size());
+    for (std::size_t p = 0; p < a->patches.size(); ++p) EXPECT_EQ(a->patches[p].axis, b->patches[p].axis) << p;
+    EXPECT_EQ(a->n_fold_splits, b->n_fold_splits);
+    EXPECT_EQ(a->n_crease_edges, seg.n_crease_edges);
+    EXPECT_EQ(b->n_crease_edges, seg.n_crease_edges);
+    EXPECT_EQ(a->n_degenerate_faces, seg.n_degenerate_faces);
+    EXPECT_EQ(b->n_degenerate_faces, seg.n_degenerate_faces);
+    EXPECT_EQ(a->n_slope_exceptions, seg.n_slope_exceptions);
+    EXPECT_EQ(b->n_slope_exceptions, seg.n_slope_exceptions);
+  }
+  // Unchecked, the same split still rejects a patch id out of range.
+  EXPECT_THROW((void)segment_detail::split(*kept, second, {static_cast<int>(second.patches.size())}), InvalidInput);
+}
+
 // The pipeline's order: segment(), merges and split rounds without border curves, the
 // borders extracted once at the end (with_borders) are those each step would have
 // extracted: the same curves (vertices, edges, sides, smoothed points), corners and

@@ -775,6 +775,73 @@ TEST(Surfmesh, BorderChecksAndCreaseAnglesDoNotDependOnTheThreadCount) {
   }
 }
 
+TEST(Surfmesh, DiscretisedBordersDoNotDependOnTheThreadCount) {
+  // A wavy grid cut into 6 x 6 blocks of 4 x 4 cells (36 patches, 80 curves: several chunks
+  // of curves per worker), every curve source, smoothed polylines moved off the input, a size
+  // that varies across the grid and one merged corner pair (a merged-away curve): the nodes,
+  // their kinds, owners and every curve's node list are the same bit for bit on 1, 2 and 3
+  // threads, and each curve's list runs between its end corners' nodes.
+  constexpr int kN = 24, kBlock = 4;
+  TriangleSoup soup = test::grid_patch(kN, kN);
+  for (auto& p : soup.points) p.z() = 0.08 * std::sin(7.0 * p.x()) * std::cos(5.0 * p.y());
+  const TriMesh mesh = to_trimesh(soup);
+  std::vector<int> face_patch(mesh.n_faces(), 0);
+  for (int j = 0; j < kN; ++j)
+    for (int i = 0; i < kN; ++i) {
+      const auto f = static_cast<std::size_t>(2 * (j * kN + i));
+      face_patch[f] = face_patch[f + 1] = (j / kBlock) * (kN / kBlock) + i / kBlock;
+    }
+  Segmentation seg = labelled_segmentation(mesh, face_patch, (kN / kBlock) * (kN / kBlock));
+  ASSERT_EQ(seg.curves.size(), 80u);  // 60 between blocks, 20 on the grid's boundary
+  std::vector<surfmesh_detail::CurveSource> source(seg.curves.size());
+  for (std::size_t c = 0; c < seg.curves.size(); ++c) {
+    source[c] = static_cast<surfmesh_detail::CurveSource>(c % 3);
+    for (auto& q : seg.curves[c].smoothed) q.z() += 0.01 * std::cos(11.0 * q.x() + 3.0 * q.y());
+  }
+  // The back corner of the first open curve with two distinct ends merges into its front one.
+  std::vector<int> target(seg.corners.size());
+  std::iota(target.begin(), target.end(), 0);
+  auto corner_of = [&](int v) {
+    return static_cast<int>(std::lower_bound(seg.corners.begin(), seg.corners.end(), v) - seg.corners.begin());
+  };
+  int merged_curve = -1;
+  for (std::size_t c = 0; c < seg.curves.size() && merged_curve < 0; ++c) {
+    const BorderCurve& curve = seg.curves[c];
+    if (curve.is_closed || curve.vertices.front() == curve.vertices.back()) continue;
+    const int a = corner_of(curve.vertices.front()), b = corner_of(curve.vertices.back());
+    target[static_cast<std::size_t>(std::max(a, b))] = std::min(a, b);
+    merged_curve = static_cast<int>(c);
+  }
+  ASSERT_GE(merged_curve, 0);
+  const surfmesh_detail::SizeAt size_at = [](const Eigen::Vector3d& x) { return (0.6 + 0.5 * x.x()) / kN; };
+  const surfmesh_detail::BorderNodes one = surfmesh_detail::discretise_borders(mesh, seg, size_at, source, target, 1);
+  ASSERT_EQ(one.curve_nodes.size(), seg.curves.size());
+  EXPECT_EQ(one.curve_nodes[static_cast<std::size_t>(merged_curve)],
+            std::vector<int>(2, target[static_cast<std::size_t>(corner_of(seg.curves[static_cast<std::size_t>(merged_curve)].vertices.front()))]));
+  for (std::size_t c = 0; c < seg.curves.size(); ++c) {
+    const BorderCurve& curve = seg.curves[c];
+    const std::vector<int>& nodes = one.curve_nodes[c];
+    if (curve.is_closed) {
+      EXPECT_GE(nodes.size(), 3u) << c;
+    } else {
+      ASSERT_GE(nodes.size(), 2u) << c;
+      EXPECT_EQ(nodes.front(), target[static_cast<std::size_t>(corner_of(curve.vertices.front()))]) << c;
+      EXPECT_EQ(nodes.back(), target[static_cast<std::size_t>(corner_of(curve.vertices.back()))]) << c;
+    }
+    for (std::size_t i = curve.is_closed ? 0 : 1; i + (curve.is_closed ? 0 : 1) < nodes.size(); ++i)
+      EXPECT_EQ(one.owner[static_cast<std::size_t>(nodes[i])], static_cast<int>(c)) << c;
+  }
+  for (const unsigned threads : {2U, 3U}) {
+    const surfmesh_detail::BorderNodes many = surfmesh_detail::discretise_borders(mesh, seg, size_at, source, target, threads);
+    EXPECT_EQ(many.curve_nodes, one.curve_nodes) << threads;
+    EXPECT_EQ(many.owner, one.owner) << threads;
+    EXPECT_TRUE(many.kind == one.kind) << threads;
+    ASSERT_EQ(many.positions.size(), one.positions.size()) << threads;
+    for (std::size_t g = 0; g < one.positions.size(); ++g)
+      EXPECT_TRUE(many.positions[g] == one.positions[g]) << threads << " node " << g;
+  }
+}
+
 TEST(Surfmesh, SmoothedBorderThatFoldsASmallPatchFallsBackToInputPositions) {
   // A flat 12 x 12 grid: patch 0 below y = 0.5, patch 2 above, patch 1 the cells (5, 5) and
   // (6, 5) just below the line, touching patch 2 (corners at (5, 6) and (7, 6) in cells).
