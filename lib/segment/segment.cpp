@@ -1678,7 +1678,7 @@ Segmentation segment_detail::split(Splitter& s, const Segmentation& segmentation
 
 Segmentation segment_detail::merge_into_neighbours(Splitter& s, const Segmentation& segmentation,
                                                    const std::vector<int>& which, const bool with_borders,
-                                                   const bool hairlines) {
+                                                   const bool hairlines, const bool steep) {
   check_edit(s, segmentation, which, "merge_patches_into_neighbours");
   if (s.mesh.n_faces() == 0 || which.empty()) return segmentation;
   s.prepare();
@@ -1715,7 +1715,7 @@ Segmentation segment_detail::merge_into_neighbours(Splitter& s, const Segmentati
     // A hairline faces away: for every neighbour's axis some face of it has its raw normal
     // outside the slope cone. A narrow patch whose faces all lie in a neighbour's cone (a
     // designed chamfer, fandisk's crease end) is left alone.
-    if (hairlines && std::any_of(shared.begin(), shared.end(), [&](const auto& entry) {
+    if (hairlines && !steep && std::any_of(shared.begin(), shared.end(), [&](const auto& entry) {
           const Eigen::Vector3d& axis = patches.axes[static_cast<std::size_t>(entry.second)];
           return std::all_of(faces.begin(), faces.end(),
                              [&](int f) { return s.normals.raw[f].dot(axis) >= grouping.cos_slope; });
@@ -1739,6 +1739,10 @@ Segmentation segment_detail::merge_into_neighbours(Splitter& s, const Segmentati
         const auto bounded_end = target.begin() + static_cast<std::ptrdiff_t>(hairlines ? n_target : target.size());
         if (!std::all_of(target.begin(), bounded_end,
                          [&](int f) { return (hairlines && exempt[static_cast<std::size_t>(f)] != 0) || grouping.fits(f, axis); }))
+          continue;
+        // Steep narrow patches face the union's plane: no face of theirs folds over it.
+        if (steep && !std::all_of(bounded_end, target.end(),
+                                  [&](int f) { return s.normals.raw[f].dot(axis) >= kSegmentMinRawNormalDot; }))
           continue;
         if (!segment_detail::check_projection(s.graph, target, patches.face_patch, axis, scratch).is_simple) continue;
         if (segment_detail::has_cliff(s.graph, target, axis, s.mean_edge, scratch)) continue;  // segment()'s step 7, both halves

@@ -1151,6 +1151,73 @@ TEST(Pipeline, TwoHairlinesJoinTheSameNeighbour) {
   }
 }
 
+// A 12 x 12 grid of side 1 (turned) with a steep step across it: the plane rises by 0.02 at
+// x = 1/2 through one column of faces tilted 70 deg from the planes (raw normal . z = 0.34:
+// outside the 60 deg slope cone, above the 0.1 orientation floor).
+// In remesh() (its crease rules) the step is a patch of its own, 0.02 wide (0.16 h), facing
+// both planes.
+TriMesh grid_with_steep_step() {
+  constexpr int n = 12;
+  constexpr double kRise = 0.02;
+  const double run = kRise / std::tan(70.0 * std::numbers::pi / 180.0);
+  TriangleSoup soup;
+  constexpr int m = n + 2;  // points per row
+  for (int j = 0; j <= n; ++j) {
+    const double y = j / double(n);
+    for (int k = 0; k < m; ++k) {
+      const bool top = k > n / 2;
+      const double x = top ? (k - 1) / double(n) + run : k / double(n);
+      soup.points.emplace_back(std::cos(0.5) * x - std::sin(0.5) * y + 0.123, std::sin(0.5) * x + std::cos(0.5) * y + 0.0456,
+                               top ? kRise : 0.0);
+    }
+  }
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i + 1 < m; ++i) {
+      const auto a = static_cast<unsigned>(j * m + i);
+      soup.triangles.push_back({a, a + 1, a + m + 1});
+      soup.triangles.push_back({a, a + m + 1, a + m});
+    }
+  return to_trimesh(soup);
+}
+
+TEST(Pipeline, NarrowCadPatchesJoinANeighbourWhenAsked) {
+  const TriMesh mesh = grid_with_steep_step();
+  RemeshOptions options = fast_options();
+  options.compute_distances = false;
+  const RemeshResult without = remesh(mesh, options);  // off by default
+  options.narrow_cad_patch_width = 0.3;
+  const RemeshResult with = remesh(mesh, options);
+  EXPECT_EQ(without.report.n_narrow_merged, 0u);
+  EXPECT_EQ(without.report.n_hairline_merged, 0u);  // it faces both planes
+  ASSERT_EQ(without.report.n_patches, 3u);  // the two planes and the step (the pipeline's creases)
+  const RemeshReport& rep = with.report;
+  EXPECT_TRUE(rep.ok()) << errors_of(rep);
+  EXPECT_EQ(rep.n_narrow_merged, 1u);
+  EXPECT_EQ(rep.n_patches, 2u);
+  EXPECT_EQ(rep.n_failed_patches, 0u);  // the union projects without folds and is meshed
+  const auto& t = rep.output.topology;
+  EXPECT_TRUE(t.is_manifold);
+  EXPECT_EQ(t.n_boundary_loops, 1u);
+  EXPECT_EQ(t.euler_characteristic, 1);
+  EXPECT_EQ(t.n_self_intersecting_pairs.value_or(1), 0u);
+  // The step meshed on its own leaves obtuse triangles; joined to a plane, it leaves none.
+  EXPECT_GT(without.report.output.quality.obtuse_fraction, 0.0);
+  EXPECT_EQ(rep.output.quality.obtuse_fraction, 0.0);
+  EXPECT_GT(rep.output.quality.alpha_mean, without.report.output.quality.alpha_mean);
+  for (const auto v : with.mesh.vertices()) {
+    EXPECT_GE(with.mesh.point(v)[2], -0.005);
+    EXPECT_LE(with.mesh.point(v)[2], 0.025);
+  }
+
+  // A bound below the step's width takes nothing; a bad bound is refused.
+  options.narrow_cad_patch_width = 0.1;
+  EXPECT_EQ(remesh(mesh, options).report.n_narrow_merged, 0u);
+  options.narrow_cad_patch_width = -1.0;
+  EXPECT_THROW((void)remesh(mesh, options), InvalidInput);
+  options.narrow_cad_patch_width = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THROW((void)remesh(mesh, options), InvalidInput);
+}
+
 // Issue 5 on CAD meshes whose machined edges bend by less than the crease angle (cheese.off:
 // 2 422 edges at 65-80 deg): RemeshOptions::crease_gap lowers the crease angle to the gap
 // below them (segment's gap_crease_angle). A roof of two planes meeting at a 72 deg bend (8 x 8
