@@ -41,6 +41,8 @@ void RemeshOptions::validate() const {
   if (tiny_patch_faces < 0) throw InvalidInput("remesh: tiny_patch_faces must be >= 0");
   if (!(std::isfinite(hairline_patch_width) && hairline_patch_width >= 0.0))
     throw InvalidInput("remesh: hairline_patch_width must be finite and >= 0");
+  if (!(std::isfinite(narrow_cad_patch_width) && narrow_cad_patch_width >= 0.0))
+    throw InvalidInput("remesh: narrow_cad_patch_width must be finite and >= 0");
   if (!(tiny_patch_max_dihedral_deg >= 0.0 && tiny_patch_max_dihedral_deg <= 180.0))
     throw InvalidInput("remesh: tiny_patch_max_dihedral_deg must be in [0, 180]");
 }
@@ -220,18 +222,20 @@ RemeshResult remesh(const TriMesh& input, const RemeshOptions& options) {
   // did not meet already (docs/segment.md, "Narrow patches"). The gate first: the search for
   // narrow patches is a serial pass over every face (0.15 G instructions on the liver).
   // The patches narrower than width target edges join a neighbour (hairlines: their own
-  // faces exempt from the slope bounds); the number of patches merged away.
-  auto merge_narrower_than = [&](double width, bool hairlines) -> std::size_t {
+  // faces exempt from the slope bounds; steep: whichever way they face, above the raw
+  // orientation floor); the number of patches merged away.
+  auto merge_narrower_than = [&](double width, bool hairlines, bool steep) -> std::size_t {
     const double h = surfmesh_detail::uniform_size(surfmesh_options.sizing, mean_edge);
     const std::vector<int> narrow = segment_detail::narrow_patches(input, first_segmentation, width * h, input_threads);
     if (narrow.empty()) return 0;
     const std::size_t n_before = first_segmentation.patches.size();
-    first_segmentation = segment_detail::merge_into_neighbours(*splitter, first_segmentation, narrow, false, hairlines);
+    first_segmentation =
+        segment_detail::merge_into_neighbours(*splitter, first_segmentation, narrow, false, hairlines, steep);
     return n_before - first_segmentation.patches.size();
   };
   if (options.narrow_patch_merge > 0.0 && surfmesh_detail::marching_cubes_lattice(input_lattice()) &&
       !surfmesh_detail::label_image_staircase(input_lattice()))
-    report.n_narrow_merged = merge_narrower_than(options.narrow_patch_merge, false);
+    report.n_narrow_merged = merge_narrower_than(options.narrow_patch_merge, false, false);
   // Tiny patches behind marginal creases (a coarse CAD-like mesh's bends) join a neighbour.
   if (options.tiny_patch_faces > 0 && !surfmesh_options.cell_grid.enabled &&
       !surfmesh_detail::marching_cubes_lattice(input_lattice()))
@@ -241,7 +245,12 @@ RemeshResult remesh(const TriMesh& input, const RemeshOptions& options) {
   // bounds (docs/segment.md "Hairline patches").
   if (options.hairline_patch_width > 0.0 && !surfmesh_options.cell_grid.enabled &&
       !surfmesh_detail::marching_cubes_lattice(input_lattice()))
-    report.n_hairline_merged = merge_narrower_than(options.hairline_patch_width, true);
+    report.n_hairline_merged = merge_narrower_than(options.hairline_patch_width, true, false);
+  // Opt-in: the narrow patches of a CAD-like mesh that face a neighbour (slope-bounded strips
+  // a fraction of h wide) join it too (docs/segment.md "Narrow patches of CAD-like meshes").
+  if (options.narrow_cad_patch_width > 0.0 && !surfmesh_options.cell_grid.enabled &&
+      !surfmesh_detail::marching_cubes_lattice(input_lattice()))
+    report.n_narrow_merged = merge_narrower_than(options.narrow_cad_patch_width, true, true);
   report.seconds_segment = watch.seconds();
 
   watch.restart();

@@ -66,6 +66,16 @@ struct RemeshOptions {
   //! hairline patches whose triangles are mostly obtuse (femur 2.90 -> 2.65% obtuse at 0.05,
   //! 2.53% at 0.1; docs/segment.md "Hairline patches"). 0 = off. Default 0.05.
   double hairline_patch_width = 0.05;
+  //! On inputs not taken for marching cubes (nor with a cell grid), after the hairline merge,
+  //! every patch narrower than this many target edges next to a wider one joins the
+  //! neighbour sharing the longest border that is not so narrow itself, facing it or not:
+  //! its own faces are exempt from the slope cone but keep the raw orientation floor (raw
+  //! normal . axis >= kSegmentMinRawNormalDot, no face folded over the union's plane); the
+  //! neighbour's faces keep the bounds and the union passes the projection and cliff checks.
+  //! Opt-in: femur 2.25 -> 1.87% obtuse at 0.3, but cheese, couplingdown, elephant, turbine
+  //! and fandisk get worse (docs/segment.md "Narrow patches of CAD-like meshes, session 17").
+  //! Counted in RemeshReport::n_narrow_merged. 0 = off (default).
+  double narrow_cad_patch_width = 0.0;
   //! On inputs not taken for marching cubes (nor with a cell grid), the crease angle
   //! (segment.crease_angle_deg, also surfmesh's) drops to segment's gap_crease_angle() where
   //! the input's bends leave a gap below it: a CAD mesh's machined edges at 65-80 deg become

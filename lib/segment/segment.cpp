@@ -1697,7 +1697,7 @@ Segmentation segment_detail::split(Splitter& s, const Segmentation& segmentation
 
 Segmentation segment_detail::merge_into_neighbours(Splitter& s, const Segmentation& segmentation,
                                                    const std::vector<int>& which, const bool with_borders,
-                                                   const bool hairlines) {
+                                                   const bool hairlines, const bool steep) {
   check_edit(s, segmentation, which, "merge_patches_into_neighbours");
   if (s.mesh.n_faces() == 0 || which.empty()) return segmentation;
   s.prepare();
@@ -1709,6 +1709,9 @@ Segmentation segment_detail::merge_into_neighbours(Splitter& s, const Segmentati
   // Hairlines go only into a patch that is not listed itself (a wide one).
   std::vector<int> listed = hairlines ? which : std::vector<int>{};
   std::sort(listed.begin(), listed.end());
+  // The faces of the hairlines joined so far: exempt from the bounds again when a second
+  // hairline joins the same neighbour.
+  std::vector<std::uint8_t> exempt(hairlines ? s.mesh.n_faces() : 0, 0);
   for (const int p : which) {
     auto& faces = patches.faces[static_cast<std::size_t>(p)];
     if (faces.empty()) continue;  // merged already
@@ -1731,7 +1734,7 @@ Segmentation segment_detail::merge_into_neighbours(Splitter& s, const Segmentati
     // A hairline faces away: for every neighbour's axis some face of it has its raw normal
     // outside the slope cone. A narrow patch whose faces all lie in a neighbour's cone (a
     // designed chamfer, fandisk's crease end) is left alone.
-    if (hairlines && std::any_of(shared.begin(), shared.end(), [&](const auto& entry) {
+    if (hairlines && !steep && std::any_of(shared.begin(), shared.end(), [&](const auto& entry) {
           const Eigen::Vector3d& axis = patches.axes[static_cast<std::size_t>(entry.second)];
           return std::all_of(faces.begin(), faces.end(),
                              [&](int f) { return s.normals.raw[f].dot(axis) >= grouping.cos_slope; });
@@ -1749,14 +1752,23 @@ Segmentation segment_detail::merge_into_neighbours(Splitter& s, const Segmentati
       std::vector<Eigen::Vector3d> axes{patches.axes[static_cast<std::size_t>(q)]};
       if (mean.norm() > 0.0) axes.push_back(mean.normalized());
       for (const Eigen::Vector3d& axis : axes) {
-        // A hairline's own faces are exempt from the bounds: a strip folded back between
-        // two creases faces away from both sides (docs/segment.md "Hairline patches").
+        // A hairline's own faces are exempt from the bounds (and those of the hairlines
+        // joined to q before): a strip folded back between two creases faces away from both
+        // sides (docs/segment.md "Hairline patches").
         const auto bounded_end = target.begin() + static_cast<std::ptrdiff_t>(hairlines ? n_target : target.size());
-        if (!std::all_of(target.begin(), bounded_end, [&](int f) { return grouping.fits(f, axis); })) continue;
+        if (!std::all_of(target.begin(), bounded_end,
+                         [&](int f) { return (hairlines && exempt[static_cast<std::size_t>(f)] != 0) || grouping.fits(f, axis); }))
+          continue;
+        // Steep narrow patches face the union's plane: no face of theirs folds over it.
+        if (steep && !std::all_of(bounded_end, target.end(),
+                                  [&](int f) { return s.normals.raw[f].dot(axis) >= kSegmentMinRawNormalDot; }))
+          continue;
         if (!segment_detail::check_projection(s.graph, target, patches.face_patch, axis, scratch).is_simple) continue;
         if (segment_detail::has_cliff(s.graph, target, axis, s.mean_edge, scratch)) continue;  // segment()'s step 7, both halves
         patches.axes[static_cast<std::size_t>(q)] = axis;
         island_faces.insert(island_faces.end(), faces.begin(), faces.end());
+        if (hairlines)
+          for (const int f : faces) exempt[static_cast<std::size_t>(f)] = 1;
         faces.clear();
         return true;
       }

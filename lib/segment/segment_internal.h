@@ -204,10 +204,14 @@ using SplitterPtr = std::unique_ptr<Splitter, SplitterDeleter>;
 //! With hairlines (the pipeline's hairline merge, docs/segment.md "Hairline patches"), only
 //! a listed patch facing away from every neighbour (for each neighbour's axis some face
 //! with raw normal . axis < cos(max_slope_deg)) is joined, only to a neighbour that is
-//! not listed itself, and its own faces need not meet the slope bounds for the union's axis
-//! (the neighbour's faces still must; the union still passes the projection and cliff checks).
+//! not listed itself, and its own faces need not meet the slope bounds for the union's axis,
+//! nor those of the hairlines joined to the same neighbour before (the neighbour's own faces
+//! still must; the union still passes the projection and cliff checks).
+//! With hairlines and steep (the pipeline's opt-in narrow merge of CAD-like meshes), every
+//! listed patch is joined whichever way it faces, its own faces exempt from the slope cone
+//! but not from the raw orientation floor (raw normal . axis >= kSegmentMinRawNormalDot).
 [[nodiscard]] Segmentation merge_into_neighbours(Splitter& splitter, const Segmentation& segmentation,
                                                  const std::vector<int>& which, bool with_borders = true,
-                                                 bool hairlines = false);
+                                                 bool hairlines = false, bool steep = false);
 
 }  // namespace nurbsfront::segment_detail

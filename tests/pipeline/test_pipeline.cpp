@@ -1075,6 +1075,151 @@ TEST(Pipeline, HairlinePatchesJoinAWideNeighbour) {
   EXPECT_THROW((void)remesh(mesh, options), InvalidInput);
 }
 
+// Two pleats like grid_with_pleat's (12 x 12 cells of side 1/12, turned): the plane steps up
+// by 0.003 at x = 1/3 and down by 0.004 at the right boundary, each strip leaning back by 0.001
+// (forward at the two boundary rows). Both strips are hairlines of the middle plane: the
+// first (narrower, joined first) shares its longer, zigzag side with it, and the second has
+// no other neighbour (its far side is the mesh's boundary).
+TriMesh grid_with_two_pleats() {
+  constexpr int n = 12;
+  constexpr double kFirst = 0.003, kSecond = 0.004, kBack = 0.001;
+  TriangleSoup soup;
+  constexpr int m = n + 3;  // points per row
+  for (int j = 0; j <= n; ++j) {
+    const double y = j / double(n);
+    const double back = (j == 0 || j == n) ? -kBack : kBack;
+    for (int k = 0; k < m; ++k) {
+      double x = 0.0, z = kFirst;
+      if (k <= 4) {
+        x = k / double(n);
+        z = 0.0;
+      } else if (k == 5) {
+        x = 4.0 / n - back;  // the first strip's top edge
+      } else if (k < m - 2) {
+        x = (k - 1) / double(n);
+      } else if (k == m - 2) {
+        x = 1.0 + back;  // the second strip's top edge
+      } else {
+        x = 1.0;
+        z = kFirst - kSecond;
+      }
+      soup.points.emplace_back(std::cos(0.5) * x - std::sin(0.5) * y + 0.123, std::sin(0.5) * x + std::cos(0.5) * y + 0.0456, z);
+    }
+  }
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i + 1 < m; ++i) {
+      const auto a = static_cast<unsigned>(j * m + i);
+      soup.triangles.push_back({a, a + 1, a + m + 1});
+      soup.triangles.push_back({a, a + m + 1, a + m});
+    }
+  return to_trimesh(soup);
+}
+
+// A second hairline joining the same neighbour: the first one's faces, now in the neighbour,
+// stay exempt from the slope bounds (they were checked against them, and the second strip,
+// with no other neighbour, stayed a patch of its own: 3 patches, a 129 deg triangle).
+TEST(Pipeline, TwoHairlinesJoinTheSameNeighbour) {
+  const TriMesh mesh = grid_with_two_pleats();
+  RemeshOptions options = fast_options();
+  options.compute_distances = false;
+  const Segmentation seg = segment(mesh, options.segment);
+  ASSERT_EQ(seg.patches.size(), 4u);  // the two planes and the two strips
+  const double h = 1.5 * mean_edge_length(mesh);
+  ASSERT_EQ(narrow_patches(mesh, seg, options.hairline_patch_width * h).size(), 2u);
+
+  const RemeshResult with = remesh(mesh, options);
+  options.hairline_patch_width = 0.0;
+  const RemeshResult without = remesh(mesh, options);
+  const RemeshReport& rep = with.report;
+  EXPECT_TRUE(rep.ok()) << errors_of(rep);
+  EXPECT_EQ(rep.n_hairline_merged, 2u);
+  EXPECT_EQ(rep.n_patches, 2u);
+  EXPECT_EQ(without.report.n_patches, 4u);
+  const auto& t = rep.output.topology;
+  EXPECT_TRUE(t.is_manifold);
+  EXPECT_EQ(t.n_boundary_loops, 1u);
+  EXPECT_EQ(t.euler_characteristic, 1);
+  EXPECT_EQ(t.n_self_intersecting_pairs.value_or(1), 0u);
+  // The strips meshed on their own leave triangles of almost 180 deg; joined, none is
+  // obtuse by more than a rounding of the grid's right angles.
+  EXPECT_GT(without.report.output.quality.max_angle_deg, 150.0);
+  EXPECT_LT(rep.output.quality.max_angle_deg, 91.0);
+  EXPECT_GT(rep.output.quality.alpha_mean, without.report.output.quality.alpha_mean);
+  for (const auto v : with.mesh.vertices()) {
+    EXPECT_GE(with.mesh.point(v)[2], -0.005);
+    EXPECT_LE(with.mesh.point(v)[2], 0.007);
+  }
+}
+
+// A 12 x 12 grid of side 1 (turned) with a steep step across it: the plane rises by 0.02 at
+// x = 1/2 through one column of faces tilted 70 deg from the planes (raw normal . z = 0.34:
+// outside the 60 deg slope cone, above the 0.1 orientation floor).
+// In remesh() (its crease rules) the step is a patch of its own, 0.02 wide (0.16 h), facing
+// both planes.
+TriMesh grid_with_steep_step() {
+  constexpr int n = 12;
+  constexpr double kRise = 0.02;
+  const double run = kRise / std::tan(70.0 * std::numbers::pi / 180.0);
+  TriangleSoup soup;
+  constexpr int m = n + 2;  // points per row
+  for (int j = 0; j <= n; ++j) {
+    const double y = j / double(n);
+    for (int k = 0; k < m; ++k) {
+      const bool top = k > n / 2;
+      const double x = top ? (k - 1) / double(n) + run : k / double(n);
+      soup.points.emplace_back(std::cos(0.5) * x - std::sin(0.5) * y + 0.123, std::sin(0.5) * x + std::cos(0.5) * y + 0.0456,
+                               top ? kRise : 0.0);
+    }
+  }
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i + 1 < m; ++i) {
+      const auto a = static_cast<unsigned>(j * m + i);
+      soup.triangles.push_back({a, a + 1, a + m + 1});
+      soup.triangles.push_back({a, a + m + 1, a + m});
+    }
+  return to_trimesh(soup);
+}
+
+TEST(Pipeline, NarrowCadPatchesJoinANeighbourWhenAsked) {
+  const TriMesh mesh = grid_with_steep_step();
+  RemeshOptions options = fast_options();
+  options.compute_distances = false;
+  const RemeshResult without = remesh(mesh, options);  // off by default
+  options.narrow_cad_patch_width = 0.3;
+  const RemeshResult with = remesh(mesh, options);
+  EXPECT_EQ(without.report.n_narrow_merged, 0u);
+  EXPECT_EQ(without.report.n_hairline_merged, 0u);  // it faces both planes
+  ASSERT_EQ(without.report.n_patches, 3u);  // the two planes and the step (the pipeline's creases)
+  const RemeshReport& rep = with.report;
+  EXPECT_TRUE(rep.ok()) << errors_of(rep);
+  EXPECT_EQ(rep.n_narrow_merged, 1u);
+  EXPECT_EQ(rep.n_patches, 2u);
+  EXPECT_EQ(rep.n_failed_patches, 0u);  // the union projects without folds and is meshed
+  const auto& t = rep.output.topology;
+  EXPECT_TRUE(t.is_manifold);
+  EXPECT_EQ(t.n_boundary_loops, 1u);
+  EXPECT_EQ(t.euler_characteristic, 1);
+  EXPECT_EQ(t.n_self_intersecting_pairs.value_or(1), 0u);
+  // The step meshed on its own leaves obtuse triangles; joined to a plane, it leaves none.
+  EXPECT_GT(without.report.output.quality.obtuse_fraction, 0.0);
+  EXPECT_EQ(rep.output.quality.obtuse_fraction, 0.0);
+  EXPECT_GT(rep.output.quality.alpha_mean, without.report.output.quality.alpha_mean);
+  // The fit of the plane that takes the step rounds it off and overshoots below the lower
+  // plane (by 0.012, 0.6 of the rise, measured): the output stays within one rise of the input.
+  for (const auto v : with.mesh.vertices()) {
+    EXPECT_GE(with.mesh.point(v)[2], -0.02);
+    EXPECT_LE(with.mesh.point(v)[2], 0.04);
+  }
+
+  // A bound below the step's width takes nothing; a bad bound is refused.
+  options.narrow_cad_patch_width = 0.1;
+  EXPECT_EQ(remesh(mesh, options).report.n_narrow_merged, 0u);
+  options.narrow_cad_patch_width = -1.0;
+  EXPECT_THROW((void)remesh(mesh, options), InvalidInput);
+  options.narrow_cad_patch_width = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THROW((void)remesh(mesh, options), InvalidInput);
+}
+
 // Issue 5 on CAD meshes whose machined edges bend by less than the crease angle (cheese.off:
 // 2 422 edges at 65-80 deg): RemeshOptions::crease_gap lowers the crease angle to the gap
 // below them (segment's gap_crease_angle). A roof of two planes meeting at a 72 deg bend (8 x 8
