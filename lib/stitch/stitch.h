@@ -89,10 +89,10 @@ struct StitchOptions {
   //! its shortest edge, for a place with fewer obtuse triangles (a compass search from a
   //! quarter of its shortest edge, the step halved this many times), kept when it passes the
   //! repair's tests once projected (docs/stitch.md "Obtuse repair: a search in the plane,
-  //! session 17"). Default 0 (opt-in): at 5 cheese 2.43 -> 1.88%, couplingdown 1.11 -> 0.93%,
-  //! rotor 1.25 -> 1.21% obtuse, but bunny00 one obtuse triangle more (12 -> 13) and pinion
-  //! 0.957 -> 0.972% (9 obtuse triangles either way, fewer splits).
-  int obtuse_search_steps = 0;
+  //! session 17"; 0 = off). Default 5: cheese 2.43 -> 1.88%, couplingdown 1.11 -> 0.93%,
+  //! rotor 1.25 -> 1.21% obtuse; bunny00 one obtuse triangle more (12 -> 13) and pinion
+  //! 0.957 -> 0.972% (9 obtuse triangles either way, fewer splits), both under 1%.
+  int obtuse_search_steps = 5;
   //! Rounds of feature slides after the obtuse repair (>= 0; 0 switches them off): a node of
   //! a feature curve (crease or input boundary; not a corner) that has an obtuse triangle
   //! slides along its curve, on the polyline of the curve's nodes as the front placed them

@@ -329,7 +329,7 @@ void add_remesh_command(CLI::App& app) {
                   "docs/stitch.md \"Obtuse repair\")");
   cmd->add_option("--obtuse-search", args->obtuse_search_steps,
                   "Halvings of the obtuse repair's search in the plane for nodes the apex steps do not help "
-                  "(in [0, 30]; default 0 = off; docs/stitch.md \"Obtuse repair: a search in the plane, session 17\")");
+                  "(in [0, 30]; default 5; 0 = off; docs/stitch.md \"Obtuse repair: a search in the plane, session 17\")");
   cmd->add_option("--feature-slide-rounds", args->feature_slide_rounds,
                   "Rounds of the stitch's feature slides: nodes of creases and of the boundary slide along their "
                   "curve where that removes an obtuse triangle (default 2; 0 = off; part of the obtuse repair: none when "
