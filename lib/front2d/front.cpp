@@ -926,7 +926,6 @@ class Optimiser {
         }
         const Vec old = P_[vtx];
         const Mat old_m = metric_ ? Mv_[vtx] : Mat::Identity();
-        const std::uint64_t old_at = moved_at(static_cast<int>(vtx));
         move(static_cast<int>(vtx), smoothing_target(static_cast<int>(vtx), inc));
         // Kept if every triangle stays counter-clockwise and the worst alpha stays above
         // min(old worst, kSmoothAcceptAlpha); the old worst is needed only below that.
@@ -952,7 +951,12 @@ class Optimiser {
         }
         for (int k = b0; k < b1 && ok && keep_good; ++k)
           ok = max_cos(T_[static_cast<std::size_t>(inc.tri[static_cast<std::size_t>(k)])]) <= std::max(before[static_cast<std::size_t>(k - b0)], target);
-        if (!ok) restore(static_cast<int>(vtx), old, old_m, old_at);
+        if (!ok) {
+          P_[vtx] = old;
+          if (metric_) Mv_[vtx] = old_m;
+        } else {
+          mark_moved(static_cast<int>(vtx));
+        }
       }
     }
   }
@@ -1046,7 +1050,6 @@ class Optimiser {
         for (int d = 0; d < (on_segment ? 2 : 8); ++d) {
           const Vec old = P_[vi];
           const Mat old_m = metric_ ? Mv_[vi] : Mat::Identity();
-          const std::uint64_t old_at = moved_at(vtx);
           double t_new = t_cur;
           if (on_segment) {
             t_new = t_cur + (d == 0 ? step : -step) / seg_len;
@@ -1059,8 +1062,10 @@ class Optimiser {
             best = q;
             t_cur = t_new;
             improved = true;
+            mark_moved(vtx);
           } else {
-            restore(vtx, old, old_m, old_at);
+            P_[vi] = old;
+            if (metric_) Mv_[vi] = old_m;
           }
         }
         if (!improved) step *= 0.5;
@@ -1471,14 +1476,11 @@ class Optimiser {
   void move(int i, const Vec& x) {
     P_[static_cast<std::size_t>(i)] = x;
     if (metric_) Mv_[static_cast<std::size_t>(i)] = metric_->tensor(x);
+  }
+  // Stamps a kept move of i (a move that is undone leaves the vertex as it was, unstamped).
+  void mark_moved(int i) {
     if (moved_at_.size() <= static_cast<std::size_t>(i)) moved_at_.resize(P_.size(), 0);
     moved_at_[static_cast<std::size_t>(i)] = ++clock_;
-  }
-  // Undoes a move of i that was not kept: its point, tensor and move stamp as before it.
-  void restore(int i, const Vec& x, const Mat& m, std::uint64_t at) {
-    P_[static_cast<std::size_t>(i)] = x;
-    if (metric_) Mv_[static_cast<std::size_t>(i)] = m;
-    moved_at_[static_cast<std::size_t>(i)] = at;
   }
   [[nodiscard]] std::uint64_t moved_at(int i) const {
     return static_cast<std::size_t>(i) < moved_at_.size() ? moved_at_[static_cast<std::size_t>(i)] : 0;
@@ -1616,7 +1618,7 @@ class Optimiser {
   const Metric* metric_;
   std::vector<Mat> Mv_;  // per vertex tensor (empty without a metric)
   std::uint64_t clock_ = 0;              // counts the moves
-  std::vector<std::uint64_t> moved_at_;  // per vertex: clock_ at its last kept move, 0 = never moved
+  std::vector<std::uint64_t> moved_at_;  // per vertex: clock_ at its last kept move (mark_moved), 0 = never moved
   struct NoSwap {
     std::array<int, 4> q{-1, -1, -1, -1};  // the quad (a, b, c, d) found not to need a swap
     std::uint64_t at = 0;                  // clock_ then
