@@ -211,16 +211,27 @@ void check_crossings(const std::vector<Vec>& P, const std::vector<std::array<int
 class Arrangement {
  public:
   Arrangement(const std::vector<Vec>& P, const std::vector<std::array<int, 2>>& S) : P_(P), S_(S) {
-    out_.resize(P.size());
-    for (std::size_t k = 0; k < S.size(); ++k) {
-      out_[static_cast<std::size_t>(S[k][0])].push_back(static_cast<int>(2 * k));
-      out_[static_cast<std::size_t>(S[k][1])].push_back(static_cast<int>(2 * k + 1));
+    // Outgoing half-edges per vertex in compressed rows (in the order a vector per vertex
+    // would receive them: no allocation per vertex), then sorted around it.
+    out_start_.assign(P.size() + 1, 0);
+    for (const auto& sg : S) {
+      ++out_start_[static_cast<std::size_t>(sg[0]) + 1];
+      ++out_start_[static_cast<std::size_t>(sg[1]) + 1];
+    }
+    for (std::size_t v = 0; v < P.size(); ++v) out_start_[v + 1] += out_start_[v];
+    out_.resize(2 * S.size());
+    {
+      std::vector<int> fill(out_start_.begin(), out_start_.end() - 1);
+      for (std::size_t k = 0; k < S.size(); ++k) {
+        out_[static_cast<std::size_t>(fill[static_cast<std::size_t>(S[k][0])]++)] = static_cast<int>(2 * k);
+        out_[static_cast<std::size_t>(fill[static_cast<std::size_t>(S[k][1])]++)] = static_cast<int>(2 * k + 1);
+      }
     }
     pos_.assign(2 * S.size(), 0);
     for (std::size_t v = 0; v < P.size(); ++v) {
-      auto& o = out_[v];
-      std::sort(o.begin(), o.end(), [&](int h1, int h2) { return ccw_less(static_cast<int>(v), h1, h2); });
-      for (std::size_t i = 0; i < o.size(); ++i) pos_[static_cast<std::size_t>(o[i])] = static_cast<int>(i);
+      const auto first = out_.begin() + out_start_[v], last = out_.begin() + out_start_[v + 1];
+      std::sort(first, last, [&](int h1, int h2) { return ccw_less(static_cast<int>(v), h1, h2); });
+      for (auto it = first; it != last; ++it) pos_[static_cast<std::size_t>(*it)] = static_cast<int>(it - first);
     }
     // Cycles.
     cycle_.assign(2 * S.size(), -1);
@@ -270,11 +281,10 @@ class Arrangement {
   static constexpr int kUnresolved = -2;
 
   int next(int h) const {
-    const int v = dest(h);
-    const auto& o = out_[static_cast<std::size_t>(v)];
+    const auto v = static_cast<std::size_t>(dest(h));
     const int i = pos_[static_cast<std::size_t>(h ^ 1)];
-    const int n = static_cast<int>(o.size());
-    return o[static_cast<std::size_t>((i - 1 + n) % n)];
+    const int n = out_start_[v + 1] - out_start_[v];
+    return out_[static_cast<std::size_t>(out_start_[v] + (i - 1 + n) % n)];
   }
 
   bool ccw_less(int v, int h1, int h2) const {
@@ -326,7 +336,7 @@ class Arrangement {
       best = static_cast<int>(2 * k);
       best_vertex = -1;
     }
-    if (best_vertex >= 0) return out_[static_cast<std::size_t>(best_vertex)].back();
+    if (best_vertex >= 0) return out_[static_cast<std::size_t>(out_start_[static_cast<std::size_t>(best_vertex) + 1] - 1)];
     if (best < 0) return -1;
     const auto& seg = S_[static_cast<std::size_t>(best >> 1)];
     return orient2d(P_[static_cast<std::size_t>(seg[0])], P_[static_cast<std::size_t>(seg[1])], q) >= 0 ? best : best + 1;
@@ -334,7 +344,8 @@ class Arrangement {
 
   const std::vector<Vec>& P_;
   const std::vector<std::array<int, 2>>& S_;
-  std::vector<std::vector<int>> out_;
+  std::vector<int> out_start_;  // per vertex: its first entry in out_ (one more entry at the end)
+  std::vector<int> out_;        // outgoing half-edges, sorted counter-clockwise around each vertex
   std::vector<int> pos_;
   std::vector<int> cycle_;
   std::vector<bool> outer_;

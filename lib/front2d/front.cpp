@@ -19,6 +19,7 @@
 #include "nurbsfront/core/error.h"
 #include "nurbsfront/core/stopwatch.h"
 #include "nurbsfront/core/tolerances.h"
+#include "nurbsfront/front2d/cholesky2.h"
 #include "nurbsfront/front2d/domain.h"
 #include "nurbsfront/front2d/predicates.h"
 
@@ -53,6 +54,7 @@ constexpr int kSegmentSamples = 16;        // sizing samples per segment when sp
 constexpr std::size_t kMaxGridCells = std::size_t{1} << 22;
 constexpr std::size_t kProgressEvery = 1u << 14;
 constexpr double kIncircleRelative = 1e-12; // swap only if clearly non-Delaunay (no ping-pong)
+constexpr double kClearanceSlack = 1e-9;    // relative slack of the clearance box filter (AdvancingFront::valid)
 const double kSqrt3 = std::sqrt(3.0);
 
 std::uint64_t dkey(int a, int b) { return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(a)) << 32) | static_cast<std::uint32_t>(b); }
@@ -469,6 +471,10 @@ class AdvancingFront {
       lo.array() -= std::max(cn, ce);
       hi.array() += std::max(cn, ce);
     }
+    // A front edge whose box lies farther than `reach` from q in x or in y keeps both
+    // clearances: reach exceeds max(cn, ce) by far more than the rounding of the distances
+    // computed below (relative 1e-9 against about 1e-15), so those would not flag it either.
+    const double reach = is_new ? std::max(cn, ce) + kClearanceSlack * (std::max(cn, ce) + q.cwiseAbs().maxCoeff()) : 0.0;
     auto inside = [&](const Vec& v) { return orient2d(A, B, v) >= 0 && orient2d(B, q, v) >= 0 && orient2d(q, A, v) >= 0; };
     auto conflict = [&](int u, const Vec& U, int w, const Vec& W, int s, int t) {
       // New edge (u, w) against front edge (s, t); the pair {u, w} == {s, t} was skipped.
@@ -483,7 +489,13 @@ class AdvancingFront {
         const Vec& Y = pt(y);
         return orient2d(C, X, Y) == 0 && (X - C).dot(Y - C) > 0;
       }
-      return front2d::segments_intersect(U, W, pt(s), pt(t));
+      const Vec& S = pt(s);
+      const Vec& T = pt(t);
+      // Boxes apart (exact comparisons): the closed segments share no point.
+      if (std::max(U.x(), W.x()) < std::min(S.x(), T.x()) || std::min(U.x(), W.x()) > std::max(S.x(), T.x()) ||
+          std::max(U.y(), W.y()) < std::min(S.y(), T.y()) || std::min(U.y(), W.y()) > std::max(S.y(), T.y()))
+        return false;
+      return front2d::segments_intersect(U, W, S, T);
     };
     bool ok = true;
     auto check = [&](int e) {
@@ -497,6 +509,9 @@ class AdvancingFront {
         // Disjoint from the triangle's box: no containment, no crossing; only the clearance
         // of a new point remains to check.
         if (!is_new) return;
+        if (std::min(S.x(), T.x()) > q.x() + reach || std::max(S.x(), T.x()) < q.x() - reach ||
+            std::min(S.y(), T.y()) > q.y() + reach || std::max(S.y(), T.y()) < q.y() - reach)
+          return;
         const bool s_free = s != a && s != b, t_free = t != a && t != b;
         if ((s_free && (S - q).squaredNorm() < cn * cn) || (t_free && (T - q).squaredNorm() < cn * cn)) {
           ok = false;
@@ -632,7 +647,7 @@ class AdvancingFront {
     const Vec& C = pt(c);
     const Vec d1 = pt(n1) - C, d2 = pt(n2) - C;
     Eigen::Matrix2d R = Eigen::Matrix2d::Identity();
-    if (metric_) R = metric_->tensor(C).llt().matrixU();
+    if (metric_) R = detail::cholesky_upper(metric_->tensor(C));
     const Vec u1 = R * d1, u2 = R * d2;
     const double l1 = u1.norm(), l2 = u2.norm();
     if (!(l1 > 0 && l2 > 0) || u1.dot(u2) >= corner_cos_ * l1 * l2) return false;
@@ -673,7 +688,7 @@ class AdvancingFront {
     Vec offset;
     if (metric_) {
       const Eigen::Matrix2d M = metric_->tensor(mid);
-      const Eigen::Matrix2d R = M.llt().matrixU();
+      const Eigen::Matrix2d R = detail::cholesky_upper(M);
       const Vec u = R * ab;
       const double L = u.norm();
       const double d = std::clamp(h, kMinSideFactor * L, kMaxSideFactor * L);
@@ -851,9 +866,14 @@ class Optimiser {
       }
   }
 
-  [[nodiscard]] int v(int slot) const { return T_[static_cast<std::size_t>(slot / 3)][static_cast<std::size_t>(slot % 3)]; }
-  [[nodiscard]] static int nxt(int slot) { return slot - slot % 3 + (slot % 3 + 1) % 3; }
-  [[nodiscard]] static int prv(int slot) { return slot - slot % 3 + (slot % 3 + 2) % 3; }
+  // Slots are never negative: unsigned division by 3 is a multiply and a shift, and each of
+  // nxt and prv takes one remainder (the swaps ask for four vertices a test).
+  [[nodiscard]] int v(int slot) const {
+    const auto u = static_cast<std::size_t>(static_cast<unsigned>(slot));
+    return T_[u / 3][u % 3];
+  }
+  [[nodiscard]] static int nxt(int slot) { return static_cast<unsigned>(slot) % 3 == 2 ? slot - 2 : slot + 1; }
+  [[nodiscard]] static int prv(int slot) { return static_cast<unsigned>(slot) % 3 == 0 ? slot + 2 : slot - 1; }
 
   std::size_t delaunay_swaps() {
     std::vector<int> stack;
@@ -867,7 +887,11 @@ class Optimiser {
       const int o = N_[static_cast<std::size_t>(s)];
       if (o < 0 || C_[static_cast<std::size_t>(s)]) continue;
       const int a = v(s), b = v(nxt(s)), c = v(prv(s)), d = v(prv(o));
-      if (!should_swap(a, b, c, d)) continue;
+      if (known_no_swap(s, a, b, c, d)) continue;
+      if (!should_swap(a, b, c, d)) {
+        remember_no_swap(s, a, b, c, d);
+        continue;
+      }
       const Vec &A = pt(a), &B = pt(b), &Cc = pt(c), &D = pt(d);
       if (orient2d(A, D, Cc) <= 0 || orient2d(D, B, Cc) <= 0) continue;
       flip(s);
@@ -930,6 +954,8 @@ class Optimiser {
         if (!ok) {
           P_[vtx] = old;
           if (metric_) Mv_[vtx] = old_m;
+        } else {
+          mark_moved(static_cast<int>(vtx));
         }
       }
     }
@@ -1036,6 +1062,7 @@ class Optimiser {
             best = q;
             t_cur = t_new;
             improved = true;
+            mark_moved(vtx);
           } else {
             P_[vi] = old;
             if (metric_) Mv_[vi] = old_m;
@@ -1450,6 +1477,28 @@ class Optimiser {
     P_[static_cast<std::size_t>(i)] = x;
     if (metric_) Mv_[static_cast<std::size_t>(i)] = metric_->tensor(x);
   }
+  // Stamps a kept move of i (a move that is undone leaves the vertex as it was, unstamped).
+  void mark_moved(int i) {
+    if (moved_at_.size() <= static_cast<std::size_t>(i)) moved_at_.resize(P_.size(), 0);
+    moved_at_[static_cast<std::size_t>(i)] = ++clock_;
+  }
+  [[nodiscard]] std::uint64_t moved_at(int i) const {
+    return static_cast<std::size_t>(i) < moved_at_.size() ? moved_at_[static_cast<std::size_t>(i)] : 0;
+  }
+  // should_swap(a, b, c, d) is a function of the four points and their tensors only: a slot
+  // whose quad was found not to need a swap, and none of whose four vertices moved since,
+  // needs no second evaluation (the swap passes after the smoothing and after each
+  // relocation round meet mostly unchanged quads).
+  [[nodiscard]] bool known_no_swap(int s, int a, int b, int c, int d) const {
+    if (static_cast<std::size_t>(s) >= no_swap_.size()) return false;
+    const NoSwap& m = no_swap_[static_cast<std::size_t>(s)];
+    return m.q[0] == a && m.q[1] == b && m.q[2] == c && m.q[3] == d && moved_at(a) <= m.at && moved_at(b) <= m.at &&
+           moved_at(c) <= m.at && moved_at(d) <= m.at;
+  }
+  void remember_no_swap(int s, int a, int b, int c, int d) {
+    if (no_swap_.size() <= static_cast<std::size_t>(s)) no_swap_.resize(N_.size());
+    no_swap_[static_cast<std::size_t>(s)] = {{a, b, c, d}, clock_};
+  }
   [[nodiscard]] Mat tri_metric(const std::array<int, 3>& t) const { return (mv(t[0]) + mv(t[1]) + mv(t[2])) / 3.0; }
 
   [[nodiscard]] double quality(const std::array<int, 3>& t) const {
@@ -1499,7 +1548,7 @@ class Optimiser {
   // factor of the mean tensor of its four vertices.
   [[nodiscard]] bool should_swap(int a, int b, int c, int d) const {
     if (!metric_) return clearly_in_circle(pt(a), pt(b), pt(c), pt(d));
-    const Mat R = ((mv(a) + mv(b) + mv(c) + mv(d)) * 0.25).llt().matrixU();
+    const Mat R = detail::cholesky_upper((mv(a) + mv(b) + mv(c) + mv(d)) * 0.25);
     return clearly_in_circle(R * pt(a), R * pt(b), R * pt(c), R * pt(d));
   }
   // d inside the circle of the counter-clockwise abc by more than the relative margin
@@ -1568,6 +1617,13 @@ class Optimiser {
   std::vector<std::array<int, 3>>& T_;
   const Metric* metric_;
   std::vector<Mat> Mv_;  // per vertex tensor (empty without a metric)
+  std::uint64_t clock_ = 0;              // counts the moves
+  std::vector<std::uint64_t> moved_at_;  // per vertex: clock_ at its last kept move (mark_moved), 0 = never moved
+  struct NoSwap {
+    std::array<int, 4> q{-1, -1, -1, -1};  // the quad (a, b, c, d) found not to need a swap
+    std::uint64_t at = 0;                  // clock_ then
+  };
+  std::vector<NoSwap> no_swap_;  // per slot (delaunay_swaps)
   std::vector<int> N_;
   std::vector<bool> C_;
   std::vector<int> cavity_;       // refinement scratch
@@ -1696,12 +1752,19 @@ Mesh2d mesh_pslg(const Pslg& pslg, const FrontOptions& options) {
   {
     constexpr int kSamples = 32;
     const Vec ext = hi - lo;
-    for (int j = 0; j < kSamples; ++j)
-      for (int i = 0; i < kSamples; ++i) {
-        const Vec x = lo + Vec((i + 0.5) * ext.x() / kSamples, (j + 0.5) * ext.y() / kSamples);
-        const double hx = size(x);
-        expected += 1.0 / (kSqrt3 / 4.0 * hx * hx);
-      }
+    if (options.sizing.kind == SizingField::Kind::Uniform) {
+      // Every sample has the same size: the same term added as often, in the same order.
+      const double hx = size(lo);
+      const double term = 1.0 / (kSqrt3 / 4.0 * hx * hx);
+      for (int k = 0; k < kSamples * kSamples; ++k) expected += term;
+    } else {
+      for (int j = 0; j < kSamples; ++j)
+        for (int i = 0; i < kSamples; ++i) {
+          const Vec x = lo + Vec((i + 0.5) * ext.x() / kSamples, (j + 0.5) * ext.y() / kSamples);
+          const double hx = size(x);
+          expected += 1.0 / (kSqrt3 / 4.0 * hx * hx);
+        }
+    }
     expected *= std::abs(mesh.report.domain_area) / (kSamples * kSamples);
   }
   double mean_edge = 0;

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <fstream>
 #include <limits>
 #include <iomanip>
@@ -12,9 +13,11 @@
 #include <sstream>
 #include <string>
 
+#include <Eigen/Cholesky>
 #include <Eigen/Geometry>
 
 #include "nurbsfront/core/error.h"
+#include "nurbsfront/front2d/cholesky2.h"
 #include "nurbsfront/front2d/front.h"
 #include "nurbsfront/front2d/predicates.h"
 #include "support/test_data.h"
@@ -449,6 +452,37 @@ TEST(Front2dMetric, QualityInMetricHandComputed) {
   const Eigen::Matrix2d tm = triangle_metric(par, a, b, c);
   EXPECT_NEAR(tm(0, 0), 1.0 + (0.0 + 1.0 + 0.25) / 3, 1e-14);
   EXPECT_NEAR(tm(1, 1), 1.0 + (0.0 + 0.0 + 3.0 / 16) / 3, 1e-14);
+}
+
+// detail::cholesky_upper replaces M.llt().matrixU() in the front and the swaps: the same
+// doubles bit for bit, metric tensors and sums of them, steep and flat, and the inputs where
+// Eigen's factorisation stops (a pivot <= 0, NaN).
+TEST(Front2dMetric, CholeskyFactorIsEigensBitForBit) {
+  std::mt19937_64 rng(17);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  std::vector<Eigen::Matrix2d> cases;
+  for (int i = 0; i < 4000; ++i) {
+    const double scale = std::pow(10.0, 4.0 * unit(rng));
+    const Eigen::Vector2d g(scale * unit(rng), scale * unit(rng));
+    const Eigen::Matrix2d m = Eigen::Matrix2d::Identity() + g * g.transpose();
+    cases.push_back(m);
+    const Eigen::Vector2d h(unit(rng), unit(rng));
+    const Eigen::Matrix2d n = Eigen::Matrix2d::Identity() + h * h.transpose();
+    cases.push_back((m + n + cases[static_cast<std::size_t>(i) / 2] + n) * 0.25);
+  }
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  cases.push_back(Eigen::Vector2d(4.0, 9.0).asDiagonal());
+  cases.push_back((Eigen::Matrix2d() << 0.0, 1.0, 1.0, 2.0).finished());    // first pivot 0
+  cases.push_back((Eigen::Matrix2d() << -1.0, 0.5, 0.5, 2.0).finished());   // first pivot < 0
+  cases.push_back((Eigen::Matrix2d() << 1.0, 2.0, 2.0, 1.0).finished());    // second pivot < 0
+  cases.push_back((Eigen::Matrix2d() << 1.0, 1.0, 1.0, 1.0).finished());    // second pivot 0
+  cases.push_back((Eigen::Matrix2d() << nan, 0.0, 0.0, 1.0).finished());
+  cases.push_back((Eigen::Matrix2d() << 2.0, nan, nan, 1.0).finished());
+  for (const Eigen::Matrix2d& m : cases) {
+    const Eigen::Matrix2d eigen = m.llt().matrixU();
+    const Eigen::Matrix2d ours = detail::cholesky_upper(m);
+    EXPECT_EQ(std::memcmp(eigen.data(), ours.data(), sizeof(double) * 4), 0) << m;
+  }
 }
 
 TEST(Front2dMetric, IdentityMetricGivesTheSameMesh) {
