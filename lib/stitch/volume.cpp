@@ -11,7 +11,6 @@
 
 #include <Eigen/Geometry>
 
-#include "nurbsfront/core/error.h"
 #include "nurbsfront/core/parallel.h"
 #include "nurbsfront/stitch/stitch_internal.h"
 #include "nurbsfront/surfmesh/surfmesh_internal.h"
@@ -213,88 +212,54 @@ std::size_t compensate_volume(const SurfaceMesh& surface, const TriMesh* input, 
     if (!any) break;
   }
   const double sin_floor = std::sin(kAwayFromFeaturesAngleBoundDeg * std::numbers::pi / 180.0);
-  // Scratch of one node's move: its faces, and per triangle of the ring, the sine of its
-  // smallest angle below which a move may not take it: min(its own before the move, the bound's).
-  struct MoveScratch {
-    std::vector<std::size_t> ring;
-    std::vector<double> floor_sine;
-  };
+  std::vector<std::size_t> ring;
+  // Per triangle of the ring, the sine of its smallest angle below which a move may not take
+  // it: min(its own before the move, the bound's).
+  std::vector<double> floor_sine;
   // The ring's obtuse triangles with node i at `at`, and whether every triangle keeps its floor
   // (the floors are taken when floor_sine is empty).
-  auto around = [&](std::size_t i, const Eigen::Vector3d& at, int& n_obtuse, MoveScratch& scratch) {
+  auto around = [&](std::size_t i, const Eigen::Vector3d& at, int& n_obtuse) {
     n_obtuse = 0;
-    const bool first = scratch.floor_sine.empty();
+    const bool first = floor_sine.empty();
     bool kept = true;
-    for (std::size_t t = 0; t < scratch.ring.size(); ++t) {
-      const std::size_t f = scratch.ring[t];
+    for (std::size_t t = 0; t < ring.size(); ++t) {
+      const std::size_t f = ring[t];
       std::array<Eigen::Vector3d, 3> q;
       for (int k = 0; k < 3; ++k) q[static_cast<std::size_t>(k)] = corners[f][static_cast<std::size_t>(k)] == i ? at : point[corners[f][static_cast<std::size_t>(k)]];
       n_obtuse += triangle_is_obtuse(q[0], q[1], q[2]) ? 1 : 0;
       const double sine = smallest_angle_sine(q[0], q[1], q[2]);
       if (first) {
-        scratch.floor_sine.push_back(std::min(sine, sin_floor));
-      } else if (sine < scratch.floor_sine[t]) {
+        floor_sine.push_back(std::min(sine, sin_floor));
+      } else if (sine < floor_sine[t]) {
         kept = false;
       }
     }
     return kept;
-  };
-  auto tried = [&](std::size_t i) { return fixed[i] == 0 && area[i] > 0.0 && wanted[i] != 0.0; };
-  // Node i's move, from the positions in `point` (its own and its faces' corners): 0 none,
-  // 1 the whole move, 2 half of it.
-  auto decide = [&](std::size_t i, MoveScratch& scratch) -> std::uint8_t {
-    const double d = std::clamp(wanted[i] / area[i], -limit[i], limit[i]);
-    if (!std::isfinite(d)) return 0;
-    scratch.ring.clear();
-    scratch.floor_sine.clear();
-    for (auto f : mesh.vf_range(mesh.vertex_handle(static_cast<unsigned>(i)))) scratch.ring.push_back(static_cast<std::size_t>(f.idx()));
-    int old_obtuse = 0;
-    around(i, point[i], old_obtuse, scratch);
-    for (const int step : {1, 2}) {
-      const double fraction = step == 1 ? 1.0 : 0.5;
-      const Eigen::Vector3d q = point[i] + fraction * d * normal[i];
-      int n_obtuse = 0;
-      if (!around(i, q, n_obtuse, scratch) || n_obtuse > old_obtuse) continue;
-      return static_cast<std::uint8_t>(step);
-    }
-    return 0;
   };
   // The moves are kept only when they bring a closed mesh's enclosed volume nearer the
   // closed input's: the axis measure is local, and where the guards below refuse the moves
   // of one sign it can break a cancellation the whole mesh had (CGAL's object.stl: -0.02% ->
   // -0.84% without this test).
   const std::vector<Eigen::Vector3d> original = point;
-  // With two or more threads every node's decision is first taken on the threads from the
-  // positions before any move; the loop below (in vertex order, each node seeing the moves
-  // before it) takes a node's planned decision unless a neighbour of it moved before it (a
-  // decision reads only the node's faces), so the moves are the serial loop's. 3: not planned.
-  constexpr std::uint8_t kNotPlanned = 3;
-  std::vector<std::uint8_t> plan;
-  if (how.n_threads >= 2) {
-    plan.assign(nv, kNotPlanned);
-    std::vector<MoveScratch> scratch(how.n_threads);
-    constexpr std::size_t kVertexChunk = 1024;
-    parallel::for_chunks(nv, how.n_threads, kVertexChunk, [&](std::size_t begin, std::size_t end, unsigned worker) {
-      for (std::size_t i = begin; i < end; ++i) {
-        if (tried(i)) plan[i] = decide(i, scratch[worker]);
-      }
-    });
-  }
-  MoveScratch scratch;
   std::size_t n_moved = 0;
   for (std::size_t i = 0; i < nv; ++i) {
-    if (!tried(i)) continue;
-    const std::uint8_t step = !plan.empty() && plan[i] != kNotPlanned ? plan[i] : decide(i, scratch);
-    NURBSFRONT_DEBUG_ASSERT(plan.empty() || plan[i] == kNotPlanned || step == decide(i, scratch));  // never stale
-    if (step == 0) continue;
+    if (fixed[i] != 0 || !(area[i] > 0.0) || wanted[i] == 0.0) continue;
     const double d = std::clamp(wanted[i] / area[i], -limit[i], limit[i]);
-    const Eigen::Vector3d q = point[i] + (step == 1 ? 1.0 : 0.5) * d * normal[i];
+    if (!std::isfinite(d)) continue;
     const auto v = mesh.vertex_handle(static_cast<unsigned>(i));
-    point[i] = q;
-    mesh.set_point(v, to_openmesh(q));
-    ++n_moved;
-    if (!plan.empty()) {
-      for (auto w : mesh.vv_range(v)) plan[static_cast<std::size_t>(w.idx())] = kNotPlanned;
+    ring.clear();
+    floor_sine.clear();
+    for (auto f : mesh.vf_range(v)) ring.push_back(static_cast<std::size_t>(f.idx()));
+    int old_obtuse = 0;
+    around(i, point[i], old_obtuse);
+    for (const double fraction : {1.0, 0.5}) {
+      const Eigen::Vector3d q = point[i] + fraction * d * normal[i];
+      int n_obtuse = 0;
+      if (!around(i, q, n_obtuse) || n_obtuse > old_obtuse) continue;
+      point[i] = q;
+      mesh.set_point(v, to_openmesh(q));
+      ++n_moved;
+      break;
     }
   }
   if (check_total && n_moved > 0) {
