@@ -11,6 +11,7 @@
 #include <numbers>
 #include <numeric>
 #include <optional>
+#include <queue>
 #include <span>
 #include <vector>
 
@@ -332,79 +333,99 @@ class Optimiser {
   // 1/2, then 1/4, 1/8 and 1/16 of the way to them; the first position, projected as in
   // smoothing, that leaves fewer obtuse triangles around the vertex and passes the
   // smoothing's tests (with the angle floor raised by kObtuseAngleMarginDeg) is taken.
-  // Serial, in vertex order. Returns the number of moves.
+  // In vertex order (the decisions planned on the run's threads: plan_ring_moves()).
+  // Returns the number of moves.
   // only: when not empty, only the vertices v with only[v] != 0 are tried.
   std::size_t obtuse_sweep(const std::vector<std::uint8_t>& only = {}) {
-    std::size_t n_moves = 0;
-    std::vector<std::pair<double, Vec>> apexes;
     // Only a vertex of an obtuse triangle is tried: those at the start of the sweep, and the
     // ring of every vertex moved in it (their triangles changed). The others are skipped
     // before their ring is taken (the same moves: most vertices have no obtuse triangle).
     std::vector<std::uint8_t> candidate = obtuse_face_vertices();
+    auto tried = [&](std::size_t i) { return candidate[i] != 0 && (only.empty() || only[i] != 0); };
+    auto decide = [this](TriMesh::VertexHandle v, SweepScratch& scratch, Vec& to) { return obtuse_move(v, scratch, to); };
+    return ring_move_sweep(candidate, tried, decide);
+  }
+
+  // Scratch of a vertex's decision in obtuse_sweep() and slide_sweep().
+  struct SweepScratch {
+    std::vector<RingTriangle> ring;
+    std::vector<std::pair<double, Vec>> apexes;
+  };
+
+  // A sweep's decisions taken ahead (plan_ring_moves): per vertex 0 none (or dropped), 1 stays,
+  // 2 moves to target.
+  struct RingMovePlans {
+    std::vector<std::uint8_t> state;
+    std::vector<Vec> target;
+  };
+
+  // The decisions decide(v, scratch, to) (true: v moves to `to`) of the vertices i with
+  // tried(i), on options_.n_threads threads on the mesh as it is now; nothing with one thread.
+  // decide must read only v's ring (v's position, its faces' and its neighbours') and the
+  // mesh's connectivity, and write only its scratch and `to`.
+  template <class Tried, class Decide>
+  RingMovePlans plan_ring_moves(const Tried& tried, const Decide& decide) const {
+    RingMovePlans plans;
+    const unsigned n_threads = options_.n_threads;
+    if (n_threads < 2) return plans;
+    const std::size_t n = mesh_.n_vertices();
+    std::vector<int> vertices;
+    for (std::size_t i = 0; i < n; ++i) {
+      if (tried(i)) vertices.push_back(static_cast<int>(i));
+    }
+    if (vertices.empty()) return plans;
+    plans.state.assign(n, 0);
+    plans.target.resize(n);
+    std::vector<SweepScratch> scratch(n_threads);
+    constexpr std::size_t kVertexChunk = 256;
+    parallel::for_chunks(vertices.size(), n_threads, kVertexChunk, [&](std::size_t begin, std::size_t end, unsigned worker) {
+      for (std::size_t k = begin; k < end; ++k) {
+        const auto i = static_cast<std::size_t>(vertices[k]);
+        plans.state[i] = decide(TriMesh::VertexHandle(vertices[k]), scratch[worker], plans.target[i]) ? 2 : 1;
+      }
+    });
+    return plans;
+  }
+
+  // A Gauss-Seidel sweep of moves in vertex order over the vertices i with tried(i), the
+  // decision of each by decide() (plan_ring_moves); a moved vertex's neighbours become
+  // candidates (candidate[w] = 1; tried() reads it). With two or more threads the decisions
+  // are first planned on the threads; the sweep takes a vertex's plan unless a neighbour moved
+  // earlier in the sweep (its plan is dropped then and it decides again): a decision reads
+  // only the vertex's ring, which nothing else changes, so the moves are the serial sweep's
+  // for any thread count. Returns the number of moves.
+  template <class Tried, class Decide>
+  std::size_t ring_move_sweep(std::vector<std::uint8_t>& candidate, const Tried& tried, const Decide& decide) {
+    RingMovePlans plans = plan_ring_moves(tried, decide);
+    SweepScratch scratch;
+    std::size_t n_moves = 0;
     for (auto v : mesh_.vertices()) {
-      if (candidate[static_cast<std::size_t>(v.idx())] == 0) continue;
-      if (!only.empty() && only[static_cast<std::size_t>(v.idx())] == 0) continue;
-      const NodeInfo& info = nodes_[static_cast<std::size_t>(v.idx())];
-      if (!info.is_movable || mesh_.is_boundary(v)) continue;
-      const Vec p = point(mesh_, v);
-      ring_.clear();
-      apexes.clear();
-      std::size_t old_obtuse = 0;
-      for (auto h : mesh_.voh_range(v)) {
-        const Vec b = point(mesh_, mesh_.to_vertex_handle(h));
-        const Vec c = point(mesh_, mesh_.to_vertex_handle(mesh_.next_halfedge_handle(h)));
-        const Vec n = area_vector(p, b, c);
-        ring_.push_back({b, c, n, n.norm()});
-        if (!triangle_is_obtuse(p, b, c)) continue;
-        ++old_obtuse;
-        // The cosine of the largest angle (the worst triangle's apex is tried first).
-        const double worst = std::min({cosine(b - p, c - p), cosine(p - b, c - b), cosine(p - c, b - c)});
-        // p's ideal place: over the middle of bc, sqrt(3)/2 |bc| away, in the triangle's plane.
-        const Vec e = c - b;
-        const Vec side = n.cross(e);  // in the plane, perpendicular to bc, towards p
-        const double side_norm = side.norm();
-        if (!(side_norm > 0.0)) continue;
-        apexes.push_back({worst, 0.5 * (b + c) + (0.5 * std::numbers::sqrt3 * e.norm() / side_norm) * side});
+      const auto i = static_cast<std::size_t>(v.idx());
+      if (!tried(i)) continue;
+      Vec to;
+      const bool planned = !plans.state.empty() && plans.state[i] != 0;
+      const bool moves = planned ? plans.state[i] == 2 : decide(v, scratch, to);
+#ifndef NDEBUG
+      if (planned) {  // the plan is never stale
+        Vec fresh;
+        const bool fresh_moves = decide(v, scratch, fresh);
+        NURBSFRONT_DEBUG_ASSERT(fresh_moves == moves && (!moves || fresh == plans.target[i]));
       }
-      if (old_obtuse == 0) continue;
-      std::sort(apexes.begin(), apexes.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
-      // Not all the way: whole steps moved border nodes far along their two fits' mean
-      // (Hausdorff up 13% on the liver) and left smaller smallest angles, for no fewer
-      // obtuse triangles.
-      bool moved = false;
-      for (const double t : {0.5, 0.25, 0.125, 0.0625}) {
-        for (const auto& apex : apexes) {
-          const Vec q = project(info, p + t * (apex.second - p));
-          if (!q.allFinite()) continue;
-          std::size_t new_obtuse = 0;
-          for (const RingTriangle& r : ring_) new_obtuse += triangle_is_obtuse(q, r.b, r.c) ? 1 : 0;
-          if (new_obtuse >= old_obtuse || !passes_ring_tests(p, q, sin_obtuse_floor_, obtuse_sine_skip_)) continue;
-          mesh_.set_point(v, to_openmesh(q));
-          ++n_moves;
-          moved = true;
-          for (auto w : mesh_.vv_range(v)) candidate[static_cast<std::size_t>(w.idx())] = 1;
-          break;
-        }
-        if (moved) break;
-      }
-      if (moved || options_.obtuse_search_steps == 0 || info.curve >= 0 || info.is_corner) continue;
-      // No apex step helps an inner node: search the tangent plane for a place with fewer
-      // obtuse triangles. Not for border nodes (on the mean of two fits; with them bunny00's
-      // Hausdorff rose 15%).
-      const Vec q = project(info, search_obtuse_place(p, old_obtuse));
-      if (!q.allFinite() || q == p) continue;
-      std::size_t new_obtuse = 0;
-      for (const RingTriangle& r : ring_) new_obtuse += triangle_is_obtuse(q, r.b, r.c) ? 1 : 0;
-      if (new_obtuse >= old_obtuse || !passes_ring_tests(p, q, sin_obtuse_floor_, obtuse_sine_skip_)) continue;
-      mesh_.set_point(v, to_openmesh(q));
+#endif
+      if (!moves) continue;
+      if (planned) to = plans.target[i];
+      mesh_.set_point(v, to_openmesh(to));
       ++n_moves;
-      for (auto w : mesh_.vv_range(v)) candidate[static_cast<std::size_t>(w.idx())] = 1;
+      for (auto w : mesh_.vv_range(v)) {
+        candidate[static_cast<std::size_t>(w.idx())] = 1;
+        if (!plans.state.empty()) plans.state[static_cast<std::size_t>(w.idx())] = 0;
+      }
     }
     return n_moves;
   }
 
   // The obtuse repair's search (StitchOptions::obtuse_search_steps; docs/stitch.md "Obtuse
-  // repair: a search"): a compass search for the node at p (its triangles in ring_, old_obtuse
+  // repair: a search"): a compass search for the node at p (its triangles in ring, old_obtuse
   // of them obtuse) in the plane through p normal to the ring's area vector. From p, steps
   // of a quarter of the shortest ring edge in eight directions (the plane's axes and
   // diagonals); the best neighbour by (obtuse triangles, then the cosine of the largest
@@ -414,11 +435,11 @@ class Optimiser {
   // sin_obtuse_floor_), within kObtuseSearchReach of the shortest edge from p. Returns p
   // when no place has fewer obtuse triangles; the caller
   // projects the place and tests it as every move.
-  Vec search_obtuse_place(const Vec& p, std::size_t old_obtuse) const {
+  Vec search_obtuse_place(std::span<const RingTriangle> ring, const Vec& p, std::size_t old_obtuse) const {
     Vec normal = Vec::Zero();
     double shortest = std::numeric_limits<double>::infinity();
     double old_sine = 1.0;
-    for (const RingTriangle& r : ring_) {
+    for (const RingTriangle& r : ring) {
       normal += r.n_old;
       shortest = std::min(shortest, (r.b - p).norm());
       old_sine = std::min(old_sine, alpha_and_min_angle_sine(p, r.b, r.c, r.l_old)[1]);
@@ -442,7 +463,7 @@ class Optimiser {
       std::size_t n_obtuse = 0;
       double worst = 1.0;
       if ((q - p).squaredNorm() > reach * reach) return std::nullopt;
-      for (const RingTriangle& r : ring_) {
+      for (const RingTriangle& r : ring) {
         const Vec n = area_vector(q, r.b, r.c);
         const double l = n.norm();
         if (l <= min_double_area_ || !(n.dot(r.n_old) > 0.0)) return std::nullopt;
@@ -486,6 +507,61 @@ class Optimiser {
     return best.first < old_obtuse ? at : p;
   }
 
+  // One vertex of obtuse_sweep(): whether v moves, and where (to).
+  bool obtuse_move(TriMesh::VertexHandle v, SweepScratch& scratch, Vec& to) const {
+    const NodeInfo& info = nodes_[static_cast<std::size_t>(v.idx())];
+    if (!info.is_movable || mesh_.is_boundary(v)) return false;
+    std::vector<RingTriangle>& ring = scratch.ring;
+    std::vector<std::pair<double, Vec>>& apexes = scratch.apexes;
+    const Vec p = point(mesh_, v);
+    ring.clear();
+    apexes.clear();
+    std::size_t old_obtuse = 0;
+    for (auto h : mesh_.voh_range(v)) {
+      const Vec b = point(mesh_, mesh_.to_vertex_handle(h));
+      const Vec c = point(mesh_, mesh_.to_vertex_handle(mesh_.next_halfedge_handle(h)));
+      const Vec n = area_vector(p, b, c);
+      ring.push_back({b, c, n, n.norm()});
+      if (!triangle_is_obtuse(p, b, c)) continue;
+      ++old_obtuse;
+      // The cosine of the largest angle (the worst triangle's apex is tried first).
+      const double worst = std::min({cosine(b - p, c - p), cosine(p - b, c - b), cosine(p - c, b - c)});
+      // p's ideal place: over the middle of bc, sqrt(3)/2 |bc| away, in the triangle's plane.
+      const Vec e = c - b;
+      const Vec side = n.cross(e);  // in the plane, perpendicular to bc, towards p
+      const double side_norm = side.norm();
+      if (!(side_norm > 0.0)) continue;
+      apexes.push_back({worst, 0.5 * (b + c) + (0.5 * std::numbers::sqrt3 * e.norm() / side_norm) * side});
+    }
+    if (old_obtuse == 0) return false;
+    std::sort(apexes.begin(), apexes.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
+    // Not all the way: whole steps moved border nodes far along their two fits' mean
+    // (Hausdorff up 13% on the liver) and left smaller smallest angles, for no fewer
+    // obtuse triangles.
+    for (const double t : {0.5, 0.25, 0.125, 0.0625}) {
+      for (const auto& apex : apexes) {
+        const Vec q = project(info, p + t * (apex.second - p));
+        if (!q.allFinite()) continue;
+        std::size_t new_obtuse = 0;
+        for (const RingTriangle& r : ring) new_obtuse += triangle_is_obtuse(q, r.b, r.c) ? 1 : 0;
+        if (new_obtuse >= old_obtuse || !passes_ring_tests(ring, p, q, sin_obtuse_floor_, obtuse_sine_skip_)) continue;
+        to = q;
+        return true;
+      }
+    }
+    // No apex step helps an inner node: search the tangent plane for a place with fewer
+    // obtuse triangles. Not for border nodes (on the mean of two fits; with them bunny00's
+    // Hausdorff rose 15%).
+    if (options_.obtuse_search_steps == 0 || info.curve >= 0 || info.is_corner) return false;
+    const Vec q = project(info, search_obtuse_place(ring, p, old_obtuse));
+    if (!q.allFinite() || q == p) return false;
+    std::size_t new_obtuse = 0;
+    for (const RingTriangle& r : ring) new_obtuse += triangle_is_obtuse(q, r.b, r.c) ? 1 : 0;
+    if (new_obtuse >= old_obtuse || !passes_ring_tests(ring, p, q, sin_obtuse_floor_, obtuse_sine_skip_)) return false;
+    to = q;
+    return true;
+  }
+
   // Flips of the edges of obtuse triangles, in edge order, when the two new triangles
   // hold fewer obtuse angles than the old ones and the flip passes flip_keeps_shape()
   // and, instead of flip_sweep()'s alpha gain, floors (the smaller new alpha must stay at least
@@ -502,7 +578,30 @@ class Optimiser {
       const auto f = mesh_.face_handle(h);
       return f.is_valid() && obtuse[static_cast<std::size_t>(f.idx())] != 0;
     };
-    for (auto e : mesh_.edges()) {
+    // The edges looked at, in edge order: those of the faces obtuse at the start, and (in
+    // `later`) those after the current edge of a face a flip leaves obtuse. Any other edge has
+    // neither face obtuse when its turn comes, so the scan over all edges skipped it: the same
+    // flips.
+    std::vector<int> edges;
+    for (std::size_t fi = 0; fi < obtuse.size(); ++fi) {
+      if (obtuse[fi] == 0) continue;
+      for (auto h : mesh_.fh_range(TriMesh::FaceHandle(static_cast<int>(fi)))) edges.push_back(mesh_.edge_handle(h).idx());
+    }
+    std::sort(edges.begin(), edges.end());
+    std::priority_queue<int, std::vector<int>, std::greater<>> later;
+    std::size_t next = 0;
+    int last = -1;
+    while (next < edges.size() || !later.empty()) {
+      int ei = 0;
+      if (later.empty() || (next < edges.size() && edges[next] <= later.top())) {
+        ei = edges[next++];
+      } else {
+        ei = later.top();
+        later.pop();
+      }
+      if (ei == last) continue;
+      last = ei;
+      const TriMesh::EdgeHandle e(ei);
       if (!is_obtuse_face(mesh_.halfedge_handle(e, 0)) && !is_obtuse_face(mesh_.halfedge_handle(e, 1))) continue;
       if (!only.empty() && (only[static_cast<std::size_t>(mesh_.to_vertex_handle(mesh_.halfedge_handle(e, 0)).idx())] == 0 ||
                             only[static_cast<std::size_t>(mesh_.from_vertex_handle(mesh_.halfedge_handle(e, 0)).idx())] == 0)) {
@@ -523,6 +622,10 @@ class Optimiser {
       for (const auto h : {mesh_.halfedge_handle(e, 0), mesh_.halfedge_handle(e, 1)}) {
         const auto f = mesh_.face_handle(h);
         obtuse[static_cast<std::size_t>(f.idx())] = is_obtuse(f) ? 1 : 0;
+        if (obtuse[static_cast<std::size_t>(f.idx())] == 0) continue;
+        for (auto g : mesh_.fh_range(f)) {
+          if (mesh_.edge_handle(g).idx() > ei) later.push(mesh_.edge_handle(g).idx());
+        }
       }
     }
     return n_flips;
@@ -540,7 +643,8 @@ class Optimiser {
   // feature_slide_cosine_gain, when that is finite), passes the obtuse repair's
   // ring tests, and the curve's two edges at the node stay within kSlideMaxSag of their piece
   // from the front's polyline points between their ends (the corner a slide cuts off).
-  // Serial, in vertex order. Returns the number of slides.
+  // In vertex order (the decisions planned on the run's threads: ring_move_sweep()). Returns
+  // the number of slides.
   std::size_t slide_sweep(const std::vector<int>& vertex_node) {
     if (surface_.curve_nodes.size() != surface_.curve_is_feature.size()) return 0;
     // Per node: its vertex, and its place on its curve's node list.
@@ -557,55 +661,60 @@ class Optimiser {
         if (surface_.node_kind[node] == NodeKind::Border) place[node] = static_cast<int>(k);
       }
     }
-    std::size_t n_slides = 0;
     std::vector<std::uint8_t> candidate = obtuse_face_vertices();
-    for (auto v : mesh_.vertices()) {
-      if (candidate[static_cast<std::size_t>(v.idx())] == 0) continue;
-      const int node = vertex_node[static_cast<std::size_t>(v.idx())];
-      if (node < 0 || static_cast<std::size_t>(node) >= surface_.nodes.size()) continue;  // a split's node
-      const NodeInfo& info = nodes_[static_cast<std::size_t>(v.idx())];
-      if (info.curve < 0 || place[static_cast<std::size_t>(node)] < 0) continue;
-      SlideFrame frame;
-      if (!slide_frame(v, info.curve, place[static_cast<std::size_t>(node)], vertex_of, frame)) continue;
-      const Vec p = point(mesh_, v);
-      ring_.clear();
-      std::size_t old_obtuse = 0;
-      double old_worst = 1.0;  // the cosine of the largest angle of the ring
-      for (auto h : mesh_.voh_range(v)) {
-        if (mesh_.is_boundary(h)) continue;
-        const Vec b = point(mesh_, mesh_.to_vertex_handle(h));
-        const Vec c = point(mesh_, mesh_.to_vertex_handle(mesh_.next_halfedge_handle(h)));
-        const Vec n = area_vector(p, b, c);
-        ring_.push_back({b, c, n, n.norm()});
-        old_obtuse += triangle_is_obtuse(p, b, c) ? 1 : 0;
-        old_worst = std::min(old_worst, largest_angle_cosine(p, b, c));
-      }
-      if (old_obtuse == 0) continue;
-      std::size_t best_obtuse = old_obtuse;
-      double best_worst = old_worst + options_.feature_slide_cosine_gain;  // infinity: no slide by the angle alone
-      Vec best = p;
-      for (int step = -kSlideSteps; step <= kSlideSteps; ++step) {
-        const double x = step * kSlideStep;
-        if (x == frame.x) continue;
-        const Vec q = slide_point(frame.at, frame.before, frame.after, x);
-        std::size_t new_obtuse = 0;
-        double new_worst = 1.0;
-        for (const RingTriangle& r : ring_) {
-          new_obtuse += triangle_is_obtuse(q, r.b, r.c) ? 1 : 0;
-          new_worst = std::min(new_worst, largest_angle_cosine(q, r.b, r.c));
-        }
-        if (new_obtuse > best_obtuse || (new_obtuse == best_obtuse && !(new_worst > best_worst))) continue;
-        if (!slide_keeps_curve(frame, x) || !passes_ring_tests(p, q, sin_obtuse_floor_, obtuse_sine_skip_)) continue;
-        best_obtuse = new_obtuse;
-        best_worst = new_worst;
-        best = q;
-      }
-      if (best == p) continue;
-      mesh_.set_point(v, to_openmesh(best));
-      ++n_slides;
-      for (auto w : mesh_.vv_range(v)) candidate[static_cast<std::size_t>(w.idx())] = 1;
+    auto tried = [&candidate](std::size_t i) { return candidate[i] != 0; };
+    auto decide = [&](TriMesh::VertexHandle v, SweepScratch& scratch, Vec& to) {
+      return slide_move(v, vertex_node, place, vertex_of, scratch.ring, to);
+    };
+    return ring_move_sweep(candidate, tried, decide);
+  }
+
+  // One vertex of slide_sweep(): whether v slides, and where (to). place, vertex_of: per
+  // node, its place on its feature curve's node list (-1: none) and its vertex.
+  bool slide_move(TriMesh::VertexHandle v, const std::vector<int>& vertex_node, const std::vector<int>& place,
+                  const std::vector<int>& vertex_of, std::vector<RingTriangle>& ring, Vec& to) const {
+    const int node = vertex_node[static_cast<std::size_t>(v.idx())];
+    if (node < 0 || static_cast<std::size_t>(node) >= surface_.nodes.size()) return false;  // a split's node
+    const NodeInfo& info = nodes_[static_cast<std::size_t>(v.idx())];
+    if (info.curve < 0 || place[static_cast<std::size_t>(node)] < 0) return false;
+    SlideFrame frame;
+    if (!slide_frame(v, info.curve, place[static_cast<std::size_t>(node)], vertex_of, frame)) return false;
+    const Vec p = point(mesh_, v);
+    ring.clear();
+    std::size_t old_obtuse = 0;
+    double old_worst = 1.0;  // the cosine of the largest angle of the ring
+    for (auto h : mesh_.voh_range(v)) {
+      if (mesh_.is_boundary(h)) continue;
+      const Vec b = point(mesh_, mesh_.to_vertex_handle(h));
+      const Vec c = point(mesh_, mesh_.to_vertex_handle(mesh_.next_halfedge_handle(h)));
+      const Vec n = area_vector(p, b, c);
+      ring.push_back({b, c, n, n.norm()});
+      old_obtuse += triangle_is_obtuse(p, b, c) ? 1 : 0;
+      old_worst = std::min(old_worst, largest_angle_cosine(p, b, c));
     }
-    return n_slides;
+    if (old_obtuse == 0) return false;
+    std::size_t best_obtuse = old_obtuse;
+    double best_worst = old_worst + options_.feature_slide_cosine_gain;  // infinity: no slide by the angle alone
+    Vec best = p;
+    for (int step = -kSlideSteps; step <= kSlideSteps; ++step) {
+      const double x = step * kSlideStep;
+      if (x == frame.x) continue;
+      const Vec q = slide_point(frame.at, frame.before, frame.after, x);
+      std::size_t new_obtuse = 0;
+      double new_worst = 1.0;
+      for (const RingTriangle& r : ring) {
+        new_obtuse += triangle_is_obtuse(q, r.b, r.c) ? 1 : 0;
+        new_worst = std::min(new_worst, largest_angle_cosine(q, r.b, r.c));
+      }
+      if (new_obtuse > best_obtuse || (new_obtuse == best_obtuse && !(new_worst > best_worst))) continue;
+      if (!slide_keeps_curve(frame, x) || !passes_ring_tests(ring, p, q, sin_obtuse_floor_, obtuse_sine_skip_)) continue;
+      best_obtuse = new_obtuse;
+      best_worst = new_worst;
+      best = q;
+    }
+    if (best == p) return false;
+    to = best;
+    return true;
   }
 
   // A node's piece of its feature curve for slide_sweep: the front's points of the node
@@ -1127,16 +1236,11 @@ class Optimiser {
     return std::isfinite(info.max_move) ? clamp_to_ball(q, info.origin, info.max_move) : q;
   }
 
-  // The tests of a move of a node from p to q, its triangles in ring_: no triangle
+  // The tests of a move of a node from p to q, its triangles in `ring`: no triangle
   // degenerates or turns its normal by more than acos(min_normal_dot); the smallest alpha
   // stays at least min(old smallest, alpha_floor) and the sine of the smallest angle at
   // least min(old, sin_floor): the old ring is needed only below the floors. sine_skip:
   // sqrt(3) (sin_floor + kSineSkipMargin), see alpha_sine_skip_.
-  bool passes_ring_tests(const Vec& p, const Vec& q, double sin_floor, double sine_skip) const {
-    return passes_ring_tests(ring_, p, q, sin_floor, sine_skip);
-  }
-
-  // passes_ring_tests() for the triangles in `ring`.
   bool passes_ring_tests(const std::vector<RingTriangle>& ring, const Vec& p, const Vec& q, double sin_floor,
                          double sine_skip) const {
     double new_min = 1.0, new_sine = 1.0;  // smallest alpha, sine of the smallest angle

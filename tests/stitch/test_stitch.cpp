@@ -744,6 +744,37 @@ TEST(StitchSlow, ObtuseSplitsSameForAnyThreadCount) {
   }
 }
 
+// The obtuse repair's moves are Gauss-Seidel in vertex order; with 2+ threads every
+// candidate's move is planned on the threads first and the sweep drops the plan of a vertex
+// whose neighbour moved before it (decides again). On a jittered sphere of 5 120 faces (many
+// obtuse triangles side by side, so neighbours move in one sweep: 613 moves) the obtuse
+// repair alone gives the same moves, flips and positions bit for bit at 1, 2 and 4 threads
+// (with the plans kept where a neighbour moved, this test and SameResultForAnyThreadCount
+// failed).
+TEST(Stitch, PlannedObtuseMovesGiveTheSerialSweep) {
+  const TriangleSoup soup = jittered_sphere(4, 0.3);
+  const SurfaceMesh surface = cube_map_surface(soup);
+  const TriMesh input = to_trimesh(soup);
+  StitchOptions options = without_optimisation();
+  options.obtuse_repair_rounds = 2;
+  options.obtuse_split_rounds = 0;
+  options.angle_repair_rounds = 0;
+  options.collapse_below_angle_deg = 0.0;
+  options.volume_compensation = 0.0;
+  options.n_threads = 1;
+  const StitchResult r1 = stitch(surface, input, options);
+  EXPECT_TRUE(r1.report.ok()) << joined(r1.report.errors);
+  ASSERT_GT(r1.report.n_smoothing_moves, 200U);
+  for (const unsigned n : {2U, 4U}) {
+    options.n_threads = n;
+    const StitchResult r = stitch(surface, input, options);
+    EXPECT_EQ(r.report.n_smoothing_moves, r1.report.n_smoothing_moves) << n;
+    EXPECT_EQ(r.report.n_flips, r1.report.n_flips) << n;
+    ASSERT_EQ(r.mesh.n_vertices(), r1.mesh.n_vertices());
+    for (auto v : r.mesh.vertices()) ASSERT_EQ(r.mesh.point(v), r1.mesh.point(v)) << "vertex " << v.idx() << ", " << n << " threads";
+  }
+}
+
 // The smoothing sweep is Gauss-Seidel in vertex order; with 2+ threads it runs on a schedule
 // (border nodes and corners, and every node before a neighbour of theirs, in order on one
 // thread; the other inner nodes in connected groups, each after the border nodes it touches).
