@@ -505,7 +505,7 @@ class FidelityMover {
           for (std::int64_t z = a[2]; z <= b[2]; ++z) {
             const std::uint64_t key = grid_key({x, y, z});
             const auto extra = std::equal_range(extra_cells_.begin(), extra_cells_.end(), std::pair{key, std::uint32_t{0}},
-                                                [](const auto& a, const auto& b) { return a.first < b.first; });
+                                                [](const auto& l, const auto& r) { return l.first < r.first; });
             for (auto e = extra.first; e != extra.second; ++e) test(e->second);
             const auto it = std::lower_bound(grid_keys_.begin(), grid_keys_.end(), key);
             if (it == grid_keys_.end() || *it != key) continue;
