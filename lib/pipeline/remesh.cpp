@@ -224,13 +224,15 @@ RemeshResult remesh(const TriMesh& input, const RemeshOptions& options) {
   // The patches narrower than width target edges join a neighbour (hairlines: their own
   // faces exempt from the slope bounds; steep: whichever way they face, above the raw
   // orientation floor); the number of patches merged away.
+  // The faces the hairline and steep merges joined, kept across their two calls.
+  std::vector<std::uint8_t> exempt_faces;
   auto merge_narrower_than = [&](double width, bool hairlines, bool steep) -> std::size_t {
     const double h = surfmesh_detail::uniform_size(surfmesh_options.sizing, mean_edge);
     const std::vector<int> narrow = segment_detail::narrow_patches(input, first_segmentation, width * h, input_threads);
     if (narrow.empty()) return 0;
     const std::size_t n_before = first_segmentation.patches.size();
     first_segmentation =
-        segment_detail::merge_into_neighbours(*splitter, first_segmentation, narrow, false, hairlines, steep);
+        segment_detail::merge_into_neighbours(*splitter, first_segmentation, narrow, false, hairlines, steep, &exempt_faces);
     return n_before - first_segmentation.patches.size();
   };
   if (options.narrow_patch_merge > 0.0 && surfmesh_detail::marching_cubes_lattice(input_lattice()) &&

@@ -1697,7 +1697,8 @@ Segmentation segment_detail::split(Splitter& s, const Segmentation& segmentation
 
 Segmentation segment_detail::merge_into_neighbours(Splitter& s, const Segmentation& segmentation,
                                                    const std::vector<int>& which, const bool with_borders,
-                                                   const bool hairlines, const bool steep) {
+                                                   const bool hairlines, const bool steep,
+                                                   std::vector<std::uint8_t>* exempt_faces) {
   check_edit(s, segmentation, which, "merge_patches_into_neighbours");
   if (s.mesh.n_faces() == 0 || which.empty()) return segmentation;
   s.prepare();
@@ -1709,9 +1710,11 @@ Segmentation segment_detail::merge_into_neighbours(Splitter& s, const Segmentati
   // Hairlines go only into a patch that is not listed itself (a wide one).
   std::vector<int> listed = hairlines ? which : std::vector<int>{};
   std::sort(listed.begin(), listed.end());
-  // The faces of the hairlines joined so far: exempt from the bounds again when a second
-  // hairline joins the same neighbour.
-  std::vector<std::uint8_t> exempt(hairlines ? s.mesh.n_faces() : 0, 0);
+  // The faces of the hairlines (1) and steep patches (2) joined so far, by this call or an
+  // earlier one: exempt from the bounds again when a second one joins the same neighbour.
+  std::vector<std::uint8_t> own_exempt;
+  std::vector<std::uint8_t>& exempt = exempt_faces != nullptr ? *exempt_faces : own_exempt;
+  if (hairlines && exempt.size() != s.mesh.n_faces()) exempt.assign(s.mesh.n_faces(), 0);
   for (const int p : which) {
     auto& faces = patches.faces[static_cast<std::size_t>(p)];
     if (faces.empty()) continue;  // merged already
@@ -1757,7 +1760,11 @@ Segmentation segment_detail::merge_into_neighbours(Splitter& s, const Segmentati
         // sides (docs/segment.md "Hairline patches").
         const auto bounded_end = target.begin() + static_cast<std::ptrdiff_t>(hairlines ? n_target : target.size());
         if (!std::all_of(target.begin(), bounded_end,
-                         [&](int f) { return (hairlines && exempt[static_cast<std::size_t>(f)] != 0) || grouping.fits(f, axis); }))
+                         [&](int f) {
+                           const std::uint8_t mark = hairlines ? exempt[static_cast<std::size_t>(f)] : 0;
+                           return mark == 1 || (mark == 2 && s.normals.raw[f].dot(axis) >= kSegmentMinRawNormalDot) ||
+                                  grouping.fits(f, axis);
+                         }))
           continue;
         // Steep narrow patches face the union's plane: no face of theirs folds over it.
         if (steep && !std::all_of(bounded_end, target.end(),
@@ -1768,7 +1775,7 @@ Segmentation segment_detail::merge_into_neighbours(Splitter& s, const Segmentati
         patches.axes[static_cast<std::size_t>(q)] = axis;
         island_faces.insert(island_faces.end(), faces.begin(), faces.end());
         if (hairlines)
-          for (const int f : faces) exempt[static_cast<std::size_t>(f)] = 1;
+          for (const int f : faces) exempt[static_cast<std::size_t>(f)] = steep ? 2 : 1;
         faces.clear();
         return true;
       }

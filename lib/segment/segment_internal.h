@@ -210,8 +210,13 @@ using SplitterPtr = std::unique_ptr<Splitter, SplitterDeleter>;
 //! With hairlines and steep (the pipeline's opt-in narrow merge of CAD-like meshes), every
 //! listed patch is joined whichever way it faces, its own faces exempt from the slope cone
 //! but not from the raw orientation floor (raw normal . axis >= kSegmentMinRawNormalDot).
+//! exempt (with hairlines; may be null): per input face, 1 for a hairline's face joined
+//! before (exempt from the bounds), 2 for a steep patch's face joined before (exempt from the
+//! slope cone, not from the raw floor); read and extended, so the marks of an earlier call
+//! hold in a later one (sized to the mesh's faces when empty).
 [[nodiscard]] Segmentation merge_into_neighbours(Splitter& splitter, const Segmentation& segmentation,
                                                  const std::vector<int>& which, bool with_borders = true,
-                                                 bool hairlines = false, bool steep = false);
+                                                 bool hairlines = false, bool steep = false,
+                                                 std::vector<std::uint8_t>* exempt = nullptr);
 
 }  // namespace nurbsfront::segment_detail

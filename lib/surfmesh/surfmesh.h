@@ -75,7 +75,9 @@ struct SizingOptions {
   //! (docs/surfmesh.md "Feature sizing: a gentler gradation"). Must be > 1. Default 1.25.
   double feature_gradation = 1.25;
   //! Optional user sizing h(x) at world points (length units, finite, > 0); when set it
-  //! replaces the uniform size (adaptive still applies on top).
+  //! replaces the uniform size (adaptive still applies on top). Called concurrently from
+  //! the worker threads (border discretisation, patch fronts): it must be thread-safe and a
+  //! pure function of the point, or the output depends on the thread count.
   std::function<double(const Eigen::Vector3d&)> callback;
   //! Gradation: |grad h| <= gradation - 1. Must be > 1. Default 1.5.
   double gradation = 1.5;
