@@ -26,6 +26,7 @@
 #include "nurbsfront/isosurface/volume_io.h"
 #include "nurbsfront/quality/report.h"
 #include "nurbsfront/pipeline/remesh.h"
+#include "nurbsfront/segment/segment_internal.h"
 #include "support/test_data.h"
 
 namespace nurbsfront {
@@ -1149,6 +1150,38 @@ TEST(Pipeline, TwoHairlinesJoinTheSameNeighbour) {
     EXPECT_GE(with.mesh.point(v)[2], -0.005);
     EXPECT_LE(with.mesh.point(v)[2], 0.007);
   }
+}
+
+// remesh() joins hairlines and (opt-in) steep narrow patches in two calls of
+// merge_into_neighbours(): the faces the first call joined to a neighbour must stay exempt
+// from its slope bounds in the second, through the marks the calls share (else the second
+// strip, whose only neighbour holds the first one's faces, is refused). Here each call
+// takes one of the two pleats.
+TEST(Pipeline, ExemptMarksCarryAcrossMergeCalls) {
+  const TriMesh mesh = grid_with_two_pleats();
+  const RemeshOptions options = fast_options();
+  const double mean_edge = mean_edge_length(mesh);
+  const double width = options.hairline_patch_width * 1.5 * mean_edge;
+  segment_detail::SplitterPtr splitter;
+  const Segmentation seg = segment_detail::segment(mesh, options.segment, mean_edge, &splitter);
+  ASSERT_EQ(seg.patches.size(), 4u);
+  const std::vector<int> strips = narrow_patches(mesh, seg, width);
+  ASSERT_EQ(strips.size(), 2u);
+  std::vector<std::uint8_t> marks;
+  const Segmentation first =
+      segment_detail::merge_into_neighbours(*splitter, seg, {strips[0]}, false, true, false, &marks);
+  ASSERT_EQ(first.patches.size(), 3u);
+  ASSERT_EQ(marks.size(), mesh.n_faces());
+  EXPECT_EQ(static_cast<std::size_t>(std::count(marks.begin(), marks.end(), std::uint8_t{1})),
+            seg.patches[static_cast<std::size_t>(strips[0])].faces.size());
+  const std::vector<int> rest = narrow_patches(mesh, first, width);
+  ASSERT_EQ(rest.size(), 1u);
+  // Without the first call's marks the second strip stays a patch of its own ...
+  const Segmentation fresh = segment_detail::merge_into_neighbours(*splitter, first, rest, false, true, false);
+  EXPECT_EQ(fresh.patches.size(), 3u);
+  // ... with them it joins the same neighbour.
+  const Segmentation second = segment_detail::merge_into_neighbours(*splitter, first, rest, false, true, false, &marks);
+  EXPECT_EQ(second.patches.size(), 2u);
 }
 
 // A 12 x 12 grid of side 1 (turned) with a steep step across it: the plane rises by 0.02 at
