@@ -534,19 +534,22 @@ class Optimiser {
       apexes.push_back({worst, 0.5 * (b + c) + (0.5 * std::numbers::sqrt3 * e.norm() / side_norm) * side});
     }
     if (old_obtuse == 0) return false;
+    // A projected place q is taken when it leaves fewer obtuse triangles and passes the ring tests.
+    auto takes = [&](const Vec& q) {
+      if (!q.allFinite()) return false;
+      std::size_t new_obtuse = 0;
+      for (const RingTriangle& r : ring) new_obtuse += triangle_is_obtuse(q, r.b, r.c) ? 1 : 0;
+      if (new_obtuse >= old_obtuse || !passes_ring_tests(ring, p, q, sin_obtuse_floor_, obtuse_sine_skip_)) return false;
+      to = q;
+      return true;
+    };
     std::sort(apexes.begin(), apexes.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
     // Not all the way: whole steps moved border nodes far along their two fits' mean
     // (Hausdorff up 13% on the liver) and left smaller smallest angles, for no fewer
     // obtuse triangles.
     for (const double t : {0.5, 0.25, 0.125, 0.0625}) {
       for (const auto& apex : apexes) {
-        const Vec q = project(info, p + t * (apex.second - p));
-        if (!q.allFinite()) continue;
-        std::size_t new_obtuse = 0;
-        for (const RingTriangle& r : ring) new_obtuse += triangle_is_obtuse(q, r.b, r.c) ? 1 : 0;
-        if (new_obtuse >= old_obtuse || !passes_ring_tests(ring, p, q, sin_obtuse_floor_, obtuse_sine_skip_)) continue;
-        to = q;
-        return true;
+        if (takes(project(info, p + t * (apex.second - p)))) return true;
       }
     }
     // No apex step helps an inner node: search the tangent plane for a place with fewer
@@ -554,12 +557,7 @@ class Optimiser {
     // Hausdorff rose 15%).
     if (options_.obtuse_search_steps == 0 || info.curve >= 0 || info.is_corner) return false;
     const Vec q = project(info, search_obtuse_place(ring, p, old_obtuse));
-    if (!q.allFinite() || q == p) return false;
-    std::size_t new_obtuse = 0;
-    for (const RingTriangle& r : ring) new_obtuse += triangle_is_obtuse(q, r.b, r.c) ? 1 : 0;
-    if (new_obtuse >= old_obtuse || !passes_ring_tests(ring, p, q, sin_obtuse_floor_, obtuse_sine_skip_)) return false;
-    to = q;
-    return true;
+    return q != p && takes(q);
   }
 
   // Flips of the edges of obtuse triangles, in edge order, when the two new triangles
