@@ -946,6 +946,22 @@ TEST(Pipeline, NarrowFinPatchesJoinANeighbour) {
   EXPECT_THROW((void)remesh(mesh, options), InvalidInput);
 }
 
+// The grids below: the point (x, y, z) turned by 0.5 rad about z and shifted, off any lattice.
+void add_turned_point(TriangleSoup& soup, double x, double y, double z) {
+  soup.points.emplace_back(std::cos(0.5) * x - std::sin(0.5) * y + 0.123, std::sin(0.5) * x + std::cos(0.5) * y + 0.0456, z);
+}
+
+// Two triangles per cell of a grid of rows + 1 rows of points, added row by row, `columns` to a row.
+void add_grid_triangles(TriangleSoup& soup, int rows, int columns) {
+  const auto m = static_cast<unsigned>(columns);
+  for (int j = 0; j < rows; ++j)
+    for (int i = 0; i + 1 < columns; ++i) {
+      const auto a = static_cast<unsigned>(j * columns + i);
+      soup.triangles.push_back({a, a + 1, a + m + 1});
+      soup.triangles.push_back({a, a + m + 1, a + m});
+    }
+}
+
 // A 12 x 12 grid of side 1 (turned, off any lattice) with its middle vertex raised by 0.05:
 // with a 25 deg crease angle each of the six faces around it is a patch of one face, bounded
 // by creases (a coarse mesh's bends, as on femur.off).
@@ -955,14 +971,9 @@ TriMesh grid_with_bump() {
   for (int j = 0; j <= n; ++j)
     for (int i = 0; i <= n; ++i) {
       const double x = i / double(n), y = j / double(n), z = (i == n / 2 && j == n / 2) ? 0.6 / n : 0.0;
-      soup.points.emplace_back(std::cos(0.5) * x - std::sin(0.5) * y + 0.123, std::sin(0.5) * x + std::cos(0.5) * y + 0.0456, z);
+      add_turned_point(soup, x, y, z);
     }
-  for (int j = 0; j < n; ++j)
-    for (int i = 0; i < n; ++i) {
-      const auto a = static_cast<unsigned>(j * (n + 1) + i);
-      soup.triangles.push_back({a, a + 1, a + n + 2});
-      soup.triangles.push_back({a, a + n + 2, a + n + 1});
-    }
+  add_grid_triangles(soup, n, n + 1);
   return to_trimesh(soup);
 }
 
@@ -1021,14 +1032,9 @@ TriMesh grid_with_pleat() {
       double x = (top ? i - 1 : i) / double(n);
       if (i == n / 2 + 1) x -= (j == 0 || j == n) ? -kBack : kBack;
       const double z = top ? kStep : 0.0;
-      soup.points.emplace_back(std::cos(0.5) * x - std::sin(0.5) * y + 0.123, std::sin(0.5) * x + std::cos(0.5) * y + 0.0456, z);
+      add_turned_point(soup, x, y, z);
     }
-  for (int j = 0; j < n; ++j)
-    for (int i = 0; i <= n; ++i) {
-      const auto a = static_cast<unsigned>(j * (n + 2) + i);
-      soup.triangles.push_back({a, a + 1, a + n + 3});
-      soup.triangles.push_back({a, a + n + 3, a + n + 2});
-    }
+  add_grid_triangles(soup, n, n + 2);
   return to_trimesh(soup);
 }
 
@@ -1104,15 +1110,10 @@ TriMesh grid_with_two_pleats() {
         x = 1.0;
         z = kFirst - kSecond;
       }
-      soup.points.emplace_back(std::cos(0.5) * x - std::sin(0.5) * y + 0.123, std::sin(0.5) * x + std::cos(0.5) * y + 0.0456, z);
+      add_turned_point(soup, x, y, z);
     }
   }
-  for (int j = 0; j < n; ++j)
-    for (int i = 0; i + 1 < m; ++i) {
-      const auto a = static_cast<unsigned>(j * m + i);
-      soup.triangles.push_back({a, a + 1, a + m + 1});
-      soup.triangles.push_back({a, a + m + 1, a + m});
-    }
+  add_grid_triangles(soup, n, m);
   return to_trimesh(soup);
 }
 
@@ -1200,16 +1201,10 @@ TriMesh grid_with_steep_step() {
     for (int k = 0; k < m; ++k) {
       const bool top = k > n / 2;
       const double x = top ? (k - 1) / double(n) + run : k / double(n);
-      soup.points.emplace_back(std::cos(0.5) * x - std::sin(0.5) * y + 0.123, std::sin(0.5) * x + std::cos(0.5) * y + 0.0456,
-                               top ? kRise : 0.0);
+      add_turned_point(soup, x, y, top ? kRise : 0.0);
     }
   }
-  for (int j = 0; j < n; ++j)
-    for (int i = 0; i + 1 < m; ++i) {
-      const auto a = static_cast<unsigned>(j * m + i);
-      soup.triangles.push_back({a, a + 1, a + m + 1});
-      soup.triangles.push_back({a, a + m + 1, a + m});
-    }
+  add_grid_triangles(soup, n, m);
   return to_trimesh(soup);
 }
 
