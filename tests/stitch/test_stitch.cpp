@@ -677,6 +677,19 @@ TEST(Stitch, ObtuseRepairAndChordCompensationRunWithoutTheSweeps) {
 
 // The flips' tests run in parallel and the verification's signatures on helper threads:
 // the same flips, positions and report for any thread count.
+// r's mesh is r1's bit for bit: the same vertices at the same points, the same faces with the
+// same corners (n: r's thread count, for the messages).
+void expect_same_mesh(const StitchResult& r, const StitchResult& r1, unsigned n) {
+  ASSERT_EQ(r.mesh.n_vertices(), r1.mesh.n_vertices()) << n << " threads";
+  ASSERT_EQ(r.mesh.n_faces(), r1.mesh.n_faces()) << n << " threads";
+  for (auto v : r.mesh.vertices()) ASSERT_EQ(r.mesh.point(v), r1.mesh.point(v)) << "vertex " << v.idx() << ", " << n << " threads";
+  for (auto f : r.mesh.faces()) {
+    auto a = r.mesh.fv_range(f).begin();
+    auto b = r1.mesh.fv_range(TriMesh::FaceHandle(f.idx())).begin();
+    for (int k = 0; k < 3; ++k, ++a, ++b) ASSERT_EQ((*a).idx(), (*b).idx()) << "face " << f.idx() << ", " << n << " threads";
+  }
+}
+
 TEST(Stitch, SameResultForAnyThreadCount) {
   const TriangleSoup soup = jittered_sphere(3, 0.6);
   const SurfaceMesh surface = cube_map_surface(soup);
@@ -698,15 +711,7 @@ TEST(Stitch, SameResultForAnyThreadCount) {
     ASSERT_EQ(r.report.output_components.size(), r1.report.output_components.size());
     EXPECT_EQ(r.report.output_components[0].n_faces, r1.report.output_components[0].n_faces);
     EXPECT_EQ(r.report.input_components[0].n_vertices, r1.report.input_components[0].n_vertices);
-    ASSERT_EQ(r.mesh.n_faces(), r1.mesh.n_faces());
-    for (auto f : r.mesh.faces()) {
-      auto a = r.mesh.fv_range(f).begin();
-      auto b = r1.mesh.fv_range(TriMesh::FaceHandle(f.idx())).begin();
-      for (int k = 0; k < 3; ++k, ++a, ++b) {
-        ASSERT_EQ((*a).idx(), (*b).idx());
-        ASSERT_EQ(r.mesh.point(*a), r1.mesh.point(*b));
-      }
-    }
+    expect_same_mesh(r, r1, n);
   }
 }
 
@@ -733,14 +738,7 @@ TEST(StitchSlow, ObtuseSplitsSameForAnyThreadCount) {
     EXPECT_EQ(r.report.n_obtuse_splits, r1.report.n_obtuse_splits) << n;
     EXPECT_EQ(r.report.n_flips, r1.report.n_flips) << n;
     EXPECT_EQ(r.report.n_smoothing_moves, r1.report.n_smoothing_moves) << n;
-    ASSERT_EQ(r.mesh.n_faces(), r1.mesh.n_faces());
-    ASSERT_EQ(r.mesh.n_vertices(), r1.mesh.n_vertices());
-    for (auto v : r.mesh.vertices()) ASSERT_EQ(r.mesh.point(v), r1.mesh.point(v)) << "vertex " << v.idx() << ", " << n << " threads";
-    for (auto f : r.mesh.faces()) {
-      auto a = r.mesh.fv_range(f).begin();
-      auto b = r1.mesh.fv_range(TriMesh::FaceHandle(f.idx())).begin();
-      for (int k = 0; k < 3; ++k, ++a, ++b) ASSERT_EQ((*a).idx(), (*b).idx()) << "face " << f.idx();
-    }
+    expect_same_mesh(r, r1, n);
   }
 }
 
@@ -770,8 +768,7 @@ TEST(Stitch, PlannedObtuseMovesGiveTheSerialSweep) {
     const StitchResult r = stitch(surface, input, options);
     EXPECT_EQ(r.report.n_smoothing_moves, r1.report.n_smoothing_moves) << n;
     EXPECT_EQ(r.report.n_flips, r1.report.n_flips) << n;
-    ASSERT_EQ(r.mesh.n_vertices(), r1.mesh.n_vertices());
-    for (auto v : r.mesh.vertices()) ASSERT_EQ(r.mesh.point(v), r1.mesh.point(v)) << "vertex " << v.idx() << ", " << n << " threads";
+    expect_same_mesh(r, r1, n);
   }
 }
 
@@ -815,8 +812,7 @@ TEST(Stitch, ScheduledSmoothingGivesTheSerialSweep) {
       EXPECT_EQ(r.report.n_flips, r1.report.n_flips);
       EXPECT_EQ(r.report.n_smoothing_moves, r1.report.n_smoothing_moves);
       EXPECT_EQ(r.report.n_smoothing_rejected, r1.report.n_smoothing_rejected);
-      ASSERT_EQ(r.mesh.n_vertices(), r1.mesh.n_vertices());
-      for (auto v : r.mesh.vertices()) ASSERT_EQ(r.mesh.point(v), r1.mesh.point(v)) << "vertex " << v.idx() << ", " << n << " threads";
+      expect_same_mesh(r, r1, n);
     }
   }
 }
