@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <functional>
 #include <limits>
 
 #include <Eigen/Geometry>
@@ -52,6 +53,21 @@ float float_below(double x) {
   return std::bit_cast<float>(f > 0.0f ? bits - 1 : bits + 1);
 }
 float float_above(double x) { return -float_below(-x); }
+
+// The outward-rounded float box of triangle t of the soup.
+Box3f face_box_of(const TriangleSoup& soup, std::uint32_t face) {
+  const auto& t = soup.triangles[face];
+  const Eigen::Vector3d& a = soup.points[t[0]];
+  const Eigen::Vector3d& b = soup.points[t[1]];
+  const Eigen::Vector3d& c = soup.points[t[2]];
+  const Eigen::Vector3d lo = a.cwiseMin(b).cwiseMin(c), hi = a.cwiseMax(b).cwiseMax(c);
+  Box3f box;
+  for (int k = 0; k < 3; ++k) {
+    box.lo[k] = float_below(lo[k]);
+    box.hi[k] = float_above(hi[k]);
+  }
+  return box;
+}
 
 Box3f merge(const Box3f& a, const Box3f& b) {
   Box3f r;
@@ -121,15 +137,7 @@ AabbTree::AabbTree(const TriangleSoup& soup, std::vector<std::uint32_t> faces, u
   boxes_.resize(n);
   for_faces([&](std::size_t i) {
     faces_[i] = faces[order[i]];
-    const auto& t = soup.triangles[faces_[i]];
-    const Eigen::Vector3d& a = soup.points[t[0]];
-    const Eigen::Vector3d& b = soup.points[t[1]];
-    const Eigen::Vector3d& c = soup.points[t[2]];
-    const Eigen::Vector3d lo = a.cwiseMin(b).cwiseMin(c), hi = a.cwiseMax(b).cwiseMax(c);
-    for (int k = 0; k < 3; ++k) {
-      boxes_[i].lo[k] = float_below(lo[k]);
-      boxes_[i].hi[k] = float_above(hi[k]);
-    }
+    boxes_[i] = face_box_of(soup, faces_[i]);
   });
   if (n_threads >= 2 && n >= kParallelBuildFaces) {
     build_halves(codes);
@@ -203,6 +211,58 @@ void AabbTree::build_halves(const std::vector<std::uint64_t>& codes) {
     }
   });
   nodes_[0].box = merge(nodes_[1].box, nodes_[2].box);
+}
+
+namespace {
+std::vector<std::uint32_t> all_faces_of(const TriangleSoup& soup) {
+  std::vector<std::uint32_t> faces(soup.triangles.size());
+  for (std::size_t i = 0; i < faces.size(); ++i) faces[i] = static_cast<std::uint32_t>(i);
+  return faces;
+}
+}  // namespace
+
+IndexedSoup::IndexedSoup(TriangleSoup soup, unsigned n_threads)
+    : soup_(std::move(soup)), tree_(soup_, all_faces_of(soup_), n_threads) {}
+
+void AabbTree::refit(const TriangleSoup& soup, const std::vector<std::uint32_t>& changed_faces) {
+  soup_ = &soup;
+  // Leaves first (each changed face's entry), then every ancestor of a changed leaf once,
+  // children before parents: nodes are numbered after their parents, so the marked nodes in
+  // decreasing index order.
+  std::vector<std::uint32_t> touched;
+  for (const std::uint32_t f : changed_faces) {
+    if (f >= leaf_of_.size() || leaf_of_[f] == kNoFace) continue;
+    const std::uint32_t leaf = leaf_of_[f];
+    const Node& node = nodes_[leaf];
+    for (std::uint32_t i = node.begin(); i < node.end(); ++i) {
+      if (faces_[i] == f) boxes_[i] = face_box_of(soup, f);
+    }
+    touched.push_back(leaf);
+  }
+  std::sort(touched.begin(), touched.end());
+  touched.erase(std::unique(touched.begin(), touched.end()), touched.end());
+  std::vector<std::uint8_t> marked(nodes_.size(), 0);
+  std::vector<std::uint32_t> stale;
+  for (std::uint32_t node : touched) {
+    for (;;) {
+      if (marked[node] != 0) break;
+      marked[node] = 1;
+      stale.push_back(node);
+      if (node == 0) break;
+      node = parent_[node];
+    }
+  }
+  std::sort(stale.begin(), stale.end(), std::greater<>());
+  for (const std::uint32_t k : stale) {
+    Node& node = nodes_[k];
+    if (node.is_leaf()) {
+      Box3f box = boxes_[node.begin()];
+      for (std::uint32_t i = node.begin() + 1; i < node.end(); ++i) box = merge(box, boxes_[i]);
+      node.box = box;
+    } else {
+      node.box = merge(nodes_[node.left()].box, nodes_[node.right()].box);
+    }
+  }
 }
 
 std::vector<std::uint32_t> morton_order(const std::vector<Eigen::Vector3d>& points) {

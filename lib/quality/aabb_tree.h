@@ -78,6 +78,14 @@ class AabbTree {
   //! previous answer for coherent queries) the search starts at its leaf.
   [[nodiscard]] Closest closest(const Eigen::Vector3d& p, std::uint32_t hint) const;
 
+  //! Refit after some faces changed: the tree now reads `soup` (the same face indices; it may
+  //! hold more faces and points, which the tree does not see) and the boxes of the listed
+  //! faces that are in the tree, and of their ancestors, are computed again from it (faces not
+  //! in the tree are ignored). The structure stays: closest() gives the same answers as a tree
+  //! built anew over the same faces of `soup` (its answer does not depend on the structure),
+  //! only the pruning may be looser where faces moved far. `soup` must outlive the tree.
+  void refit(const TriangleSoup& soup, const std::vector<std::uint32_t>& changed_faces);
+
  private:
   //! The subtree of faces_[begin, end) at nodes[node]: its descendants appended to nodes
   //! (children in pairs, each pair before the descendants of its left child), their
@@ -96,6 +104,23 @@ class AabbTree {
   std::vector<std::uint32_t> leaf_of_;  //!< per soup face: its leaf, or UINT32_MAX if not in the tree
   std::vector<std::uint32_t> faces_;
   std::vector<Box3f> boxes_;
+};
+
+//! A soup with its tree over all its faces, built once and read by every stage that queries
+//! that surface (the input: the fidelity moves and the report's distance pass). The tree reads
+//! the soup, so the pair is neither copied nor moved (hold it in place, e.g. std::optional).
+class IndexedSoup {
+ public:
+  //! Takes the soup and builds the tree on n_threads threads (the same tree for any count).
+  explicit IndexedSoup(TriangleSoup soup, unsigned n_threads = 1);
+  IndexedSoup(const IndexedSoup&) = delete;
+  IndexedSoup& operator=(const IndexedSoup&) = delete;
+  [[nodiscard]] const TriangleSoup& soup() const { return soup_; }
+  [[nodiscard]] const AabbTree& tree() const { return tree_; }
+
+ private:
+  TriangleSoup soup_;
+  AabbTree tree_;
 };
 
 //! The indices of `points` in Morton (Z-curve) order of the points' bounding box: queries

@@ -105,7 +105,8 @@ DistanceReport mesh_distance(const TriangleSoup& mesh, const TriangleSoup& refer
 }
 
 DistanceReport quality_detail::mesh_distance_with(const TriangleSoup& mesh, const TriangleSoup& reference,
-                                                  const DistanceOptions& options, const quality_detail::AabbTree* given_tree) {
+                                                  const DistanceOptions& options, const quality_detail::AabbTree* given_tree,
+                                                  const quality_detail::AabbTree* given_reference_tree) {
   if (mesh.triangles.empty() || reference.triangles.empty()) {
     throw InvalidInput("nurbsfront: mesh_distance needs two surfaces with at least one triangle each");
   }
@@ -115,17 +116,20 @@ DistanceReport quality_detail::mesh_distance_with(const TriangleSoup& mesh, cons
   const double spacing = r.reference_diagonal > 0.0 ? r.reference_diagonal * options.sample_spacing_relative : spacing_floor;
   report_progress(options.progress, "distance", 0.0);
   // The two trees and the two sample sets are independent: with two or more threads the
-  // reference's are prepared on a second thread (deterministic, no shared writes).
+  // reference's are prepared on a second thread (deterministic, no shared writes). With the
+  // reference's tree given, the second thread builds the mesh's instead.
   std::optional<quality_detail::AabbTree> own_mesh_tree;
-  std::optional<quality_detail::AabbTree> reference_tree;
+  std::optional<quality_detail::AabbTree> own_reference_tree;
   std::vector<Eigen::Vector3d> mesh_samples;
   std::vector<Eigen::Vector3d> reference_samples;
+  const bool mesh_tree_second = given_reference_tree != nullptr;
   auto prepare_reference = [&] {
-    reference_tree.emplace(quality_detail::all_faces_tree(reference));
+    if (given_reference_tree == nullptr) own_reference_tree.emplace(quality_detail::all_faces_tree(reference));
+    if (mesh_tree_second && given_tree == nullptr) own_mesh_tree.emplace(quality_detail::all_faces_tree(mesh));
     mesh_samples = sample_surface(mesh, spacing, options.max_samples);
   };
   auto prepare_mesh = [&] {
-    if (given_tree == nullptr) own_mesh_tree.emplace(quality_detail::all_faces_tree(mesh));
+    if (!mesh_tree_second && given_tree == nullptr) own_mesh_tree.emplace(quality_detail::all_faces_tree(mesh));
     reference_samples = sample_surface(reference, spacing, options.max_samples);
   };
   if (options.n_threads >= 2) {
@@ -144,7 +148,8 @@ DistanceReport quality_detail::mesh_distance_with(const TriangleSoup& mesh, cons
   r.n_mesh_samples = mesh_samples.size();
   r.n_reference_samples = reference_samples.size();
   report_progress(options.progress, "distance", 0.1);
-  const OneSided forward = one_sided(mesh_samples, *reference_tree, options.n_threads);
+  const OneSided forward = one_sided(
+      mesh_samples, given_reference_tree != nullptr ? *given_reference_tree : *own_reference_tree, options.n_threads);
   report_progress(options.progress, "distance", 0.55);
   const OneSided backward =
       one_sided(reference_samples, given_tree != nullptr ? *given_tree : *own_mesh_tree, options.n_threads);

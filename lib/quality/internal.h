@@ -31,9 +31,12 @@ AabbTree all_faces_tree(const TriangleSoup& soup, unsigned n_threads = 1);
 std::size_t count_self_intersections_with(const TriangleSoup& soup, const AabbTree& tree, unsigned n_threads,
                                           std::vector<std::array<std::uint32_t, 2>>* pairs = nullptr);
 
-//! mesh_distance() with the mesh's tree over all its faces given (nullptr: built here).
+//! mesh_distance() with the mesh's tree over all its faces given (nullptr: built here), and
+//! the reference's (nullptr: built here; e.g. IndexedSoup::tree() of the input). The same
+//! report either way. Not validated (mesh_distance() validates).
 DistanceReport mesh_distance_with(const TriangleSoup& mesh, const TriangleSoup& reference,
-                                  const DistanceOptions& options, const AabbTree* mesh_tree);
+                                  const DistanceOptions& options, const AabbTree* mesh_tree,
+                                  const AabbTree* reference_tree = nullptr);
 
 //! \throw InvalidInput naming `what` for out-of-range indices or non-finite points.
 void validate_soup(const TriangleSoup& soup, const char* what);

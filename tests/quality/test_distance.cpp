@@ -2,10 +2,13 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
+#include <vector>
 
 #include "fixtures/shapes.h"
 #include "nurbsfront/core/error.h"
 #include "nurbsfront/quality/aabb_tree.h"
+#include "nurbsfront/quality/internal.h"
 #include "nurbsfront/quality/report.h"
 
 namespace nurbsfront {
@@ -84,6 +87,72 @@ TEST(QualityDistance, TreeBuiltOnThreadsIsTheSerialTree) {
       EXPECT_DOUBLE_EQ(tree.closest(p, faces[static_cast<std::size_t>(k) * 401 % faces.size()]).squared_distance, best);
       EXPECT_DOUBLE_EQ(tree.closest(p, 3).squared_distance, best);
     }
+  }
+}
+
+// A tree refitted after faces changed (points moved, corners of some faces replaced) answers
+// every query as a tree built anew over the changed soup (the same face and distance, hinted
+// or not), though its structure is the old one; without the refit it answers some wrongly.
+TEST(QualityDistance, RefitTreeAnswersAsARebuiltOne) {
+  TriangleSoup s = test::icosphere(4);
+  std::vector<std::uint32_t> faces(s.triangles.size());
+  for (std::uint32_t i = 0; i < faces.size(); ++i) faces[i] = i;
+  quality_detail::AabbTree refitted(s, faces, 2);
+  const quality_detail::AabbTree stale_structure(s, faces);
+  TriangleSoup changed = s;
+  // Every 9th point pushed out or in by up to 30% (far beyond its faces' old boxes), and every
+  // 50th face given another corner (the edge flips and splits of the fidelity moves).
+  std::vector<std::uint8_t> point_moved(s.points.size(), 0);
+  for (std::size_t i = 0; i < changed.points.size(); i += 9) {
+    changed.points[i] *= 1.0 + 0.3 * std::sin(double(i));
+    point_moved[i] = 1;
+  }
+  std::vector<std::uint32_t> changed_faces;
+  for (std::uint32_t f = 0; f < changed.triangles.size(); ++f) {
+    auto& t = changed.triangles[f];
+    if (f % 50 == 7) t[2] = (t[2] + 17) % static_cast<std::uint32_t>(changed.points.size());
+    if (f % 50 == 7 || point_moved[t[0]] != 0 || point_moved[t[1]] != 0 || point_moved[t[2]] != 0) changed_faces.push_back(f);
+  }
+  refitted.refit(changed, changed_faces);
+  const quality_detail::AabbTree rebuilt(changed, faces);
+  std::size_t n_stale_wrong = 0;
+  for (int k = 0; k < 400; ++k) {
+    const V p(std::sin(k * 1.3) * 1.3, std::cos(k * 0.7) * 1.3, std::sin(k * 0.31) * 1.25);
+    const auto want = rebuilt.closest(p, UINT32_MAX);
+    for (const std::uint32_t hint : {UINT32_MAX, static_cast<std::uint32_t>(k * 13 % faces.size()), want.face}) {
+      const auto got = refitted.closest(p, hint);
+      EXPECT_EQ(got.squared_distance, want.squared_distance) << k;
+      EXPECT_EQ(got.face, want.face) << k;
+    }
+    // The old boxes over the new soup (a refit with nothing listed): pruned wrongly somewhere.
+    quality_detail::AabbTree stale = stale_structure;
+    stale.refit(changed, {});
+    const auto old = stale.closest(p, UINT32_MAX);
+    n_stale_wrong += old.face != want.face || old.squared_distance != want.squared_distance ? 1 : 0;
+  }
+  EXPECT_GT(n_stale_wrong, 0u);
+}
+
+// The distance pass on a reference tree built beforehand (IndexedSoup, shared with the
+// fidelity moves) gives the report it builds itself, on one thread and on two.
+TEST(QualityDistance, SharedReferenceTreeGivesTheSameDistances) {
+  const TriangleSoup mesh = test::icosphere(3, 1.05);
+  const quality_detail::IndexedSoup reference(test::torus(30, 12, 0.8, 0.3), 2);
+  for (const unsigned threads : {1u, 2u}) {
+    DistanceOptions options = coarse(0.01);
+    options.n_threads = threads;
+    const DistanceReport own = mesh_distance(mesh, reference.soup(), options);
+    const DistanceReport shared =
+        quality_detail::mesh_distance_with(mesh, reference.soup(), options, nullptr, &reference.tree());
+    EXPECT_GT(own.hausdorff, 0.1);
+    EXPECT_EQ(shared.hausdorff, own.hausdorff);
+    EXPECT_EQ(shared.mean, own.mean);
+    EXPECT_EQ(shared.mesh_to_reference_max, own.mesh_to_reference_max);
+    EXPECT_EQ(shared.reference_to_mesh_max, own.reference_to_mesh_max);
+    EXPECT_EQ(shared.mesh_to_reference_mean, own.mesh_to_reference_mean);
+    EXPECT_EQ(shared.reference_to_mesh_mean, own.reference_to_mesh_mean);
+    EXPECT_EQ(shared.n_mesh_samples, own.n_mesh_samples);
+    EXPECT_EQ(shared.n_reference_samples, own.n_reference_samples);
   }
 }
 
