@@ -16,8 +16,11 @@
 #include "nurbsfront/core/soup.h"
 #include "nurbsfront/core/soup_internal.h"
 #include "nurbsfront/core/stopwatch.h"
+#include "nurbsfront/quality/aabb_tree.h"
+#include "nurbsfront/quality/internal.h"
 #include "nurbsfront/quality/report.h"
 #include "nurbsfront/segment/segment_internal.h"
+#include "nurbsfront/stitch/stitch_internal.h"
 #include "nurbsfront/surfmesh/surfmesh_internal.h"
 
 namespace nurbsfront {
@@ -279,7 +282,17 @@ RemeshResult remesh(const TriMesh& input, const RemeshOptions& options) {
   report.seconds_surfmesh = watch.seconds();
 
   watch.restart();
-  StitchResult stitched = stitch(surface, input, stitch_options);
+  // The input's soup and tree over all faces, built once for the fidelity moves and the
+  // distance pass (docs/stitch.md "Fidelity moves, session 18").
+  std::optional<quality_detail::IndexedSoup> input_index;
+  if (stitch_options.fidelity_distance_edges > 0.0 && options.compute_distances) {
+    input_index.emplace(to_soup(input), stitch_options.n_threads);
+  }
+  auto run_stitch = [&](const SurfaceMesh& meshed) {
+    return input_index ? stitch_detail::stitch_with_input_index(meshed, input, *input_index, stitch_options)
+                       : stitch(meshed, input, stitch_options);
+  };
+  StitchResult stitched = run_stitch(surface);
   report.seconds_stitch = watch.seconds();
 
   // Last resort against crossings that stitching left (docs/segment.md, "Re-segmenting
@@ -321,7 +334,7 @@ RemeshResult remesh(const TriMesh& input, const RemeshOptions& options) {
       SurfaceMesh merged_surface = surfmesh_detail::mesh_surface(input, merged, surfmesh_options, mean_edge, shares);
       report.seconds_surfmesh += watch.seconds();
       watch.restart();
-      StitchResult merged_stitched = stitch(merged_surface, input, stitch_options);
+      StitchResult merged_stitched = run_stitch(merged_surface);
       report.seconds_stitch += watch.seconds();
       if (crossing_pairs(merged_stitched.report) >= n_pairs || other_errors(merged_stitched.report) > 0 ||
           failed_patches(merged_surface) > failed_patches(surface))
@@ -364,7 +377,17 @@ RemeshResult remesh(const TriMesh& input, const RemeshOptions& options) {
   if (options.compute_distances && result.mesh.n_faces() > 0) {
     DistanceOptions distance = options.distance;
     distance.progress = chained(options.progress, options.distance.progress);
-    report.output.distance = mesh_distance(to_soup(result.mesh), to_soup(input), distance);
+    if (input_index) {
+      // mesh_distance() on the input's tree built for the stitch (the same report).
+      distance.validate();
+      const TriangleSoup output_soup = to_soup(result.mesh);
+      quality_detail::validate_soup(output_soup, "mesh_distance (mesh)");
+      quality_detail::validate_soup(input_index->soup(), "mesh_distance (reference)");
+      report.output.distance =
+          quality_detail::mesh_distance_with(output_soup, input_index->soup(), distance, nullptr, &input_index->tree());
+    } else {
+      report.output.distance = mesh_distance(to_soup(result.mesh), to_soup(input), distance);
+    }
   }
   report.seconds_distance = watch.seconds();
   report.seconds_total = total.seconds();

@@ -63,16 +63,18 @@ class FidelityMover {
  public:
   FidelityMover(const TriMesh& input, const StitchOptions& options, double bound, double cell, const FinRimBound& rim,
                 bool incremental, StitchResult& result, std::vector<std::uint8_t>& is_feature,
-                std::vector<std::uint8_t> fixed)
+                std::vector<std::uint8_t> fixed, const quality_detail::IndexedSoup* input_index)
       : options_(options), bound_(bound), cell_(cell), rim_(rim), incremental_(incremental), cheap_first_(incremental),
         mesh_(result.mesh), result_(result),
-        is_feature_(is_feature), fixed_(std::move(fixed)), input_soup_(to_soup(input)) {
-    std::vector<std::uint32_t> all(input_soup_.triangles.size());
-    std::iota(all.begin(), all.end(), 0U);
-    input_tree_.emplace(input_soup_, std::move(all), options.n_threads);
+        is_feature_(is_feature), fixed_(std::move(fixed)) {
+    // The input's soup and tree: the caller's when given (shared with the report's distance
+    // pass), else built here.
+    if (input_index == nullptr) input_index = &own_input_.emplace(to_soup(input), options.n_threads);
+    input_index_ = input_index;
+    const TriangleSoup& input_soup = input_index_->soup();
     // The input's samples: its vertices here; the first sweep adds the centroid and edge
     // midpoints of the faces it cannot show within the bound (select_probes()).
-    probes_ = input_soup_.points;
+    probes_ = input_soup.points;
     probe_id_.resize(probes_.size());
     std::iota(probe_id_.begin(), probe_id_.end(), 0U);
     const double diagonal = bounding_box(mesh_).diagonal();
@@ -87,13 +89,11 @@ class FidelityMover {
   // to, and try only the candidates whose checks read a changed place (a refused candidate
   // with nothing changed around it is refused again): the same moves as a full sweep.
   std::size_t sweep() {
-    const TriangleSoup out = to_soup(mesh_);
-    std::vector<std::uint32_t> all(out.triangles.size());
-    std::iota(all.begin(), all.end(), 0U);
-    const quality_detail::AabbTree out_tree(out, std::move(all), options_.n_threads);
+    update_output();
+    const TriangleSoup& out = out_;
     const bool full = !incremental_ || first_sweep_;
     const bool first = first_sweep_;
-    if (first_sweep_) select_probes(out, out_tree);
+    if (first_sweep_) select_probes(out, *out_tree_);
     first_sweep_ = false;
     const std::size_t n_v = mesh_.n_vertices();
     // changed: vertices moved or made in the last sweep (all of them in a full sweep).
@@ -103,12 +103,14 @@ class FidelityMover {
     // Output nodes off the input: their closest input point (kept for unchanged vertices).
     vertex_distance_.resize(n_v, 0.0);
     vertex_target_.resize(n_v, Vec::Zero());
-    // (On the run's threads: each closest distance is exact whatever the hint; where faces tie
-    // (a shared edge or vertex) the hint picks the face, the same for any thread count because
-    // the chunks are fixed.)
+    // (On the run's threads, in Morton order of the points in a full sweep (each query starts
+    // at the last one's face, near it): each closest face is exact whatever the hint, ties go
+    // to the lowest face index.)
+    const std::vector<std::uint32_t> vertex_order = full ? quality_detail::morton_order(out.points) : std::vector<std::uint32_t>{};
     parallel::for_chunks(n_v, options_.n_threads, kQueryChunk, [&](std::size_t begin, std::size_t end, unsigned) {
       std::uint32_t input_hint = UINT32_MAX;
-      for (std::size_t i = begin; i < end; ++i) {
+      for (std::size_t k = begin; k < end; ++k) {
+        const std::size_t i = full ? vertex_order[k] : k;
         if (changed[i] == 0 || fixed_[i] != 0) continue;
         const Vec p = point(mesh_, TriMesh::VertexHandle(static_cast<int>(i)));
         vertex_target_[i] = closest_input(p, input_hint);
@@ -141,7 +143,7 @@ class FidelityMover {
     for (const std::uint32_t i : probe_order_) {
       if (requery[i] == 0) continue;
       ++n_searched_;
-      const auto c = out_tree.closest(probes_[i], hint);
+      const auto c = closest_output(probes_[i], hint);
       hint = c.face;
       const double d = std::sqrt(c.squared_distance);
       if (!full && (c.face != near_face_[i] || d != near_distance_[i])) {
@@ -253,6 +255,59 @@ class FidelityMover {
   }
 
  private:
+  const TriangleSoup& input_soup() const { return input_index_->soup(); }
+
+  // The output as a soup and its tree, for this sweep: built in the first sweep; later the
+  // soup takes the last sweep's changes (the points of the vertices moved or made, the faces
+  // around them, the faces made) and the tree is refitted over the faces it was built on (their
+  // boxes where they are now), the faces made by splits in a small tree of their own
+  // (closest_output()). The answers are those of a tree built anew over the whole output.
+  void update_output() {
+    if (!out_tree_) {
+      out_ = to_soup(mesh_);
+      std::vector<std::uint32_t> all(out_.triangles.size());
+      std::iota(all.begin(), all.end(), 0U);
+      out_tree_.emplace(out_, std::move(all), options_.n_threads);
+      n_tree_faces_ = out_.triangles.size();
+      return;
+    }
+    out_.points.resize(mesh_.n_vertices());
+    out_.triangles.resize(mesh_.n_faces());
+    std::vector<std::uint32_t> changed_faces;
+    for (const int i : changed_vertices_) {
+      const TriMesh::VertexHandle v(i);
+      out_.points[static_cast<std::size_t>(i)] = point(mesh_, v);
+      for (auto f : mesh_.vf_range(v)) changed_faces.push_back(static_cast<std::uint32_t>(f.idx()));
+    }
+    for (std::size_t f = n_tree_faces_; f < mesh_.n_faces(); ++f) changed_faces.push_back(static_cast<std::uint32_t>(f));
+    std::sort(changed_faces.begin(), changed_faces.end());
+    changed_faces.erase(std::unique(changed_faces.begin(), changed_faces.end()), changed_faces.end());
+    for (const std::uint32_t f : changed_faces) {
+      auto& t = out_.triangles[f];
+      int k = 0;
+      for (auto u : mesh_.fv_range(TriMesh::FaceHandle(static_cast<int>(f)))) t[static_cast<std::size_t>(k++)] = static_cast<std::uint32_t>(u.idx());
+    }
+    out_tree_->refit(out_, changed_faces);
+    extra_tree_.reset();
+    if (out_.triangles.size() > n_tree_faces_) {
+      std::vector<std::uint32_t> made(out_.triangles.size() - n_tree_faces_);
+      std::iota(made.begin(), made.end(), static_cast<std::uint32_t>(n_tree_faces_));
+      extra_tree_.emplace(out_, std::move(made), 1);
+    }
+  }
+
+  // The output's closest face to p (ties: the lowest face index), as AabbTree::closest over
+  // the whole output: the refitted tree's answer, or the faces made since it was built
+  // (higher indices) where nearer.
+  quality_detail::AabbTree::Closest closest_output(const Vec& p, std::uint32_t hint) const {
+    auto best = out_tree_->closest(p, hint);
+    if (extra_tree_) {
+      const auto e = extra_tree_->closest(p, hint);
+      if (e.squared_distance < best.squared_distance) best = e;
+    }
+    return best;
+  }
+
   // The first sweep's input samples and their distances to the output. Every input vertex
   // is a sample (the walk first when incremental: a vertex whose walk from the last vertex's
   // face, Morton order, ends on a face within the bound keeps that face and distance, an
@@ -265,6 +320,19 @@ class FidelityMover {
   // whose walks start afresh: the same samples and distances for any thread count.
   void select_probes(const TriangleSoup& out, const quality_detail::AabbTree& out_tree) {
     const bool walk = cheap_first_;
+    // The walks' steps: each output face's edge neighbours (UINT32_MAX across the boundary),
+    // read once from the mesh (its circulators cost more than the steps' distances).
+    if (walk) {
+      face_neighbours_.assign(mesh_.n_faces(), {UINT32_MAX, UINT32_MAX, UINT32_MAX});
+      parallel::for_each_index(mesh_.n_faces(), options_.n_threads, kQueryChunk, [&](std::size_t f) {
+        std::size_t k = 0;
+        for (auto h : mesh_.fh_range(TriMesh::FaceHandle(static_cast<int>(f)))) {
+          const auto g = mesh_.face_handle(mesh_.opposite_halfedge_handle(h));
+          if (g.is_valid()) face_neighbours_[f][k] = static_cast<std::uint32_t>(g.idx());
+          ++k;
+        }
+      });
+    }
     const double bound2 = bound_ * bound_;
     auto locate = [&](const std::vector<std::uint32_t>& order, std::size_t first) {
       near_face_.resize(probes_.size(), 0);
@@ -294,7 +362,7 @@ class FidelityMover {
     };
     const std::size_t n_vertices = probes_.size();
     locate(quality_detail::morton_order(probes_), 0);
-    const std::size_t n_faces = input_soup_.triangles.size();
+    const std::size_t n_faces = input_soup().triangles.size();
     // Per input face the output face that holds it wholly within the bound (UINT32_MAX: none).
     std::vector<std::uint32_t> certified(n_faces, UINT32_MAX);
     auto to_face2 = [&](const Vec& u, std::uint32_t g) {
@@ -303,7 +371,7 @@ class FidelityMover {
           .squaredNorm();
     };
     parallel::for_each_index(n_faces, options_.n_threads, kQueryChunk, [&](std::size_t f) {
-      const auto& t = input_soup_.triangles[f];
+      const auto& t = input_soup().triangles[f];
       for (int k = 0; k < 3; ++k) {
         const std::uint32_t g = near_face_[t[static_cast<std::size_t>(k)]];
         if (k > 0 && g == near_face_[t[0]]) continue;
@@ -311,7 +379,7 @@ class FidelityMover {
         bool within = true;
         for (int j = 0; j < 3 && within; ++j) {
           const std::uint32_t v = t[static_cast<std::size_t>(j)];
-          within = (j == k ? near_distance_[v] * near_distance_[v] : to_face2(input_soup_.points[v], g)) <= bound2;
+          within = (j == k ? near_distance_[v] * near_distance_[v] : to_face2(input_soup().points[v], g)) <= bound2;
         }
         if (within) {
           certified[f] = g;
@@ -328,7 +396,7 @@ class FidelityMover {
         vouch[f].fill(certified[f]);
         return;
       }
-      const auto& t = input_soup_.triangles[f];
+      const auto& t = input_soup().triangles[f];
       const auto u = face_samples(f);
       for (std::size_t k = 0; k < u.size(); ++k) {
         vouch[f][k] = UINT32_MAX;
@@ -368,14 +436,15 @@ class FidelityMover {
     std::vector<std::uint32_t> added(probes_.size() - n_vertices);
     std::iota(added.begin(), added.end(), 0U);
     locate(added, n_vertices);
+    face_neighbours_ = {};
     build_probe_grid(cell_);
     just_selected_ = true;
   }
 
   // Input face f's samples besides its corners: its centroid and edge midpoints.
   std::array<Vec, 4> face_samples(std::size_t f) const {
-    const auto& t = input_soup_.triangles[f];
-    const Vec &a = input_soup_.points[t[0]], &b = input_soup_.points[t[1]], &c = input_soup_.points[t[2]];
+    const auto& t = input_soup().triangles[f];
+    const Vec &a = input_soup().points[t[0]], &b = input_soup().points[t[1]], &c = input_soup().points[t[2]];
     return {Vec((a + b + c) / 3.0), Vec(0.5 * (a + b)), Vec(0.5 * (b + c)), Vec(0.5 * (c + a))};
   }
 
@@ -385,7 +454,7 @@ class FidelityMover {
   // samples as before). Serial, in face and sample order: the same for any thread count.
   void recheck_left_out(const TriangleSoup& out, const std::vector<std::uint8_t>& face_changed) {
     const double bound2 = bound_ * bound_;
-    const std::size_t n_vertices = input_soup_.points.size();
+    const std::size_t n_vertices = input_soup().points.size();
     const std::size_t n_vouching = vouched_start_.empty() ? 0 : vouched_start_.size() - 1;
     for (std::size_t g = 0; g < n_vouching; ++g) {
       if (face_changed[g] == 0) continue;
@@ -421,8 +490,8 @@ class FidelityMover {
     quality_detail::AabbTree::Closest best{to_face(f), f};
     for (int step = 0; step < kWalkSteps; ++step) {
       const std::uint32_t from = best.face;
-      for (auto g : mesh_.ff_range(TriMesh::FaceHandle(static_cast<int>(from)))) {
-        const auto gi = static_cast<std::uint32_t>(g.idx());
+      for (const std::uint32_t gi : face_neighbours_[from]) {
+        if (gi == UINT32_MAX) continue;
         const double d = to_face(gi);
         if (d < best.squared_distance || (d == best.squared_distance && gi < best.face)) best = {d, gi};
       }
@@ -529,17 +598,17 @@ class FidelityMover {
 
   // p's closest input point; hint as for input_distance().
   Vec closest_input(const Vec& p, std::uint32_t& hint) const {
-    const auto c = input_tree_->closest(p, hint);
+    const auto c = input_index_->tree().closest(p, hint);
     hint = c.face;
-    const auto& t = input_soup_.triangles[c.face];
-    return quality_detail::closest_point_on_triangle(p, input_soup_.points[t[0]], input_soup_.points[t[1]],
-                                                     input_soup_.points[t[2]]);
+    const auto& t = input_soup().triangles[c.face];
+    return quality_detail::closest_point_on_triangle(p, input_soup().points[t[0]], input_soup().points[t[1]],
+                                                     input_soup().points[t[2]]);
   }
 
   // Distance of p to the input; hint: an input face near p (UINT32_MAX: none), set to p's
   // nearest face (coherent queries start there: the same answer, sooner).
   double input_distance(const Vec& p, std::uint32_t& hint) const {
-    const auto c = input_tree_->closest(p, hint);
+    const auto c = input_index_->tree().closest(p, hint);
     hint = c.face;
     return std::sqrt(c.squared_distance);
   }
@@ -899,16 +968,22 @@ class FidelityMover {
   double grid_cell_ = 1.0;
   std::vector<std::uint64_t> grid_keys_;
   std::vector<std::uint32_t> grid_start_, grid_items_;
+  // Per output face its edge neighbours (the first sweep's walks).
+  std::vector<std::array<std::uint32_t, 3>> face_neighbours_;
+  // The output's soup and trees (update_output()).
+  TriangleSoup out_;
+  std::optional<quality_detail::AabbTree> out_tree_, extra_tree_;
+  std::size_t n_tree_faces_ = 0;
   TriMesh& mesh_;
   StitchResult& result_;
   std::vector<std::uint8_t>& is_feature_;
   std::vector<std::uint8_t> fixed_;
-  TriangleSoup input_soup_;
+  std::optional<quality_detail::IndexedSoup> own_input_;
+  const quality_detail::IndexedSoup* input_index_ = nullptr;
   std::vector<Vec> probes_;
   // Per sample its index among all the input's samples (its vertices, then per face its
   // centroid and edge midpoints): FidelityCandidates::samples.
   std::vector<std::uint32_t> probe_id_;
-  std::optional<quality_detail::AabbTree> input_tree_;
   double min_double_area_ = 0.0;
   double sin_floor_ = 0.0;
   std::vector<std::uint32_t> near_face_;
@@ -926,7 +1001,7 @@ FidelityCandidates fidelity_candidates(const TriMesh& input, const StitchOptions
   if (!(bound > 0.0) || input.n_faces() == 0 || result.mesh.n_faces() == 0) return out;
   const FinRimBound rim;
   FidelityMover mover(input, options, bound, reference_edge, rim, walk, result, is_feature,
-                      fixed_vertices(result.mesh, result.vertex_node, is_feature));
+                      fixed_vertices(result.mesh, result.vertex_node, is_feature), nullptr);
   for (int k = 0; k < sweeps_before; ++k) out.n_changed_before += mover.sweep();
   mover.record_only_ = true;
   (void)mover.sweep();
@@ -946,7 +1021,8 @@ FidelityCandidates fidelity_candidates(const TriMesh& input, const StitchOptions
 
 FidelityResult move_toward_input(const TriMesh& input, const StitchOptions& options,
                                  std::vector<std::uint8_t>& is_feature, double reference_edge, const FinRimBound& rim,
-                                 StitchResult& result, bool incremental) {
+                                 StitchResult& result, bool incremental,
+                                 const quality_detail::IndexedSoup* input_index) {
   FidelityResult out;
   const double bound = options.fidelity_distance_edges * reference_edge;
   TriMesh& mesh = result.mesh;
@@ -956,7 +1032,7 @@ FidelityResult move_toward_input(const TriMesh& input, const StitchOptions& opti
   if (options.check_self_intersections) before = mesh;
   const std::vector<Vec> start = vertex_points(mesh);
   FidelityMover mover(input, options, bound, reference_edge, rim, incremental, result, is_feature,
-                      fixed_vertices(mesh, result.vertex_node, is_feature));
+                      fixed_vertices(mesh, result.vertex_node, is_feature), input_index);
   for (int round = 0; round < kFidelityRounds; ++round) {
     if (mover.sweep() == 0) break;
     ++out.n_sweeps_changing;

@@ -571,7 +571,8 @@ void split_obtuse_checked(const SurfaceMesh& surface, const StitchOptions& optio
   }
 }
 
-StitchResult stitch_impl(const SurfaceMesh& surface, const TriMesh* input, const StitchOptions& options) {
+StitchResult stitch_impl(const SurfaceMesh& surface, const TriMesh* input, const StitchOptions& options,
+                         const quality_detail::IndexedSoup* input_index) {
   options.validate();
   validate_surface(surface);
   StitchResult result;
@@ -726,7 +727,8 @@ StitchResult stitch_impl(const SurfaceMesh& surface, const TriMesh* input, const
   if (options.fidelity_distance_edges > 0.0 && input != nullptr && pairs.empty() && mesh.n_faces() > 0 &&
       !is_label_staircase()) {
     const stitch_detail::FidelityResult fidelity = stitch_detail::move_toward_input(
-        *input, options, feature, surface.input_mean_edge, stitch_detail::fin_rim_bound(surface, options), result);
+        *input, options, feature, surface.input_mean_edge, stitch_detail::fin_rim_bound(surface, options), result, true,
+        input_index);
     report.n_fidelity_moves = fidelity.n_moved;
     report.n_fidelity_moves_undone = fidelity.n_undone;
     report.n_fidelity_splits = fidelity.n_split;
@@ -863,11 +865,17 @@ std::vector<ComponentSignature> component_signatures(const TriMesh& mesh) {
 }
 
 StitchResult stitch(const SurfaceMesh& surface, const StitchOptions& options) {
-  return stitch_impl(surface, nullptr, options);
+  return stitch_impl(surface, nullptr, options, nullptr);
 }
 
 StitchResult stitch(const SurfaceMesh& surface, const TriMesh& input, const StitchOptions& options) {
-  return stitch_impl(surface, &input, options);
+  return stitch_impl(surface, &input, options, nullptr);
+}
+
+StitchResult stitch_detail::stitch_with_input_index(const SurfaceMesh& surface, const TriMesh& input,
+                                                    const quality_detail::IndexedSoup& input_index,
+                                                    const StitchOptions& options) {
+  return stitch_impl(surface, &input, options, &input_index);
 }
 
 }  // namespace nurbsfront

@@ -13,6 +13,7 @@
 #include <Eigen/Geometry>
 
 #include "nurbsfront/core/parallel.h"
+#include "nurbsfront/quality/aabb_tree.h"
 #include "nurbsfront/stitch/stitch.h"
 
 namespace nurbsfront::stitch_detail {
@@ -392,10 +393,18 @@ struct FidelityResult {
 //! stands for the nearest one in the checks); after the first sweep only the vertices and
 //! input samples near the last sweep's changes are measured again and only the candidates
 //! whose checks read a changed place are tried. false measures and tries everything in
-//! every sweep.
+//! every sweep. input_index: to_soup(input) and its tree when the caller has them (shared
+//! with the report's distance pass; nullptr: built here); the same result either way.
 FidelityResult move_toward_input(const TriMesh& input, const StitchOptions& options,
                                  std::vector<std::uint8_t>& is_feature, double reference_edge, const FinRimBound& rim,
-                                 StitchResult& result, bool incremental = true);
+                                 StitchResult& result, bool incremental = true,
+                                 const quality_detail::IndexedSoup* input_index = nullptr);
+
+//! stitch(surface, input, options) with to_soup(input) and its tree over all faces given
+//! (the fidelity moves query them; the caller builds them once and shares them, e.g. with the
+//! report's distance pass): the same result.
+StitchResult stitch_with_input_index(const SurfaceMesh& surface, const TriMesh& input,
+                                     const quality_detail::IndexedSoup& input_index, const StitchOptions& options);
 
 //! The first sweep's candidates of move_toward_input() (tests and measurements).
 struct FidelityCandidates {

@@ -95,6 +95,28 @@ TEST(StitchFidelitySlow, MovesAndSplitsBringTheBrainCloserToItsInputAndKeepItsSh
   }
 }
 
+TEST(StitchFidelitySlow, SharedInputIndexGivesTheSameStitch) {
+  // The input's soup and tree built by the caller (the pipeline shares them with the distance
+  // pass): the same moves, splits and mesh as the stitch that builds its own.
+  const Brain brain;
+  const auto& [input, surface, plain_options, plain] = brain;
+  StitchOptions options = plain_options;
+  options.fidelity_distance_edges = 0.25;
+  const StitchResult own = stitch(surface, input, options);
+  const quality_detail::IndexedSoup index(to_soup(input), 2);
+  const StitchResult shared = stitch_detail::stitch_with_input_index(surface, input, index, options);
+  EXPECT_GT(own.report.n_fidelity_moves, 10u);
+  EXPECT_EQ(shared.report.n_fidelity_moves, own.report.n_fidelity_moves);
+  EXPECT_EQ(shared.report.n_fidelity_splits, own.report.n_fidelity_splits);
+  ASSERT_EQ(shared.mesh.n_vertices(), own.mesh.n_vertices());
+  ASSERT_EQ(shared.mesh.n_faces(), own.mesh.n_faces());
+  for (const auto v : own.mesh.vertices()) EXPECT_EQ(shared.mesh.point(v), own.mesh.point(v));
+  for (const auto f : own.mesh.faces()) {
+    auto a = own.mesh.fv_range(f).begin();
+    for (const auto w : shared.mesh.fv_range(f)) EXPECT_EQ(w, *a++);
+  }
+}
+
 TEST(StitchFidelity, ZeroLeavesTheStitchAsItWasAndBadBoundsThrow) {
   const Brain brain;
   const auto& [input, surface, plain_options, plain] = brain;
