@@ -136,10 +136,10 @@ TEST(QualityDistance, RefitTreeAnswersAsARebuiltOne) {
 // The distance pass on a reference tree built beforehand (IndexedSoup, shared with the
 // fidelity moves) gives the report it builds itself, on one thread and on two.
 TEST(QualityDistance, SharedReferenceTreeGivesTheSameDistances) {
-  const TriangleSoup mesh = test::icosphere(3, 1.05);
-  const quality_detail::IndexedSoup reference(test::torus(30, 12, 0.8, 0.3), 2);
+  const TriangleSoup mesh = test::icosphere(2, 1.05);
+  const quality_detail::IndexedSoup reference(test::torus(20, 8, 0.8, 0.3), 2);
   for (const unsigned threads : {1u, 2u}) {
-    DistanceOptions options = coarse(0.01);
+    DistanceOptions options = coarse(0.03);
     options.n_threads = threads;
     const DistanceReport own = mesh_distance(mesh, reference.soup(), options);
     const DistanceReport shared =
