@@ -390,6 +390,29 @@ TEST(Pipeline, OccupancySphereBandFit) {
 // takes the volume towards the truth's (the terraced input is 1% below it). With
 // CellGrid::curved_smoothing 0.375 the centroids' mean was 1 / 2.88 of the input's and a node
 // 0.29 voxel out (docs/surfmesh.md, "Torus at 48 cells").
+// The fidelity moves with the distance report: remesh() builds the input's soup and tree once
+// and shares them between the stitch and the distance pass. The mesh is the one the stitch
+// makes with its own tree (the run without the report), the report the one mesh_distance()
+// gives on the output.
+TEST(PipelineSlow, FidelityMovesShareTheInputTreeWithTheDistancePass) {
+  const TriMesh input = read_mesh(test::test_data("io/brainImageSmooth.vtk"));
+  RemeshOptions options;
+  options.stitch.fidelity_distance_edges = 0.25;
+  const RemeshResult shared = remesh(input, options);
+  options.compute_distances = false;
+  const RemeshResult own = remesh(input, options);
+  ASSERT_TRUE(shared.report.ok());
+  EXPECT_GT(shared.report.stitch.n_fidelity_moves, 10u);
+  ASSERT_EQ(shared.mesh.n_vertices(), own.mesh.n_vertices());
+  ASSERT_EQ(shared.mesh.n_faces(), own.mesh.n_faces());
+  for (const auto v : own.mesh.vertices()) EXPECT_EQ(shared.mesh.point(v), own.mesh.point(v));
+  ASSERT_TRUE(shared.report.output.distance.has_value());
+  const DistanceReport want = mesh_distance(to_soup(shared.mesh), to_soup(input), options.distance);
+  EXPECT_EQ(shared.report.output.distance->hausdorff, want.hausdorff);
+  EXPECT_EQ(shared.report.output.distance->mean, want.mean);
+  EXPECT_EQ(shared.report.output.distance->relative_volume_change, want.relative_volume_change);
+}
+
 TEST(PipelineSlow, OccupancyTorus48BandFitWithinIssueBounds) {
   const SceneInput in = scene_input("torus", 48, SampleMode::Occupancy);
   RemeshOptions options = fast_options();
