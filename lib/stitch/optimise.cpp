@@ -23,6 +23,7 @@
 #include "nurbsfront/core/tolerances.h"
 #include "nurbsfront/surfmesh/surfmesh_internal.h"
 #include "nurbsfront/stitch/stitch_internal.h"
+#include "nurbsfront/stitch/sweep_schedule.h"
 
 namespace nurbsfront::stitch_detail {
 
@@ -196,135 +197,26 @@ class Optimiser {
   }
 
   // The vertices a smoothing sweep tries (movable, not on the boundary), cut so that several
-  // threads give the serial sweep's result. A vertex reads only its ring, so the order
-  // matters only between neighbours, the lower index first. `serial`: the border nodes and
-  // corners and every tried vertex before a neighbour of theirs (closed downwards: a tried
-  // neighbour of a serial vertex with a lower index is serial), run in vertex order by one
-  // thread. The others (inner nodes) form groups, connected through their edges (a patch's
-  // inner nodes, joined where flips made an edge across a border), each run in vertex order by
-  // one thread; a group's serial neighbours all have lower indices (the closure), so it starts
-  // once the serial run has done the first `ready` of them, and groups share no edge.
-  struct SweepSchedule {
-    std::vector<int> serial;
-    std::vector<int> group_vertices;         // group after group, each in vertex order
-    std::vector<std::size_t> group_begin;    // group g: group_vertices[group_begin[g], group_begin[g + 1])
-    std::vector<std::size_t> group_ready;    // serial vertices done before group g starts
-    std::vector<std::size_t> order;          // groups by ready, then by first vertex
-  };
-
+  // threads give the serial sweep's result (stitch_detail::sweep_schedule): the border nodes
+  // and corners run in vertex order on one thread, the inner nodes in groups.
   SweepSchedule sweep_schedule() const {
-    const std::size_t n = mesh_.n_vertices();
     // 0 not tried, 1 tried and serial, 2 tried in a group.
-    std::vector<std::uint8_t> role(n, 0);
+    std::vector<std::uint8_t> role(mesh_.n_vertices(), 0);
     for (auto v : mesh_.vertices()) {
       const NodeInfo& info = nodes_[static_cast<std::size_t>(v.idx())];
       if (!info.is_movable || mesh_.is_boundary(v)) continue;
       role[static_cast<std::size_t>(v.idx())] = info.curve >= 0 || info.is_corner ? 1 : 2;
     }
-    for (std::size_t i = n; i-- > 0;) {
-      if (role[i] != 1) continue;
-      for (auto u : mesh_.vv_range(TriMesh::VertexHandle(static_cast<int>(i)))) {
-        const auto j = static_cast<std::size_t>(u.idx());
-        if (j < i && role[j] == 2) role[j] = 1;
-      }
-    }
-    SweepSchedule s;
-    std::vector<std::size_t> position(n, 0);  // serial vertex: 1 + its place in s.serial
-    for (std::size_t i = 0; i < n; ++i) {
-      if (role[i] != 1) continue;
-      s.serial.push_back(static_cast<int>(i));
-      position[i] = s.serial.size();
-    }
-    // Groups: union-find over the edges between group vertices.
-    DisjointSets sets(n);
-    for (auto e : mesh_.edges()) {
-      const auto h = mesh_.halfedge_handle(e, 0);
-      const int a = mesh_.from_vertex_handle(h).idx(), b = mesh_.to_vertex_handle(h).idx();
-      if (role[static_cast<std::size_t>(a)] != 2 || role[static_cast<std::size_t>(b)] != 2) continue;
-      sets.unite(static_cast<std::uint32_t>(a), static_cast<std::uint32_t>(b));
-    }
-    // Group ids in order of their first vertex; then the vertices bucketed by group.
-    std::vector<int> group(n, -1);
-    std::size_t n_groups = 0;
-    for (std::size_t i = 0; i < n; ++i) {
-      if (role[i] != 2) continue;
-      const auto r = static_cast<std::size_t>(sets.find(static_cast<std::uint32_t>(i)));
-      if (group[r] < 0) group[r] = static_cast<int>(n_groups++);
-      group[i] = group[r];
-    }
-    s.group_begin.assign(n_groups + 1, 0);
-    s.group_ready.assign(n_groups, 0);
-    for (std::size_t i = 0; i < n; ++i) {
-      if (role[i] == 2) ++s.group_begin[static_cast<std::size_t>(group[i]) + 1];
-    }
-    for (std::size_t g = 0; g < n_groups; ++g) s.group_begin[g + 1] += s.group_begin[g];
-    s.group_vertices.resize(s.group_begin[n_groups]);
-    std::vector<std::size_t> fill(s.group_begin.begin(), s.group_begin.end() - 1);
-    for (std::size_t i = 0; i < n; ++i) {
-      if (role[i] == 2) s.group_vertices[fill[static_cast<std::size_t>(group[i])]++] = static_cast<int>(i);
-    }
-    for (auto e : mesh_.edges()) {
-      const auto h = mesh_.halfedge_handle(e, 0);
-      auto a = static_cast<std::size_t>(mesh_.from_vertex_handle(h).idx()), b = static_cast<std::size_t>(mesh_.to_vertex_handle(h).idx());
-      if (role[a] == 2) std::swap(a, b);
-      if (role[a] != 1 || role[b] != 2) continue;
-      std::size_t& ready = s.group_ready[static_cast<std::size_t>(group[b])];
-      ready = std::max(ready, position[a]);
-    }
-    s.order.resize(n_groups);
-    std::iota(s.order.begin(), s.order.end(), std::size_t{0});
-    std::stable_sort(s.order.begin(), s.order.end(),
-                     [&s](std::size_t x, std::size_t y) { return s.group_ready[x] < s.group_ready[y]; });
-    return s;
+    return stitch_detail::sweep_schedule(mesh_, std::move(role));
   }
 
   // Runs visit(v, ring, worker) for every vertex of `schedule` on options_.n_threads threads
-  // (ring: the worker's scratch; worker < n_threads): the serial vertices in order on one
-  // thread, each group in order on one thread once the serial run has done its `ready`
-  // vertices. visit must read only v's ring and write only v (and per-worker state).
+  // (ring: the worker's scratch; worker < n_threads; stitch_detail::run_schedule).
   template <class Visit>
   void run_schedule(const SweepSchedule& schedule, const Visit& visit) {
-    const unsigned n_threads = options_.n_threads;
-    std::vector<std::vector<RingTriangle>> rings(n_threads);
-    std::atomic<std::size_t> done{0};        // serial vertices done
-    std::atomic<std::size_t> next_group{0};  // next place in schedule.order to take
-    std::atomic<bool> failed{false};
-    constexpr std::size_t kNotifyEvery = 64;
-    const std::size_t n_serial = schedule.serial.size();
-    auto run_groups = [&](unsigned worker) {
-      for (;;) {
-        const std::size_t k = next_group.fetch_add(1);
-        if (k >= schedule.order.size() || failed.load()) return;
-        const std::size_t g = schedule.order[k];
-        const std::size_t ready = schedule.group_ready[g];
-        for (std::size_t seen = done.load(std::memory_order_acquire); seen < ready;
-             seen = done.load(std::memory_order_acquire)) {
-          done.wait(seen, std::memory_order_acquire);
-        }
-        if (failed.load()) return;
-        for (std::size_t i = schedule.group_begin[g]; i < schedule.group_begin[g + 1]; ++i) {
-          visit(TriMesh::VertexHandle(schedule.group_vertices[i]), rings[worker], worker);
-        }
-      }
-    };
-    parallel::for_chunks(n_threads, n_threads, 1, [&](std::size_t role, std::size_t, unsigned worker) {
-      if (role == 0) {
-        try {
-          for (std::size_t i = 0; i < n_serial; ++i) {
-            visit(TriMesh::VertexHandle(schedule.serial[i]), rings[worker], worker);
-            done.store(i + 1, std::memory_order_release);
-            if ((i + 1) % kNotifyEvery == 0) done.notify_all();
-          }
-        } catch (...) {
-          failed = true;
-          done.store(n_serial, std::memory_order_release);
-          done.notify_all();
-          throw;
-        }
-        done.notify_all();
-      }
-      run_groups(worker);
-    });
+    std::vector<std::vector<RingTriangle>> rings(options_.n_threads);
+    stitch_detail::run_schedule(schedule, options_.n_threads,
+                                [&](TriMesh::VertexHandle v, unsigned worker) { visit(v, rings[worker], worker); });
   }
 
   // Obtuse repair (StitchOptions::obtuse_repair_rounds): each movable vertex of an obtuse

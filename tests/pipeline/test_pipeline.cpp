@@ -845,8 +845,10 @@ TEST(Pipeline, VolumeCompensationSameForAnyThreadCount) {
 }
 
 // The volume compensation's measure runs in chunks of 4096 faces on the run's threads
-// (session 15): on a level-set torus of some 17 000 output faces (several chunks, so the
-// threads really share the work) the moves are the same points, bit for bit, at 1, 2 and 3
+// (session 15), and its sums onto the vertices (normals, areas, edge terms, shares, pools)
+// gather each vertex's face terms in face order in chunks of 4096 vertices (session 18): on
+// a level-set torus of some 17 000 output faces (several chunks of both, so the threads
+// really share the work) the moves are the same points, bit for bit, at 1, 2, 3 and 4
 // threads (the reviewer's note: the gear prism's output is one chunk).
 TEST(PipelineSlow, VolumeCompensationMeasureSameForAnyThreadCount) {
   const SceneInput in = scene_input("torus", 96, SampleMode::LevelSet);
@@ -856,8 +858,9 @@ TEST(PipelineSlow, VolumeCompensationMeasureSameForAnyThreadCount) {
   const RemeshResult one = remesh(in.mesh, options);
   ASSERT_TRUE(one.report.ok()) << errors_of(one.report);
   ASSERT_GT(one.mesh.n_faces(), 3u * 4096u);
+  ASSERT_GT(one.mesh.n_vertices(), 2u * 4096u);
   EXPECT_GT(one.report.stitch.n_volume_compensation_moves, 0u);
-  for (const unsigned threads : {2u, 3u}) {
+  for (const unsigned threads : {2u, 3u, 4u}) {
     options.set_threads(threads);
     const RemeshResult many = remesh(in.mesh, options);
     ASSERT_TRUE(many.report.ok()) << errors_of(many.report);
