@@ -44,6 +44,8 @@ void RemeshOptions::validate() const {
   if (tiny_patch_faces < 0) throw InvalidInput("remesh: tiny_patch_faces must be >= 0");
   if (!(std::isfinite(hairline_patch_width) && hairline_patch_width >= 0.0))
     throw InvalidInput("remesh: hairline_patch_width must be finite and >= 0");
+  if (!(std::isfinite(fin_strip_width) && fin_strip_width >= 0.0 && fin_strip_width <= 1.0))
+    throw InvalidInput("remesh: fin_strip_width must be in [0, 1]");
   if (!(std::isfinite(narrow_cad_patch_width) && narrow_cad_patch_width >= 0.0))
     throw InvalidInput("remesh: narrow_cad_patch_width must be finite and >= 0");
   if (!(tiny_patch_max_dihedral_deg >= 0.0 && tiny_patch_max_dihedral_deg <= 180.0))
@@ -241,6 +243,12 @@ RemeshResult remesh(const TriMesh& input, const RemeshOptions& options) {
   if (options.narrow_patch_merge > 0.0 && surfmesh_detail::marching_cubes_lattice(input_lattice()) &&
       !surfmesh_detail::label_image_staircase(input_lattice()))
     report.n_narrow_merged = merge_narrower_than(options.narrow_patch_merge, false, false);
+  // Opt-in: the fin strips the narrow merge left (no neighbour's cone holds them: a fin's
+  // rim faces away from both sides) join a neighbour as hairlines do, their own faces exempt
+  // (docs/segment.md "Fin strips, session 18").
+  if (options.fin_strip_width > 0.0 && surfmesh_detail::marching_cubes_lattice(input_lattice()) &&
+      !surfmesh_detail::label_image_staircase(input_lattice()))
+    report.n_narrow_merged += merge_narrower_than(options.fin_strip_width, true, false);
   // Tiny patches behind marginal creases (a coarse CAD-like mesh's bends) join a neighbour.
   if (options.tiny_patch_faces > 0 && !surfmesh_options.cell_grid.enabled &&
       !surfmesh_detail::marching_cubes_lattice(input_lattice()))

@@ -44,6 +44,14 @@ struct RemeshOptions {
   //! patches of a few triangles, most of them obtuse (docs/segment.md "Narrow patches").
   //! 0 = off. Default 0.5.
   double narrow_patch_merge = 0.5;
+  //! On marching-cubes inputs (not a label image's staircase), after the narrow merge, patches
+  //! still narrower than this many target edges next to a wider one (a thin fin's rim between
+  //! its two creases, a lens a fraction of h wide) join the neighbour sharing the longest
+  //! border that is not so narrow itself, their own faces exempt from the slope bounds (the
+  //! neighbour's keep them; the union passes the projection and cliff checks): the fin's two
+  //! rims become one border curve. Counted in RemeshReport::n_narrow_merged. 0 = off
+  //! (default; docs/segment.md "Fin strips, session 18").
+  double fin_strip_width = 0.0;
   //! On inputs not taken for marching cubes (nor with a cell grid), patches of at most this
   //! many input faces whose every border edge with another patch bends by at most
   //! tiny_patch_max_dihedral_deg (segment's tiny_patches) join a neighbour after segmentation,

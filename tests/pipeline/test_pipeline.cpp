@@ -972,6 +972,45 @@ TEST(Pipeline, NarrowFinPatchesJoinANeighbour) {
   EXPECT_THROW((void)remesh(mesh, options), InvalidInput);
 }
 
+// Session 18 (issue 5, docs/segment.md "Fin strips, session 18"): the fin slab's rims (with
+// the narrow merge off, all of them left) join a neighbour when RemeshOptions::fin_strip_width
+// asks, their own faces exempt from the slope bounds: fewer patches, the output still closed,
+// manifold, of Euler characteristic 2, without crossings, no lower mean alpha; a bound below
+// their width takes none. Off by default; not on a label image.
+TEST(Pipeline, FinStripsJoinANeighbourWhenAsked) {
+  const TriMesh mesh = slab_with_fins();
+  RemeshOptions options = fast_options();
+  options.compute_distances = false;
+  EXPECT_EQ(options.fin_strip_width, 0.0);
+  // Without the narrow merge (whose slope bounds take one strip of this slab): every strip
+  // left to the fin-strip merge.
+  options.narrow_patch_merge = 0.0;
+  const RemeshResult without = remesh(mesh, options);
+  EXPECT_EQ(without.report.n_narrow_merged, 0u);
+  options.fin_strip_width = 1.0;
+  const RemeshResult with = remesh(mesh, options);
+  const RemeshReport& rep = with.report;
+  EXPECT_TRUE(rep.ok()) << errors_of(rep);
+  EXPECT_GT(rep.n_narrow_merged, without.report.n_narrow_merged);
+  EXPECT_LT(rep.n_patches, without.report.n_patches);
+  const TopologyReport& t = rep.output.topology;
+  EXPECT_TRUE(t.is_closed && t.is_manifold && t.is_consistently_oriented);
+  EXPECT_EQ(t.euler_characteristic, 2);
+  EXPECT_EQ(count_self_intersections(to_soup(with.mesh)), 0u);
+  EXPECT_GE(rep.output.quality.alpha_mean, without.report.output.quality.alpha_mean);
+  // (Obtuse triangles are not asserted: on this slab 6 -> 7, see the docs.) The two strips
+  // taken are wider than half a target edge: a bound of 0.5 takes none.
+  options.fin_strip_width = 0.5;
+  EXPECT_EQ(remesh(mesh, options).report.n_narrow_merged, 0u);
+  options.fin_strip_width = 1.0;
+  // A label image's staircase is left alone (as by the narrow merge).
+  EXPECT_EQ(remesh(slab_with_fins(true), options).report.n_narrow_merged, 0u);
+  for (const double bad : {-0.1, 1.5, std::numeric_limits<double>::quiet_NaN()}) {
+    options.fin_strip_width = bad;
+    EXPECT_THROW((void)remesh(mesh, options), InvalidInput);
+  }
+}
+
 // The grids below: the point (x, y, z) turned by 0.5 rad about z and shifted, off any lattice.
 void add_turned_point(TriangleSoup& soup, double x, double y, double z) {
   soup.points.emplace_back(std::cos(0.5) * x - std::sin(0.5) * y + 0.123, std::sin(0.5) * x + std::cos(0.5) * y + 0.0456, z);

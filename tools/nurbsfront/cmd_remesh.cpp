@@ -56,6 +56,7 @@ struct RemeshArgs {
   std::optional<double> tiny_merge_angle;
   std::optional<double> hairline_merge;
   std::optional<double> narrow_cad_merge;
+  std::optional<double> fin_strip_merge;
   std::optional<double> fin_rim_width;
   std::optional<double> fin_rim_angle;
   std::optional<double> fin_rim_gap;
@@ -141,6 +142,7 @@ void run_remesh(RemeshArgs& args) {
   if (args.tiny_merge_angle) options.tiny_patch_max_dihedral_deg = *args.tiny_merge_angle;
   if (args.hairline_merge) options.hairline_patch_width = *args.hairline_merge;
   if (args.narrow_cad_merge) options.narrow_cad_patch_width = *args.narrow_cad_merge;
+  if (args.fin_strip_merge) options.fin_strip_width = *args.fin_strip_merge;
   if (args.fin_rim_width) options.surfmesh.fin_rim_width = *args.fin_rim_width;
   if (args.fin_rim_angle) options.surfmesh.fin_rim_max_angle_deg = *args.fin_rim_angle;
   if (args.fin_rim_gap) options.surfmesh.fin_rim_max_gap_edges = *args.fin_rim_gap;
@@ -324,6 +326,11 @@ void add_remesh_command(CLI::App& app) {
                   "neighbour whichever way they face, their own faces exempt from the slope bound but not folded over "
                   "its plane (opt-in: femur 2.25 -> 1.87% obtuse at 0.3, cheese and couplingdown worse; default 0 = "
                   "off; docs/segment.md \"Narrow patches of CAD-like meshes, session 17\")");
+  cmd->add_option("--fin-strip-merge", args->fin_strip_merge,
+                  "On marching-cubes inputs, after the narrow merge, patches still narrower than this many target "
+                  "edges join a wider neighbour, their own faces exempt from the slope bound (a thin fin's rim: its "
+                  "two creases become one; default 0 = off; docs/segment.md \"Fin strips, session 18\")")
+      ->check(CLI::Range(0.0, 1.0));
   cmd->add_option("--obtuse-repair-rounds", args->obtuse_repair_rounds,
                   "Sweeps of the stitch's obtuse repair after its optimisation (default 2; 0 = off; "
                   "docs/stitch.md \"Obtuse repair\")");
