@@ -49,6 +49,7 @@ std::string to_json(const RemeshReport& r) {
   counts.count("narrow_patches_merged", r.n_narrow_merged);
   counts.count("tiny_patches_merged", r.n_tiny_merged);
   counts.count("hairline_patches_merged", r.n_hairline_merged);
+  counts.count("narrow_patches_widened", r.n_narrow_widened);
   counts.count("fin_rim_curves", r.n_fin_rim_curves);
   counts.num("crease_angle_deg", r.crease_angle_deg);
   json::Object seconds;

@@ -48,6 +48,8 @@ void RemeshOptions::validate() const {
     throw InvalidInput("remesh: fin_strip_width must be in [0, 1]");
   if (!(std::isfinite(narrow_cad_patch_width) && narrow_cad_patch_width >= 0.0))
     throw InvalidInput("remesh: narrow_cad_patch_width must be finite and >= 0");
+  if (!(std::isfinite(narrow_widen_width) && narrow_widen_width >= 0.0))
+    throw InvalidInput("remesh: narrow_widen_width must be finite and >= 0");
   if (!(tiny_patch_max_dihedral_deg >= 0.0 && tiny_patch_max_dihedral_deg <= 180.0))
     throw InvalidInput("remesh: tiny_patch_max_dihedral_deg must be in [0, 180]");
 }
@@ -264,6 +266,17 @@ RemeshResult remesh(const TriMesh& input, const RemeshOptions& options) {
   if (options.narrow_cad_patch_width > 0.0 && !surfmesh_options.cell_grid.enabled &&
       !surfmesh_detail::marching_cubes_lattice(input_lattice()))
     report.n_narrow_merged = merge_narrower_than(options.narrow_cad_patch_width, true, true);
+  // Narrow slope-bounded patches of a CAD-like mesh (a rough triangulation of a smooth
+  // surface: femur) take faces from their wider neighbours (docs/segment.md "Widening
+  // narrow patches, session 18").
+  if (options.narrow_widen_width > 0.0 && !surfmesh_options.cell_grid.enabled &&
+      !surfmesh_detail::marching_cubes_lattice(input_lattice())) {
+    const double width = options.narrow_widen_width * surfmesh_detail::uniform_size(surfmesh_options.sizing, mean_edge);
+    const std::vector<int> narrow = segment_detail::narrow_patches(input, first_segmentation, width, input_threads);
+    if (!narrow.empty())
+      first_segmentation = segment_detail::widen_patches(*splitter, first_segmentation, narrow, width, false,
+                                                         &report.n_narrow_widened);
+  }
   report.seconds_segment = watch.seconds();
 
   watch.restart();

@@ -93,6 +93,9 @@ constexpr double kCliffRiseEdges = 3.0;
 constexpr double kCliffMinRiseOverRun = 4.0;
 constexpr std::size_t kCliffMinFaces = 40;
 
+// widen_patches(): at most this many rings of faces join a narrow patch.
+constexpr int kWidenMaxRings = 8;
+
 double radians(double degrees) { return degrees * std::numbers::pi / 180.0; }
 
 struct FaceNormals {
@@ -1793,6 +1796,148 @@ Segmentation segment_detail::merge_into_neighbours(Splitter& s, const Segmentati
   if (n_merged == 0) return segmentation;
   return finish_edit(s, patches, segmentation.n_fold_splits, segmentation.n_islands_absorbed + n_merged,
                      std::move(island_faces), with_borders);
+}
+
+Segmentation segment_detail::widen_patches(Splitter& s, const Segmentation& segmentation, const std::vector<int>& which,
+                                          const double min_width, const bool with_borders, std::size_t* n_widened) {
+  check_edit(s, segmentation, which, "widen_patches");
+  if (!(std::isfinite(min_width) && min_width >= 0.0)) throw InvalidInput("widen_patches: min_width must be finite and >= 0");
+  if (n_widened != nullptr) *n_widened = 0;
+  if (s.mesh.n_faces() == 0 || which.empty() || min_width == 0.0) return segmentation;
+  s.prepare();
+  const Grouping grouping = splitter_grouping(s);
+  const FaceGraph& graph = s.graph;
+  Patches patches = editable_patches(segmentation);
+  Scratch scratch(s.mesh);
+  std::vector<int> listed = which;
+  std::sort(listed.begin(), listed.end());
+  const auto is_listed = [&](int q) { return std::binary_search(listed.begin(), listed.end(), q); };
+  // 2 area / border length of a patch's input faces (the border: edges to another patch or none).
+  const auto width_of = [&](const std::vector<int>& faces, int p) {
+    double area = 0.0, border = 0.0;
+    for (const int f : faces) {
+      area += s.normals.area[f];
+      for (int i = 0; i < 3; ++i) {
+        const int g = graph.neighbours[f][i];
+        if (g >= 0 && patches.face_patch[g] == p) continue;
+        border += (graph.points[graph.vertices[f][i]] - graph.points[graph.vertices[f][(i + 1) % 3]]).norm();
+      }
+    }
+    return border > 0.0 ? 2.0 * area / border : std::numeric_limits<double>::infinity();
+  };
+  // Whether the faces of patch q form one edge-connected piece.
+  std::vector<int> seen(static_cast<std::size_t>(graph.n_faces()), -1);
+  int stamp = 0;
+  const auto is_connected = [&](const std::vector<int>& faces, int q) {
+    if (faces.empty()) return false;
+    ++stamp;
+    std::vector<int> queue{faces.front()};
+    seen[faces.front()] = stamp;
+    for (std::size_t head = 0; head < queue.size(); ++head) {
+      const int f = queue[head];
+      for (int i = 0; i < 3; ++i) {
+        const int g = graph.neighbours[f][i];
+        if (g < 0 || patches.face_patch[g] != q || seen[g] == stamp) continue;
+        seen[g] = stamp;
+        queue.push_back(g);
+      }
+    }
+    return queue.size() == faces.size();
+  };
+  // Per face: the last (patch, ring) that took it as a candidate.
+  std::vector<int> in_ring(static_cast<std::size_t>(graph.n_faces()), -1);
+  std::size_t n_changed = 0;
+  for (std::size_t k_patch = 0; k_patch < which.size(); ++k_patch) {
+    const int p = which[k_patch];
+    const Eigen::Vector3d axis = patches.axes[static_cast<std::size_t>(p)];
+    bool widened = false;
+    for (int round = 0; round < kWidenMaxRings; ++round) {
+      const int ring_stamp = static_cast<int>(k_patch) * kWidenMaxRings + round;
+      std::vector<int>& faces = patches.faces[static_cast<std::size_t>(p)];
+      const double old_width = width_of(faces, p);
+      if (old_width >= min_width) break;
+      // The ring: faces of unlisted neighbours across an edge that is no crease, within p's bounds.
+      std::vector<int> ring;
+      for (const int f : faces) {
+        for (int i = 0; i < 3; ++i) {
+          const int g = graph.neighbours[f][i];
+          if (g < 0 || graph.is_crease(f, i) || in_ring[g] == ring_stamp) continue;
+          const int q = patches.face_patch[g];
+          if (q == p || is_listed(q) || !grouping.fits(g, axis)) continue;
+          in_ring[g] = ring_stamp;
+          ring.push_back(g);
+        }
+      }
+      // Faces of the givers left with two edges on p and the ring (the teeth between ring faces)
+      // join too: else the ring's sawtooth lengthens p's border more than it adds area.
+      for (std::size_t k = 0; k < ring.size(); ++k) {
+        for (int i = 0; i < 3; ++i) {
+          const int g = graph.neighbours[ring[k]][i];
+          if (g < 0 || graph.is_crease(ring[k], i) || in_ring[g] == ring_stamp) continue;
+          const int q = patches.face_patch[g];
+          if (q == p || is_listed(q) || !grouping.fits(g, axis)) continue;
+          int n_inside = 0;
+          for (int j = 0; j < 3; ++j) {
+            const int h = graph.neighbours[g][j];
+            n_inside += h >= 0 && (patches.face_patch[h] == p || in_ring[h] == ring_stamp) ? 1 : 0;
+          }
+          if (n_inside < 2) continue;
+          in_ring[g] = ring_stamp;
+          ring.push_back(g);
+        }
+      }
+      // No crease inside p: a ring face with a crease edge to p or to another ring face stays.
+      std::erase_if(ring, [&](int g) {
+        for (int k = 0; k < 3; ++k) {
+          const int h = graph.neighbours[g][k];
+          if (h >= 0 && graph.is_crease(g, k) && (patches.face_patch[h] == p || in_ring[h] == ring_stamp)) return true;
+        }
+        return false;
+      });
+      if (ring.empty()) break;
+      std::sort(ring.begin(), ring.end());
+      // Move the ring, then check p and every neighbour that gave faces; undo it all otherwise.
+      std::vector<int> from(ring.size());
+      std::vector<int> givers;
+      for (std::size_t k = 0; k < ring.size(); ++k) {
+        from[k] = patches.face_patch[ring[k]];
+        givers.push_back(from[k]);
+        patches.face_patch[ring[k]] = p;
+      }
+      std::sort(givers.begin(), givers.end());
+      givers.erase(std::unique(givers.begin(), givers.end()), givers.end());
+      for (const int q : givers)
+        std::erase_if(patches.faces[static_cast<std::size_t>(q)], [&](int f) { return patches.face_patch[f] != q; });
+      const std::size_t n_old = faces.size();
+      faces.insert(faces.end(), ring.begin(), ring.end());
+      bool ok = width_of(faces, p) > old_width &&
+                segment_detail::check_projection(graph, faces, patches.face_patch, axis, scratch).is_simple &&
+                !segment_detail::has_cliff(graph, faces, axis, s.mean_edge, scratch);
+      for (std::size_t k = 0; ok && k < givers.size(); ++k) {
+        const int q = givers[k];
+        const auto& given = patches.faces[static_cast<std::size_t>(q)];
+        ok = is_connected(given, q) && width_of(given, q) >= min_width &&
+             segment_detail::check_projection(graph, given, patches.face_patch, patches.axes[static_cast<std::size_t>(q)],
+                                              scratch)
+                 .is_simple;
+      }
+      if (!ok) {
+        faces.resize(n_old);
+        for (std::size_t k = 0; k < ring.size(); ++k) {
+          patches.face_patch[ring[k]] = from[k];
+          patches.faces[static_cast<std::size_t>(from[k])].push_back(ring[k]);
+        }
+        for (const int q : givers) std::sort(patches.faces[static_cast<std::size_t>(q)].begin(), patches.faces[static_cast<std::size_t>(q)].end());
+        break;
+      }
+      widened = true;
+    }
+    n_changed += widened ? 1 : 0;
+  }
+  if (n_widened != nullptr) *n_widened = n_changed;
+  if (n_changed == 0) return segmentation;
+  return finish_edit(s, patches, segmentation.n_fold_splits, segmentation.n_islands_absorbed, segmentation.island_faces,
+                     with_borders);
 }
 
 Segmentation segment_detail::bisect_patches(Splitter& s, const Segmentation& segmentation, const std::vector<int>& which) {

@@ -219,4 +219,17 @@ using SplitterPtr = std::unique_ptr<Splitter, SplitterDeleter>;
                                                  bool hairlines = false, bool steep = false,
                                                  std::vector<std::uint8_t>* exempt = nullptr);
 
+//! The pipeline's widening of narrow slope-bounded patches (docs/segment.md "Widening narrow
+//! patches, session 18"): each listed patch p, in the order given, takes rings of faces from
+//! its unlisted neighbours, across edges that are no crease, where a face meets the slope
+//! bounds for p's axis (grouping's fits), ring by ring (at most kWidenMaxRings) until its
+//! width (2 area / border length of its input faces) is at least min_width. A ring is kept
+//! only when p gets wider and passes the projection and cliff checks with its axis, and
+//! every neighbour that gave faces stays connected, at least min_width wide and passes the
+//! projection check with its axis; else it is undone and p stops. Axes do not change, so
+//! segment()'s slope bounds hold for every face. n_widened (may be null): the patches widened.
+[[nodiscard]] Segmentation widen_patches(Splitter& splitter, const Segmentation& segmentation,
+                                         const std::vector<int>& which, double min_width, bool with_borders = true,
+                                         std::size_t* n_widened = nullptr);
+
 }  // namespace nurbsfront::segment_detail

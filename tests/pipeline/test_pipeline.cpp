@@ -1313,6 +1313,19 @@ TEST(Pipeline, NarrowCadPatchesJoinANeighbourWhenAsked) {
   EXPECT_THROW((void)remesh(mesh, options), InvalidInput);
 }
 
+// RemeshOptions::narrow_widen_width (opt-in; segment's widen_patches, tested in
+// tests/segment): off by default, a negative or non-finite width refused.
+TEST(Pipeline, NarrowWidenWidthIsOptInAndValidated) {
+  RemeshOptions options;
+  EXPECT_EQ(options.narrow_widen_width, 0.0);
+  options.narrow_widen_width = 0.3;
+  EXPECT_NO_THROW(options.validate());
+  options.narrow_widen_width = -1.0;
+  EXPECT_THROW(options.validate(), InvalidInput);
+  options.narrow_widen_width = std::numeric_limits<double>::infinity();
+  EXPECT_THROW(options.validate(), InvalidInput);
+}
+
 // Issue 5 on CAD meshes whose machined edges bend by less than the crease angle (cheese.off:
 // 2 422 edges at 65-80 deg): RemeshOptions::crease_gap lowers the crease angle to the gap
 // below them (segment's gap_crease_angle). A roof of two planes meeting at a 72 deg bend (8 x 8

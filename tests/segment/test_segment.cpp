@@ -917,6 +917,104 @@ TEST(NarrowPatches, StripWidthIsTwiceAreaOverBorder) {
   EXPECT_THROW((void)narrow_patches(cube, seg, 1.0), InvalidInput);  // another mesh's segmentation
 }
 
+// segment_detail::widen_patches (the pipeline's RemeshOptions::narrow_widen_width): an open
+// 8 x 4 grid of unit cells bent by bend_deg along x = 6; patch 0 = the flat cells x < 6, patch 1
+// = the two bent columns (area 8, border 4 + 4 + 2 + 2: width 4/3; patch 0: width 2.4). At
+// min_width 1.6 patch 1 takes, where patch 0's faces meet the slope bound for its axis and the
+// bend is no crease, the column 5 < x < 6 but its top left triangle: the 4 triangles on the
+// bend and the 3 teeth between them (2 edges on patch 1 and the ring; the top one has 1): area
+// 11.5, border 4 + 3 + 2 + 3 + sqrt 2, width 1.71 (patch 0: 20.5 / 19.41 x 2 = 2.11).
+struct BentGrid {
+  TriMesh mesh;
+  Segmentation seg;
+};
+BentGrid bent_grid(double bend_deg) {
+  TriangleSoup soup = test::grid_patch(8, 4);
+  const double bend = bend_deg * std::numbers::pi / 180.0;
+  for (auto& p : soup.points) {
+    p.x() *= 8.0;
+    p.y() *= 4.0;
+    if (p.x() > 6.0) {
+      const double d = p.x() - 6.0;
+      p.x() = 6.0 + d * std::cos(bend);
+      p.z() = d * std::sin(bend);
+    }
+  }
+  BentGrid g;
+  g.mesh = to_trimesh(soup);
+  g.seg.patches.resize(2);
+  for (const auto f : g.mesh.faces()) {
+    const int p = g.mesh.calc_face_centroid(f)[0] < 6.0 - 1e-9 ? 0 : 1;
+    g.seg.face_patch.push_back(p);
+    g.seg.patches[static_cast<std::size_t>(p)].faces.push_back(f.idx());
+  }
+  for (auto& patch : g.seg.patches) {
+    const auto n = g.mesh.calc_face_normal(g.mesh.face_handle(patch.faces.front()));
+    patch.axis = Eigen::Vector3d(n[0], n[1], n[2]);
+  }
+  return g;
+}
+
+TEST(WidenPatches, NarrowPatchTakesARingAcrossASlopeBoundedBorder) {
+  const SegmentOptions options;
+  const BentGrid g = bent_grid(30.0);
+  ASSERT_EQ(g.seg.patches[1].faces.size(), 16u);
+  auto splitter = segment_detail::make_splitter(g.mesh, options);
+  std::size_t n_widened = 0;
+  const Segmentation wide = segment_detail::widen_patches(*splitter, g.seg, {1}, 1.6, true, &n_widened);
+  EXPECT_EQ(n_widened, 1u);
+  ASSERT_EQ(wide.patches.size(), 2u);
+  segment_test::expect_contracts(g.mesh, wide, options, 0.0);
+  // The column 5 < x < 6 moved but its top left triangle; the axes stay.
+  for (const auto f : g.mesh.faces()) {
+    const auto c = g.mesh.calc_face_centroid(f);
+    const bool top_left = c[0] > 5.0 && c[0] < 5.5 && c[1] > 3.5;
+    EXPECT_EQ(wide.face_patch[static_cast<std::size_t>(f.idx())], c[0] < 5.0 || top_left ? 0 : 1)
+        << "face " << f.idx() << " at x " << c[0];
+  }
+  EXPECT_EQ(wide.patches[1].faces.size(), 23u);
+  for (std::size_t p = 0; p < 2; ++p) EXPECT_NEAR(wide.patches[p].axis.dot(g.seg.patches[p].axis), 1.0, 1e-12);
+  const auto widths = [&](const Segmentation& s, double bound) { return narrow_patches(g.mesh, s, bound); };
+  EXPECT_EQ(widths(g.seg, 1.6), std::vector<int>{1});
+  EXPECT_TRUE(widths(wide, 1.6).empty());  // 12/7 and 2 wide now
+  // A bound it meets already, or none: the same segmentation.
+  EXPECT_EQ(segment_detail::widen_patches(*splitter, g.seg, {1}, 1.3, true, &n_widened).face_patch, g.seg.face_patch);
+  EXPECT_EQ(n_widened, 0u);
+  EXPECT_EQ(segment_detail::widen_patches(*splitter, g.seg, {}, 1.6).face_patch, g.seg.face_patch);
+  // A bound the giver cannot keep (patch 0 would fall to 2.11 < 2.3): nothing moves.
+  EXPECT_EQ(segment_detail::widen_patches(*splitter, g.seg, {1}, 2.3).face_patch, g.seg.face_patch);
+  EXPECT_THROW((void)segment_detail::widen_patches(*splitter, g.seg, {1}, std::nan("")), InvalidInput);
+  EXPECT_THROW((void)segment_detail::widen_patches(*splitter, g.seg, {1}, -1.0), InvalidInput);
+  EXPECT_THROW((void)segment_detail::widen_patches(*splitter, g.seg, {2}, 1.6), InvalidInput);
+}
+
+TEST(WidenPatches, NoRingAcrossASteepBendOrACrease) {
+  // Bent by 30 deg with a 5-deg slope bound: patch 0's faces (smoothed normals at most half
+  // way round the bend) are outside patch 1's cone. (At 70 deg and 60 the smoothed normals
+  // beside the bend, no crease stopping the averaging, are within it: the column moves.)
+  const BentGrid steep = bent_grid(30.0);
+  SegmentOptions steep_options;
+  steep_options.max_slope_deg = 5.0;
+  auto splitter = segment_detail::make_splitter(steep.mesh, steep_options);
+  std::size_t n_widened = 1;
+  EXPECT_EQ(segment_detail::widen_patches(*splitter, steep.seg, {1}, 1.6, true, &n_widened).face_patch,
+            steep.seg.face_patch);
+  EXPECT_EQ(n_widened, 0u);
+  // Bent by 50 deg with a 40-deg crease angle: within the cone, but the bend is a crease.
+  const BentGrid creased = bent_grid(50.0);
+  SegmentOptions crease_options;
+  crease_options.crease_angle_deg = 40.0;
+  auto crease_splitter = segment_detail::make_splitter(creased.mesh, crease_options);
+  EXPECT_EQ(segment_detail::widen_patches(*crease_splitter, creased.seg, {1}, 1.6, true, &n_widened).face_patch,
+            creased.seg.face_patch);
+  EXPECT_EQ(n_widened, 0u);
+  // The same bend without the crease: the column moves.
+  auto plain_splitter = segment_detail::make_splitter(creased.mesh, SegmentOptions{});
+  EXPECT_NE(segment_detail::widen_patches(*plain_splitter, creased.seg, {1}, 1.6, true, &n_widened).face_patch,
+            creased.seg.face_patch);
+  EXPECT_EQ(n_widened, 1u);
+}
+
 // A 4 x 4 grid of side 1 folded by `fold_deg` along x = 0.75; patches: 1 = the two faces of
 // the cell [0.25, 0.5] x [0.25, 0.5], 2 = those of [0.5, 0.75] x [0.25, 0.5] (its right edge on
 // the fold), 3 = one face of the cell [0.25, 0.5] x [0.75, 1] (only patch 0 around it), 0 = the rest.
