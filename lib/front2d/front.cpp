@@ -46,15 +46,12 @@ constexpr int kRelocateIterations = 24;     // compass search iterations per poi
 constexpr int kRelocateRounds = 2;          // relocation + swaps rounds
 // Delaunay refinement (Optimiser::refine).
 constexpr std::size_t kMaxCavity = 4096;          // triangles examined for encroachment per circumcentre
-constexpr double kRefineMinLengthRelative = 1e-9;  // no piece shorter than twice this times the bbox diagonal is split
 constexpr double kRefineMaxPointsFactor = 2.0;     // at most this times the triangles (+1000) new points
 constexpr double kAutoSizeDivisor = 40.0;  // automatic uniform size: bbox diagonal / this
 constexpr int kSizingGridCells = SizingField::kMaxCallbackGridCells;  // background grid of callback sizing fields, per side
 constexpr int kSegmentSamples = 16;        // sizing samples per segment when splitting it
 constexpr std::size_t kMaxGridCells = std::size_t{1} << 22;
 constexpr std::size_t kProgressEvery = 1u << 14;
-constexpr double kIncircleRelative = 1e-12; // swap only if clearly non-Delaunay (no ping-pong)
-constexpr double kClearanceSlack = 1e-9;    // relative slack of the clearance box filter (AdvancingFront::valid)
 const double kSqrt3 = std::sqrt(3.0);
 
 std::uint64_t dkey(int a, int b) { return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(a)) << 32) | static_cast<std::uint32_t>(b); }
@@ -474,7 +471,7 @@ class AdvancingFront {
     // A front edge whose box lies farther than `reach` from q in x or in y keeps both
     // clearances: reach exceeds max(cn, ce) by far more than the rounding of the distances
     // computed below (relative 1e-9 against about 1e-15), so those would not flag it either.
-    const double reach = is_new ? std::max(cn, ce) + kClearanceSlack * (std::max(cn, ce) + q.cwiseAbs().maxCoeff()) : 0.0;
+    const double reach = is_new ? std::max(cn, ce) + tolerance::kClearanceSlack * (std::max(cn, ce) + q.cwiseAbs().maxCoeff()) : 0.0;
     auto inside = [&](const Vec& v) { return orient2d(A, B, v) >= 0 && orient2d(B, q, v) >= 0 && orient2d(q, A, v) >= 0; };
     auto conflict = [&](int u, const Vec& U, int w, const Vec& W, int s, int t) {
       // New edge (u, w) against front edge (s, t); the pair {u, w} == {s, t} was skipped.
@@ -1552,7 +1549,7 @@ class Optimiser {
     return clearly_in_circle(R * pt(a), R * pt(b), R * pt(c), R * pt(d));
   }
   // d inside the circle of the counter-clockwise abc by more than the relative margin
-  // kIncircleRelative (so that near-cocircular quads never ping-pong). Evaluated in double
+  // tolerance::kIncircleRelative (so that near-cocircular quads never ping-pong). Evaluated in double
   // relative to d: its rounding error, about 1e-15 of the scale, is far below the margin.
   [[nodiscard]] static bool clearly_in_circle(const Vec& a, const Vec& b, const Vec& c, const Vec& d) {
     const Vec ad = a - d, bd = b - d, cd = c - d;
@@ -1560,7 +1557,7 @@ class Optimiser {
                        bd.squaredNorm() * (cd.x() * ad.y() - ad.x() * cd.y()) +
                        cd.squaredNorm() * (ad.x() * bd.y() - bd.x() * ad.y());
     const double scale = std::max((a - b).squaredNorm(), (c - d).squaredNorm());
-    return det > kIncircleRelative * scale * scale;
+    return det > tolerance::kIncircleRelative * scale * scale;
   }
   // The smoothing target of vtx: the mean of its neighbours (each counted once per incident
   // triangle). With a metric that varies over the star, the point x minimising
@@ -1815,7 +1812,7 @@ Mesh2d mesh_pslg(const Pslg& pslg, const FrontOptions& options) {
     rc.segments = &dom.segments;
     rc.acute = acute_vertices(pslg.points, dom.segments);
     rc.n_input = static_cast<int>(pslg.points.size());
-    rc.min_length = kRefineMinLengthRelative * (hi - lo).norm();
+    rc.min_length = tolerance::kRefineMinLengthRelative * (hi - lo).norm();
     rc.size = &size;
     rc.max_points = static_cast<std::size_t>(kRefineMaxPointsFactor * static_cast<double>(mesh.triangles.size())) + 1000;
     const auto relocate = [&]() {

@@ -91,7 +91,7 @@ struct FrontOptions {
   //! The front may create at most this many times the expected number of points before it
   //! stops creating new ones and closes with existing nodes only. Must be >= 1. Default 4.
   double work_budget_factor = 4.0;
-  //! Progress and cancellation; stage names "front2d: front", "front2d: optimise".
+  //! Progress and cancellation; stage names "front2d: front", "front2d: optimise". Default none.
   ProgressCallback progress;
 
   //! \throw InvalidInput on nonsense (bad sizing, budget < 1, negative passes).

@@ -13,6 +13,7 @@
 
 #include "nurbsfront/core/error.h"
 #include "nurbsfront/core/parallel.h"
+#include "nurbsfront/core/tolerances.h"
 #include "nurbsfront/io/mesh_io.h"
 
 namespace nurbsfront {
@@ -25,8 +26,6 @@ constexpr std::size_t kNoIndex = std::numeric_limits<std::size_t>::max();
 //! to look into (a point is near a face along an axis with probability 2 / 8) but longer
 //! chains per cell when points are denser than the tolerance.
 constexpr double kCellsPerTolerance = 8.0;
-//! Relative widening of the near-a-face band, against rounding in p / cell.
-constexpr double kNearFaceMargin = 1e-6;
 //! Points or triangles per task of clean()'s parallel passes.
 constexpr std::size_t kCleanChunk = 16384;
 
@@ -98,7 +97,7 @@ std::vector<std::uint32_t> weld(const std::vector<Eigen::Vector3d>& points, doub
   const double inv_cell = 1.0 / (kCellsPerTolerance * tol);
   const double tol2 = tol * tol;
   // the margin covers the rounding of p * inv_cell; checking a neighbour too many is harmless
-  const double near_face = (1.0 + kNearFaceMargin) / kCellsPerTolerance;
+  const double near_face = (1.0 + tolerance::kNearFaceMargin) / kCellsPerTolerance;
   auto cell_of = [inv_cell](const Eigen::Vector3d& p) {
     return CellKey{static_cast<std::int64_t>(std::floor(p.x() * inv_cell)),
                    static_cast<std::int64_t>(std::floor(p.y() * inv_cell)),

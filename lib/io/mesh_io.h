@@ -182,7 +182,7 @@ struct WriteOptions {
   //! Default true. OBJ and OFF are always ASCII.
   bool binary = true;
   //! Per-face scalar fields, written to VTK/VTU (CELL_DATA) and PLY (face properties);
-  //! other formats ignore them. Each must have one value per triangle.
+  //! other formats ignore them. Each must have one value per triangle. Default none.
   std::vector<FaceField> face_fields;
   //! \throw InvalidInput for an empty or whitespace-containing field name or a repeated name.
   void validate() const;

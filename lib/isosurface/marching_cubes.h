@@ -23,7 +23,7 @@ struct MarchingCubesOptions {
   //! Pad the grid by one layer of "outside" values so the surface closes at the grid border.
   //! Default false (the surface is open where it leaves the grid).
   bool pad = false;
-  //! Progress / cancel callback (stage "marching cubes"); empty = none.
+  //! Progress / cancel callback (stage "marching cubes"). Default empty = none.
   ProgressCallback progress;
   //! \throw InvalidInput if iso is not finite.
   void validate() const;

@@ -18,14 +18,13 @@
 #include <string>
 
 #include "nurbsfront/core/error.h"
+#include "nurbsfront/core/tolerances.h"
 
 namespace nurbsfront {
 namespace {
 
 using Triplets = std::vector<Eigen::Triplet<double>>;
 
-// Relative tolerance on the unit length of a band's direction.
-constexpr double kUnitTolerance = 1e-6;
 // Diagonal regularisation (the data weights are about 1 per sample): only makes the system
 // definite should the samples not determine the penalty's null space (the quadrics); far
 // below any data term, and not scaled with the penalty, which would bias quadrics.
@@ -34,10 +33,9 @@ constexpr double kRidge = 1e-12;
 constexpr int kBisectionSteps = 40;
 // Step halvings of the line search at most.
 constexpr int kLineSearchSteps = 12;
-// Preconditioned conjugate gradient steps at most before a new factorisation, and their
-// stopping residual relative to the right-hand side's norm.
+// Preconditioned conjugate gradient steps at most before a new factorisation (their
+// stopping residual: tolerance::kBandPcgRelative).
 constexpr int kMaxPcgSteps = 40;
-constexpr double kPcgTolerance = 1e-13;
 // Bands whose state may differ from the last factorisation's for a solve by preconditioned
 // conjugate gradients instead of a new factorisation (occupancy torus at 64 cells: 4 to 32
 // cut the fits' CPU time by 6-12%; with no limit, the steps cost 35% more than they saved).
@@ -204,7 +202,7 @@ void validate_samples(const std::vector<BandSample>& samples) {
     if (!s.point.allFinite() || !s.direction.allFinite() || !std::isfinite(s.half_length))
       throw InvalidInput("fit_height_field_to_bands: sample " + std::to_string(i) + " is not finite");
     if (s.half_length < 0.0) throw InvalidInput("fit_height_field_to_bands: sample " + std::to_string(i) + " has a negative half length");
-    if (s.half_length > 0.0 && !(std::abs(s.direction.norm() - 1.0) <= kUnitTolerance))
+    if (s.half_length > 0.0 && !(std::abs(s.direction.norm() - 1.0) <= tolerance::kUnitDirectionRelative))
       throw InvalidInput("fit_height_field_to_bands: sample " + std::to_string(i) + " has a band direction that is not a unit vector");
     mean += s.point.head<2>();
   }
@@ -389,7 +387,7 @@ BandFitResult fit_height_field_to_bands(const std::vector<BandSample>& samples, 
   // a few steps where a new factorisation would cost much more. Returns false (x then
   // undefined) if it does not converge within kMaxPcgSteps.
   auto pcg = [&](const std::vector<int>& active, const Eigen::VectorXd& rhs, Eigen::VectorXd& x) {
-    const double tolerance = kPcgTolerance * rhs.norm();
+    const double tolerance = tolerance::kBandPcgRelative * rhs.norm();
     Eigen::VectorXd r = rhs - apply(active, x);
     if (r.norm() <= tolerance) return true;
     Eigen::VectorXd z = solver.solve(r);

@@ -33,7 +33,8 @@ struct BandSample {
 //! Options of fit_height_field_to_bands().
 struct BandFitOptions {
   //! Lattice cell size (unit of x, y), > 0. About one or two cells of the occupancy grid:
-  //! the smoothness comes from smoothing_length, not from a coarse lattice. Required.
+  //! the smoothness comes from smoothing_length, not from a coarse lattice. Required: the
+  //! default 0 is refused by validate().
   double spacing = 0.0;
   //! Length (unit of x, y) over which the third derivatives of f are penalised (the energy
   //! integral of l^6 (f_xxx^2 + 3 f_xxy^2 + 3 f_xyy^2 + f_yyy^2) times the sample density over

@@ -13,11 +13,6 @@
 namespace nurbsfront {
 namespace {
 
-// Normals whose mean is shorter than this (each normalised to length 1) cancel out.
-constexpr double kMinMeanNormalLength = 1e-6;
-// Spread ratio below which points are collinear (see mba.cpp).
-constexpr double kCollinearRelative = 1e-6;
-
 void check_finite(const std::vector<Eigen::Vector3d>& values, const char* what) {
   for (std::size_t k = 0; k < values.size(); ++k) {
     if (!values[k].allFinite()) throw InvalidInput(std::string("patch frame: ") + what + " " + std::to_string(k) + " is not finite");
@@ -85,7 +80,7 @@ PatchFrame patch_frame(const std::vector<Eigen::Vector3d>& points, const std::ve
       ++n_used;
     }
   }
-  if (n_used == 0 || !(sum.norm() > kMinMeanNormalLength * static_cast<double>(n_used))) {
+  if (n_used == 0 || !(sum.norm() > tolerance::kMinMeanNormalLength * static_cast<double>(n_used))) {
     throw InvalidInput("patch frame: the normals cancel out (no mean direction)");
   }
   return frame_with_z(points, centroid(points), sum.normalized());
@@ -100,7 +95,7 @@ PatchFrame patch_frame_pca(const std::vector<Eigen::Vector3d>& points, const Eig
   for (const auto& p : points) cov.noalias() += (p - origin) * (p - origin).transpose();
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
   const Eigen::Vector3d ev = eig.eigenvalues().cwiseMax(0.0);
-  if (!(ev[2] > 0.0) || std::sqrt(ev[1]) <= kCollinearRelative * std::sqrt(ev[2])) {
+  if (!(ev[2] > 0.0) || std::sqrt(ev[1]) <= tolerance::kCollinearRelative * std::sqrt(ev[2])) {
     throw InvalidInput("patch frame: the points are collinear or coincide (no plane)");
   }
   Eigen::Vector3d z = eig.eigenvectors().col(0).normalized();

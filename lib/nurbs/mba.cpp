@@ -125,10 +125,6 @@ double add_thin_plate_product(const std::vector<double>& x, std::size_t nx, std:
 namespace nurbsfront {
 namespace {
 
-// Points whose xy spread across their main direction is below this fraction of the spread
-// along it are collinear: no height field over a line.
-constexpr double kCollinearRelative = 1e-6;
-
 struct Lattice {
   int n_x = 0;
   int n_y = 0;
@@ -572,7 +568,6 @@ Lattice least_squares_polish(const PointWeights& weights, const std::vector<doub
     rz += residual[k] * z[k];
     b_norm += b[k] * b[k];
   }
-  constexpr double kRelativeStop = 1e-8;
   for (int it = 0; it < iterations && rz > 0.0; ++it) {
     const double p_ap = apply(p, a_p);
     if (!(p_ap > 0.0)) break;
@@ -586,7 +581,7 @@ Lattice least_squares_polish(const PointWeights& weights, const std::vector<doub
       z[k] = residual[k] / diagonal[k];
       rz_next += residual[k] * z[k];
     }
-    if (r_norm <= kRelativeStop * kRelativeStop * b_norm) break;
+    if (r_norm <= tolerance::kLeastSquaresCgRelative * tolerance::kLeastSquaresCgRelative * b_norm) break;
     const double beta = rz_next / rz;
     rz = rz_next;
     for (std::size_t k = 0; k < size; ++k) p[k] = z[k] + beta * p[k];
@@ -644,7 +639,7 @@ void check_points(const std::vector<Eigen::Vector3d>& points) {
   const double big = std::max(eig.eigenvalues()[1], 0.0);
   const double small = std::max(eig.eigenvalues()[0], 0.0);
   if (!(big > 0.0)) throw InvalidInput("fit_height_field: all points coincide in the xy-plane (zero-size rectangle)");
-  if (std::sqrt(small) <= kCollinearRelative * std::sqrt(big)) {
+  if (std::sqrt(small) <= tolerance::kCollinearRelative * std::sqrt(big)) {
     throw InvalidInput("fit_height_field: all points are collinear in the xy-plane; no height field over a line");
   }
 }

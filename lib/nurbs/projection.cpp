@@ -9,16 +9,13 @@
 #include <Eigen/Dense>
 
 #include "nurbsfront/core/error.h"
+#include "nurbsfront/core/tolerances.h"
 
 namespace nurbsfront {
 namespace {
 
 // Halvings of a step before giving up on it.
 constexpr int kMaxStepHalvings = 30;
-// Near the minimum the squared distance changes by less than its round-off: a step that
-// raises it by no more than this (relative) still counts as a descent, so the position
-// converges to full precision instead of sqrt(epsilon).
-constexpr double kDescentSlackRelative = 8.0 * std::numeric_limits<double>::epsilon();
 
 // Distinct knot values inside the domain (span borders), for sampling.
 std::vector<double> span_borders(const KnotVector& kv) {
@@ -139,7 +136,7 @@ ClosestPoint closest_point(const NurbsSurface& surface, const Eigen::Vector3d& q
       nt = std::clamp(t + alpha * step.y(), v0, v1);
       np = surface.evaluate(ns, nt);
       nf = 0.5 * (np - query).squaredNorm();
-      if (nf <= f * (1.0 + kDescentSlackRelative)) {
+      if (nf <= f * (1.0 + tolerance::kDescentSlackRelative)) {
         moved = true;
         break;
       }

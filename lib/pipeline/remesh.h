@@ -102,11 +102,11 @@ struct RemeshOptions {
   //! Measure the two-sided distance of the output to the input (Hausdorff, mean,
   //! relative volume change) into the report. Default true.
   bool compute_distances = true;
-  //! Options of that measurement (sample spacing, threads).
+  //! Options of that measurement (sample spacing, threads); see DistanceOptions.
   DistanceOptions distance;
   //! Progress and cancellation for the whole run. When set, it receives every stage's
   //! progress (stages "segment", "surfmesh: ...", "stitch: ...", "distance"); a stage's own
-  //! callback, if set too, is called as well. Returning false cancels (Cancelled).
+  //! callback, if set too, is called as well. Returning false cancels (Cancelled). Default none.
   ProgressCallback progress;
   //! The same thread count for every stage (segmentation, surfmesh workers, checks, distances); n >= 1.
   void set_threads(unsigned n);

@@ -332,14 +332,13 @@ TopologyReport compute_topology(const TriangleSoup& soup, std::vector<EdgeEntry>
 // three atan2.
 bool may_change_angle_extremes(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c,
                                double sin_min_bound, double cos_max_bound) {
-  constexpr double kMargin = 1e-9;
   std::array<double, 3> l2{(b - a).squaredNorm(), (c - b).squaredNorm(), (a - c).squaredNorm()};
   std::sort(l2.begin(), l2.end());
   const double product = std::sqrt(l2[1] * l2[2]);
   if (!(product > 0.0)) return true;
-  if (!((b - a).cross(c - a).norm() / product > sin_min_bound + kMargin)) return true;
+  if (!((b - a).cross(c - a).norm() / product > sin_min_bound + tolerance::kAngleBoundMargin)) return true;
   const double cos_largest = (l2[0] + l2[1] - l2[2]) / (2.0 * std::sqrt(l2[0] * l2[1]));
-  return !(cos_largest > cos_max_bound + kMargin);
+  return !(cos_largest > cos_max_bound + tolerance::kAngleBoundMargin);
 }
 
 // The quality figures of the triangles (alpha, angles, obtuse and small-angle shares); the

@@ -138,7 +138,7 @@ struct DistanceOptions {
   std::size_t max_samples = 4'000'000;
   //! Worker threads (results do not depend on it). Default 2.
   unsigned n_threads = 2;
-  //! Progress and cancellation (stage "distance").
+  //! Progress and cancellation (stage "distance"). Default none.
   ProgressCallback progress;
   //! \throw InvalidInput for a non-positive spacing, max_samples == 0 or n_threads == 0.
   void validate() const;
@@ -153,6 +153,7 @@ struct ReportOptions {
   //! Options of the distance part when a reference is given.
   DistanceOptions distance;
   //! Progress and cancellation (stages "topology", "self-intersections", "distance").
+  //! Default none.
   ProgressCallback progress;
   //! \throw InvalidInput for n_threads == 0 or invalid distance options.
   void validate() const;

@@ -78,8 +78,6 @@ constexpr int kBorderCleanupPasses = 3;
 // A local fold (a short extra outer loop, or two crossing border segments) is cut out
 // with this many rings of faces around it.
 constexpr int kCarveRings = 2;
-// Keeps a seed axis strictly inside the feasible range instead of on its edge (rad).
-constexpr double kAngleMarginRad = 1e-6;
 // A "cliff" in a patch: two of its vertices closer than kCliffRunEdges mean input edges in
 // its plane (the default fit lattice, PatchFitOptions::min_spacing_edges) and more than
 // kCliffRiseEdges apart along its axis, at a rise over run above kCliffMinRiseOverRun
@@ -551,11 +549,9 @@ struct PatchCones {
 };
 
 // The radius is the largest angle to the axis. acos is evaluated only for the faces whose
-// dot product is within kConeDotSlack of the smallest: acos decreases with a slope of at
-// least 1, so any other face's angle is smaller by far more than acos' rounding error (the
-// same radius as acos of every face, without relying on acos' monotone rounding).
-constexpr double kConeDotSlack = 1e-9;
-
+// dot product is within tolerance::kConeDotSlack of the smallest: acos decreases with a
+// slope of at least 1, so any other face's angle is smaller by far more than acos' rounding
+// error (the same radius as acos of every face, without relying on acos' monotone rounding).
 PatchCones patch_cones(const Grouping& grouping, const std::vector<int>& faces, const Eigen::Vector3d& axis) {
   PatchCones cones{{axis, -1.0}, {axis, -1.0}};
   const FaceNormals& normals = grouping.normals;
@@ -567,9 +563,9 @@ PatchCones patch_cones(const Grouping& grouping, const std::vector<int>& faces, 
   }
   for (int f : faces) {
     if (normals.degenerate[f] != 0) continue;
-    if (normals.raw[f].dot(axis) <= raw_dot + kConeDotSlack)
+    if (normals.raw[f].dot(axis) <= raw_dot + tolerance::kConeDotSlack)
       cones.raw.radius = std::max(cones.raw.radius, angle_between(normals.raw[f], axis));
-    if (normals.exception[f] == 0 && normals.smooth[f].dot(axis) <= smooth_dot + kConeDotSlack)
+    if (normals.exception[f] == 0 && normals.smooth[f].dot(axis) <= smooth_dot + tolerance::kConeDotSlack)
       cones.smooth.radius = std::max(cones.smooth.radius, angle_between(normals.smooth[f], axis));
   }
   return cones;
@@ -651,8 +647,8 @@ void merge_patches(const Grouping& grouping, std::size_t min_faces, Patches& pat
   std::vector<OpenMesh::HalfedgeHandle> merged_border;
   std::vector<PatchCones> cones(n_patches);
   for (int p = 0; p < n_patches; ++p) cones[p] = patch_cones(grouping, patches.faces[p], patches.axes[p]);
-  const double max_smooth = grouping.max_slope - kAngleMarginRad;
-  const double max_raw = std::acos(kSegmentMinRawNormalDot) - kAngleMarginRad;
+  const double max_smooth = grouping.max_slope - tolerance::kAngleMarginRad;
+  const double max_raw = std::acos(kSegmentMinRawNormalDot) - tolerance::kAngleMarginRad;
   // A patch's attempt depends only on its own faces and cones and on its neighbours (which
   // faces around it are theirs, their axes and cones). Every change of a patch bumps its
   // version; a face around p changes hands only when its patch changes. An attempt that
@@ -1396,7 +1392,7 @@ FaceNormals prepare_normals(FaceGraph& graph, const SegmentOptions& options, Seg
   normals.smooth = smooth_normals(graph, normals, options.normal_smoothing_rings, workers);
   const double max_slope = radians(options.max_slope_deg);
   // A face whose raw and smoothed normals are further apart than this admits no axis.
-  const double max_spread = max_slope + std::acos(kSegmentMinRawNormalDot) - kAngleMarginRad;
+  const double max_spread = max_slope + std::acos(kSegmentMinRawNormalDot) - tolerance::kAngleMarginRad;
   segment_detail::parallel_chunks(graph.vertices.size(), workers, kFaceChunk,
                                   [&](std::size_t begin, std::size_t end, unsigned) {
     for (std::size_t f = begin; f < end; ++f) {

@@ -110,9 +110,9 @@ struct SegmentOptions {
   //! How border curves are smoothed.
   BorderSmoothingOptions border_smoothing;
   //! Worker threads for the per-face and per-patch steps (normals, projection and cliff
-  //! checks); 0 = all hardware threads. The result does not depend on it (>= 0).
+  //! checks); 0 = all hardware threads. The result does not depend on it (>= 0). Default 0.
   int threads = 0;
-  //! Optional progress callback (stage "segment"); returning false cancels.
+  //! Optional progress callback (stage "segment"); returning false cancels. Default none.
   ProgressCallback progress;
   //! Throws InvalidInput if a field is out of range.
   void validate() const;

@@ -102,9 +102,9 @@ class Optimiser {
     min_double_area_ = 2.0 * tolerance::kDegenerateAreaRelative * diagonal * diagonal;
     cos_dihedral_ = std::cos(options.max_flip_dihedral_deg * std::numbers::pi / 180.0);
     sin_angle_floor_ = std::sin(options.angle_floor_deg * std::numbers::pi / 180.0);
-    alpha_sine_skip_ = std::numbers::sqrt3 * (sin_angle_floor_ + kSineSkipMargin);
+    alpha_sine_skip_ = std::numbers::sqrt3 * (sin_angle_floor_ + tolerance::kSineSkipMargin);
     sin_obtuse_floor_ = std::sin(std::min(options.angle_floor_deg + kObtuseAngleMarginDeg, 60.0) * std::numbers::pi / 180.0);
-    obtuse_sine_skip_ = std::numbers::sqrt3 * (sin_obtuse_floor_ + kSineSkipMargin);
+    obtuse_sine_skip_ = std::numbers::sqrt3 * (sin_obtuse_floor_ + tolerance::kSineSkipMargin);
     sin_split_feature_floor_ = std::sin(options.obtuse_split_feature_angle_deg * std::numbers::pi / 180.0);
     classify_nodes(result.vertex_node);
   }
@@ -622,7 +622,7 @@ class Optimiser {
   }
 
   // The share x of the curve piece where p lies (slide_point), 0 at `at`; NaN when p lies on
-  // neither piece (within kSlideOnCurve of the piece's length) or beyond kSlideMaxShare.
+  // neither piece (within tolerance::kSlideOnCurveRelative of the piece's length) or beyond kSlideMaxShare.
   static double slide_share(const Vec& p, const Vec& at, const Vec& before, const Vec& after) {
     if (p == at) return 0.0;
     for (const int side : {1, -1}) {
@@ -630,8 +630,8 @@ class Optimiser {
       const double l2 = d.squaredNorm();
       if (!(l2 > 0.0)) continue;
       const double u = (p - at).dot(d) / l2;
-      if (u < 0.0 || u > kSlideMaxShare + kSlideOnCurve) continue;
-      if ((p - (at + u * d)).squaredNorm() <= kSlideOnCurve * kSlideOnCurve * l2) return side * u;
+      if (u < 0.0 || u > kSlideMaxShare + tolerance::kSlideOnCurveRelative) continue;
+      if ((p - (at + u * d)).squaredNorm() <= tolerance::kSlideOnCurveRelative * tolerance::kSlideOnCurveRelative * l2) return side * u;
     }
     return std::numeric_limits<double>::quiet_NaN();
   }
@@ -1096,8 +1096,8 @@ class Optimiser {
       if (parent != nullptr && n.dot(*parent) <= options_.min_normal_dot * l * parent->norm()) return -1;
       const auto [alpha, sine] = alpha_and_min_angle_sine(p[0], p[1], p[2], l);
       if (alpha < std::min(old_alpha, options_.alpha_floor)) return -1;
-      if (sine < std::min(old_sine, is_away ? sin_floor : sin_feature_floor) * (1.0 - kSplitSineTolerance)) return -1;
-      if (is_away && sine < std::min(old_sine_away, sin_floor) * (1.0 - kSplitSineTolerance)) return -1;
+      if (sine < std::min(old_sine, is_away ? sin_floor : sin_feature_floor) * (1.0 - tolerance::kSplitSineRelative)) return -1;
+      if (is_away && sine < std::min(old_sine_away, sin_floor) * (1.0 - tolerance::kSplitSineRelative)) return -1;
       new_obtuse += int(triangle_is_obtuse(p[0], p[1], p[2]));
       new_fixed += int((!movable(h1) && (p[2] - p[1]).dot(p[0] - p[1]) < 0.0) || (!movable(h2) && (p[0] - p[2]).dot(p[1] - p[2]) < 0.0));
     }
@@ -1130,7 +1130,7 @@ class Optimiser {
   // degenerates or turns its normal by more than acos(min_normal_dot); the smallest alpha
   // stays at least min(old smallest, alpha_floor) and the sine of the smallest angle at
   // least min(old, sin_floor): the old ring is needed only below the floors. sine_skip:
-  // sqrt(3) (sin_floor + kSineSkipMargin), see alpha_sine_skip_.
+  // sqrt(3) (sin_floor + tolerance::kSineSkipMargin), see alpha_sine_skip_.
   bool passes_ring_tests(const std::vector<RingTriangle>& ring, const Vec& p, const Vec& q, double sin_floor,
                          double sine_skip) const {
     double new_min = 1.0, new_sine = 1.0;  // smallest alpha, sine of the smallest angle
@@ -1303,13 +1303,13 @@ class Optimiser {
   // The sine of a triangle's smallest angle is at least alpha / sqrt(3) (twice the area is
   // alpha (l1^2 + l2^2 + l3^2) / (2 sqrt(3)), and the two longest edges' squares sum to at
   // least twice their product). A new ring triangle with alpha above sqrt(3) (floor + a
-  // margin far above the rounding) is surely not below the angle floor: its sine is not
-  // computed (1 in its place). new_sine is compared only with the floor, and below the
-  // floor it is the smallest computed sine: the same decisions as with every sine.
-  static constexpr double kSineSkipMargin = 1e-9;
+  // margin tolerance::kSineSkipMargin, far above the rounding) is surely not below the angle
+  // floor: its sine is not computed (1 in its place). new_sine is compared only with the
+  // floor, and below the floor it is the smallest computed sine: the same decisions as with
+  // every sine.
+  double alpha_sine_skip_ = 0.0;
   // Edges per chunk of the parallel flip tests.
   static constexpr std::size_t kEdgeChunk = 4096;
-  double alpha_sine_skip_ = 0.0;
   // The obtuse repair's moves and flips keep the smallest angle around them at least
   // min(old, angle_floor_deg + this margin): at the floor itself the scenes' smallest angles
   // away from features fell to it (sphere at 128 cells 30.2 -> 25.8 deg, DRAM 25.7 -> 25.0);
@@ -1322,20 +1322,16 @@ class Optimiser {
   double obtuse_sine_skip_ = 0.0;
   // slide_sweep: the shares of a piece a feature node tries (kSlideStep apart, up to
   // kSlideSteps steps either way: at most kSlideMaxShare, so neighbours stay 0.2 of a piece
-  // apart), the sag bound (share of the piece) of the crease's edges from the front's polyline, and the
-  // tolerance (share of the piece) of a node on its piece.
+  // apart), the sag bound (share of the piece) of the crease's edges from the front's polyline; a
+  // node is on its piece within tolerance::kSlideOnCurveRelative (share of the piece).
   static constexpr double kSlideStep = 0.1;
   static constexpr int kSlideSteps = 4;
   static constexpr double kSlideMaxShare = kSlideStep * kSlideSteps;
   static constexpr double kSlideMaxSag = 0.05;
-  static constexpr double kSlideOnCurve = 1e-9;
   // The sine of StitchOptions::obtuse_split_feature_angle_deg (evaluate_split).
   double sin_split_feature_floor_ = 0.0;
   // An obtuse split's node stays at least this share of the edge away from its ends.
   static constexpr double kSplitMin = 0.2;
-  // A split keeps the angles at the edge's ends (the new triangles on the obtuse side have
-  // them): their sines, computed again, may differ from the old ones by a few ulps.
-  static constexpr double kSplitSineTolerance = 1e-9;
   // A split's node projected onto the fitted surface(s) stays within this share of the
   // edge's length from the edge (a chord's sag over a radius of the edge's length is 1/8).
   static constexpr double kSplitMaxOffset = 0.125;

@@ -39,9 +39,10 @@ struct StitchOptions {
   //! node's triangles, in (0, 1]. Default 0.5.
   double smoothing_relaxation = 0.5;
   //! A smoothing move is accepted only if no incident triangle's normal turns by more than
-  //! acos(min_normal_dot) (in [-1, 1)) and the smallest alpha of the incident triangles
-  //! does not drop below min(its old value, alpha_floor) (in [0, 1]). Defaults 0.5 and 0.5.
+  //! acos(min_normal_dot) (cosine, in [-1, 1)). Default 0.5 (60 deg).
   double min_normal_dot = 0.5;
+  //! ... and the smallest alpha of the incident triangles does not drop below min(its old
+  //! value, alpha_floor) (Lo's alpha, in [0, 1]). Default 0.5.
   double alpha_floor = 0.5;
   //! A smoothing move is accepted only if the smallest angle (deg) of the incident
   //! triangles does not drop below min(its old value, angle_floor_deg), in [0, 60): a move
@@ -183,7 +184,7 @@ struct StitchOptions {
   //! Worker threads of the checks (results do not depend on it); >= 1. Default 2.
   unsigned n_threads = 2;
   //! Progress and cancellation (stages "stitch: assemble", "stitch: optimise",
-  //! "stitch: verify").
+  //! "stitch: verify"). Default none.
   ProgressCallback progress;
   //! \throw InvalidInput if a field is out of range.
   void validate() const;

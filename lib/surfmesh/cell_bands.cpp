@@ -8,17 +8,13 @@
 
 #include <Eigen/Dense>
 
+#include "nurbsfront/core/tolerances.h"
 #include "nurbsfront/nurbs/nurbs_surface.h"
 #include "nurbsfront/surfmesh/surfmesh_internal.h"
 
 namespace nurbsfront::surfmesh_detail {
 
 namespace {
-
-// How far (in cells) a lattice coordinate may be from an integer or a half-integer and
-// still count as one: marching cubes puts an occupancy vertex at the exact midpoint, so only
-// round-off separates it.
-constexpr double kLatticeTolerance = 1e-6;
 
 // Fewest vertices of a local quadric fit (six unknowns, terraced data).
 constexpr std::size_t kMinJetVertices = 12;
@@ -94,10 +90,10 @@ std::vector<BandSample> cell_band_samples(const std::vector<Eigen::Vector3d>& wo
     int axis = -1;
     for (int d = 0; d < 3; ++d) {
       const double frac = t[d] - std::floor(t[d]);
-      if (std::abs(frac - 0.5) <= kLatticeTolerance) {
+      if (std::abs(frac - 0.5) <= tolerance::kLatticeCells) {
         ++n_half;
         axis = d;
-      } else if (frac <= kLatticeTolerance || frac >= 1.0 - kLatticeTolerance) {
+      } else if (frac <= tolerance::kLatticeCells || frac >= 1.0 - tolerance::kLatticeCells) {
         ++n_whole;
       }
     }

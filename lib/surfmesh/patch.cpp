@@ -17,6 +17,7 @@
 #include <unordered_set>
 
 #include "nurbsfront/core/stopwatch.h"
+#include "nurbsfront/core/tolerances.h"
 #include "nurbsfront/front2d/front.h"
 #include "nurbsfront/nurbs/mba.h"
 #include "nurbsfront/surfmesh/height_field_metric.h"
@@ -46,8 +47,6 @@ double signed_area(const std::vector<Eigen::Vector2d>& polygon) {
 // normal . axis such a
 // face must have (a steeper face would fold the height field).
 constexpr int kFitOverlapRings = 1;
-// Relative tolerance between the meshed area and the area inside the border (round-off).
-constexpr double kAreaTolerance = 1e-9;
 constexpr double kFitOverlapMinNormalDot = 0.5;
 // Faces whose normals differ by at most this (deg) lie in one plane (flat_face_edges).
 constexpr double kFlatFaceDeg = 1.0;
@@ -693,7 +692,7 @@ void mesh_patch(const Segmentation& seg, int p, const BorderNodes& borders, cons
       meshed_area += 0.5 * ((mesh2d.points[static_cast<std::size_t>(t[1])] - a).x() * (mesh2d.points[static_cast<std::size_t>(t[2])] - a).y() -
                             (mesh2d.points[static_cast<std::size_t>(t[1])] - a).y() * (mesh2d.points[static_cast<std::size_t>(t[2])] - a).x());
     }
-    if (!(std::abs(meshed_area - border_area) <= kAreaTolerance * std::abs(border_area)))
+    if (!(std::abs(meshed_area - border_area) <= tolerance::kMeshedAreaRelative * std::abs(border_area)))
       throw std::runtime_error("the meshed area differs from the area inside the border (the border folds in the patch plane)");
     for (const auto& chain : mesh2d.segment_chains)
       if (chain.size() != 2) throw std::runtime_error("the 2D front split a border segment");

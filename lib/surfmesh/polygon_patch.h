@@ -47,7 +47,7 @@ struct PolygonPatchOptions {
   //! Keep the polygon's vertices at their input positions (true) or move them onto the
   //! fitted surface like every other node (false, as the source method). Default false.
   bool keep_polygon_vertices = false;
-  //! Progress and cancellation (stages of fit and front2d).
+  //! Progress and cancellation (stages of fit and front2d). Default none.
   ProgressCallback progress;
   //! \throw InvalidInput on nonsense.
   void validate() const;

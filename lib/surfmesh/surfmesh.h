@@ -216,7 +216,9 @@ struct CellGrid {
 
 //! Options of mesh_surface().
 struct SurfMeshOptions {
+  //! Target edge lengths (uniform, adaptive, feature sizing); see SizingOptions.
   SizingOptions sizing;
+  //! Per-patch fits (lattice spacing, polish, splits of unfitted patches); see PatchFitOptions.
   PatchFitOptions fit;
   //! Cell-based input: fit every patch to the band of each vertex (see CellGrid). Vertices
   //! not at the midpoint of a lattice edge are plain point samples. Default off.
@@ -240,7 +242,7 @@ struct SurfMeshOptions {
   //! surfaces of its curve's patches before meshing (by at most one mean input edge), so the
   //! border lies near both (DESIGN.md, Pitfalls). Corners move the same way onto all their
   //! patches' surfaces, except corners of a feature curve (crease or input boundary), which
-  //! keep their input position. Default true.
+  //! keep their input position. Default false (always on with cell_grid).
   bool project_border_nodes = false;
   //! Discretise the curves on the input's boundary from their input positions instead of
   //! the smoothed ones (BorderCurve::smoothed): the input's boundary is its geometry, and
@@ -324,7 +326,7 @@ struct SurfMeshOptions {
   //! for every thread count. Default 0.
   int threads = 0;
   //! Progress and cancellation (stages "surfmesh: borders", "surfmesh: patches"). Always
-  //! called from the thread that called mesh_surface().
+  //! called from the thread that called mesh_surface(). Default none.
   ProgressCallback progress;
   void validate() const;
 };

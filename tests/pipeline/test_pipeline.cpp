@@ -908,24 +908,10 @@ TEST(Pipeline, CreaseBoundedNarrowFacesSizedFromTheirWidth) {
 // surface turned by 30 deg is not taken for marching cubes, and the label image's surface (0/1
 // intensities: every vertex at its lattice edge's midpoint) is not merged either.
 TriMesh slab_with_fins(bool label_image = false) {
-  ScalarGrid grid;
-  grid.dims = {24, 24, 24};
-  grid.values.assign(grid.size(), 0.0F);
-  for (int k = 0; k < 24; ++k) {
-    for (int j = 0; j < 24; ++j) {
-      for (int i = 0; i < 24; ++i) {
-        const bool slab = i >= 3 && i <= 20 && j >= 3 && j <= 20 && k >= 3 && k <= 10;
-        const bool fin_x = i == 11 && j >= 5 && j <= 18 && k >= 11 && k <= 17;
-        const bool fin_y = j == 8 && i >= 5 && i <= 18 && k >= 11 && k <= 15;
-        const bool inside = slab || fin_x || fin_y;
-        // A CT-like image: intensities vary a little, so the iso-surface crosses its lattice
-        // edges at varying points (not at their midpoints, as a label image's does). (With a
-        // wobble of 0.05 or more the fins' rims are no longer narrow patches: no merge.)
-        const double wobble = label_image ? 0.0 : 0.02 * std::sin(1.7 * i + 2.3 * j + 3.1 * k);
-        grid.values[grid.index(i, j, k)] = static_cast<float>((inside ? 0.8 : 0.2) + wobble);
-      }
-    }
-  }
+  // A CT-like image: intensities vary a little, so the iso-surface crosses its lattice
+  // edges at varying points (not at their midpoints, as a label image's does). (With a
+  // wobble of 0.05 or more the fins' rims are no longer narrow patches: no merge.)
+  const ScalarGrid grid = test::slab_with_thin_fin(label_image ? 0.0 : 0.02, true);
   MarchingCubesOptions mc;
   mc.iso = 0.5;
   mc.inside_above = true;

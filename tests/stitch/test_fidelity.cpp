@@ -145,6 +145,13 @@ std::vector<std::uint8_t> border_nodes(const SurfaceMesh& surface, const StitchR
   return out;
 }
 
+// The vertex indices of face f's corners, in order.
+std::vector<int> corners(const TriMesh& mesh, TriMesh::FaceHandle f) {
+  std::vector<int> out;
+  for (const auto v : mesh.fv_range(f)) out.push_back(v.idx());
+  return out;
+}
+
 TEST(StitchFidelitySlow, IncrementalSweepsGiveTheFullSweepsResult) {
   // (Slow: 1.5 s in RelWithDebInfo, 92 s under ASan; the CI runs it in the slow suite.)
   // The brain with the bound at 0.3 mean edges: several sweeps change the mesh. Measuring
@@ -171,12 +178,7 @@ TEST(StitchFidelitySlow, IncrementalSweepsGiveTheFullSweepsResult) {
   ASSERT_EQ(full.mesh.n_vertices(), incremental.mesh.n_vertices());
   ASSERT_EQ(full.mesh.n_faces(), incremental.mesh.n_faces());
   for (const auto v : full.mesh.vertices()) EXPECT_EQ(full.mesh.point(v), incremental.mesh.point(v)) << "vertex " << v.idx();
-  for (const auto f : full.mesh.faces()) {
-    std::vector<int> x, y;
-    for (const auto v : full.mesh.fv_range(f)) x.push_back(v.idx());
-    for (const auto v : incremental.mesh.fv_range(f)) y.push_back(v.idx());
-    EXPECT_EQ(x, y) << "face " << f.idx();
-  }
+  for (const auto f : full.mesh.faces()) EXPECT_EQ(corners(full.mesh, f), corners(incremental.mesh, f)) << "face " << f.idx();
   EXPECT_EQ(full.face_patch, incremental.face_patch);
   EXPECT_EQ(feature_full, feature_incremental);
 }
@@ -245,47 +247,6 @@ TEST(StitchFidelity, WalkingFirstSweepSelectsTheFullSearchsCandidates) {
   }
 }
 
-TEST(StitchFidelity, FacesLeftOutHoldNoCandidate) {
-  // The first sweep leaves out the samples of the input faces whose corners are within the
-  // bound of one output face, and the face samples within the bound of one of their corners'
-  // output faces. Every sample of the input (its vertices, face centroids and
-  // edge midpoints) measured in the output's tree: those farther than the bound are exactly
-  // the sweep's input-side candidates, with the same distances, and most face samples were
-  // left out unmeasured.
-  const Brain brain;
-  const auto& [input, surface, plain_options, plain] = brain;
-  ASSERT_TRUE(plain.report.ok());
-  StitchOptions options = plain_options;
-  options.fidelity_distance_edges = 0.25;
-  const double bound = 0.25 * surface.input_mean_edge;
-  const auto picked = stitch_detail::fidelity_candidates(input, options, border_nodes(surface, plain),
-                                                         surface.input_mean_edge, plain, true);
-  const TriangleSoup out = to_soup(plain.mesh), in = to_soup(input);
-  std::vector<std::uint32_t> faces(out.triangles.size());
-  std::iota(faces.begin(), faces.end(), 0U);
-  const quality_detail::AabbTree tree(out, faces);
-  std::vector<Eigen::Vector3d> samples = in.points;
-  for (const auto& t : in.triangles) {
-    const Eigen::Vector3d &a = in.points[t[0]], &b = in.points[t[1]], &c = in.points[t[2]];
-    samples.push_back((a + b + c) / 3.0);
-    samples.push_back(0.5 * (a + b));
-    samples.push_back(0.5 * (b + c));
-    samples.push_back(0.5 * (c + a));
-  }
-  std::vector<std::pair<std::uint32_t, double>> far;
-  for (std::uint32_t i = 0; i < samples.size(); ++i) {
-    const double d = std::sqrt(tree.closest(samples[i], UINT32_MAX).squared_distance);
-    if (d > bound) far.emplace_back(i, d);
-  }
-  ASSERT_GT(far.size(), 10u);
-  ASSERT_EQ(picked.samples.size(), far.size());
-  for (std::size_t k = 0; k < far.size(); ++k) {
-    EXPECT_EQ(picked.samples[k].first, far[k].first);
-    EXPECT_NEAR(picked.samples[k].second, far[k].second, 1e-12 * surface.input_mean_edge);
-  }
-  EXPECT_GT(picked.n_certified, 4 * in.triangles.size() * 4 / 5);  // 86% on the brain
-}
-
 // Every input sample (its vertices, then per face its centroid and edge midpoints, as
 // FidelityCandidates::samples numbers them) farther than bound from `output`, with its
 // distance, by index (a search of each in the output's tree).
@@ -308,6 +269,31 @@ std::vector<std::pair<std::uint32_t, double>> far_samples(const TriMesh& input, 
     if (d > bound) far.emplace_back(i, d);
   }
   return far;
+}
+
+TEST(StitchFidelity, FacesLeftOutHoldNoCandidate) {
+  // The first sweep leaves out the samples of the input faces whose corners are within the
+  // bound of one output face, and the face samples within the bound of one of their corners'
+  // output faces. Every sample of the input (its vertices, face centroids and
+  // edge midpoints) measured in the output's tree: those farther than the bound are exactly
+  // the sweep's input-side candidates, with the same distances, and most face samples were
+  // left out unmeasured.
+  const Brain brain;
+  const auto& [input, surface, plain_options, plain] = brain;
+  ASSERT_TRUE(plain.report.ok());
+  StitchOptions options = plain_options;
+  options.fidelity_distance_edges = 0.25;
+  const double bound = 0.25 * surface.input_mean_edge;
+  const auto picked = stitch_detail::fidelity_candidates(input, options, border_nodes(surface, plain),
+                                                         surface.input_mean_edge, plain, true);
+  const auto far = far_samples(input, plain.mesh, bound);
+  ASSERT_GT(far.size(), 10u);
+  ASSERT_EQ(picked.samples.size(), far.size());
+  for (std::size_t k = 0; k < far.size(); ++k) {
+    EXPECT_EQ(picked.samples[k].first, far[k].first);
+    EXPECT_NEAR(picked.samples[k].second, far[k].second, 1e-12 * surface.input_mean_edge);
+  }
+  EXPECT_GT(picked.n_certified, 4 * input.n_faces() * 4 / 5);  // 86% on the brain
 }
 
 TEST(StitchFidelitySlow, LeftOutSamplesAreCheckedAgainAfterLaterMoves) {
@@ -392,10 +378,7 @@ TEST(StitchFidelitySlow, AlphaFloorHoldsForEveryMovedTriangle) {
     n_moved = r.n_moved;
     double worst = -1.0;
     for (const auto f : plain.mesh.faces()) {
-      std::vector<int> x, y;
-      for (const auto v : plain.mesh.fv_range(f)) x.push_back(v.idx());
-      for (const auto v : result.mesh.fv_range(f)) y.push_back(v.idx());
-      if (x != y) continue;
+      if (corners(plain.mesh, f) != corners(result.mesh, f)) continue;
       worst = std::max(worst, std::min(alpha_of(plain.mesh, f), 0.8) - alpha_of(result.mesh, f));
     }
     return worst;

@@ -719,21 +719,33 @@ TEST(Surfmesh, FlippedHoleLoopFound) {
   EXPECT_EQ(surfmesh_detail::extra_outer_loop_curves(seg, borders), std::vector<int>{hole});
 }
 
+// An n x n grid of the unit square waved in z (0.08 sin 7x cos 5y): inner patch borders bend.
+TriMesh wavy_grid(int n) {
+  TriangleSoup soup = test::grid_patch(n, n);
+  for (auto& p : soup.points) p.z() = 0.08 * std::sin(7.0 * p.x()) * std::cos(5.0 * p.y());
+  return to_trimesh(soup);
+}
+
+// The patch of each face of test::grid_patch(n, n): square blocks of block x block cells,
+// numbered row by row ((n / block)^2 patches).
+std::vector<int> block_patches(int n, int block) {
+  std::vector<int> face_patch(static_cast<std::size_t>(2 * n * n), 0);
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      const auto f = static_cast<std::size_t>(2 * (j * n + i));
+      face_patch[f] = face_patch[f + 1] = (j / block) * (n / block) + i / block;
+    }
+  return face_patch;
+}
+
 TEST(Surfmesh, BorderChecksAndCreaseAnglesDoNotDependOnTheThreadCount) {
   // A wavy grid cut into 8 x 8 blocks of 3 x 3 cells (64 patches, 100+ curves: several
   // chunks of patches and of curves per worker), with the second node of every fifth curve
   // pushed far off, the second and third nodes of others swapped, and one-face hole loops
   // flipped: crossings and extra outer loops in many patches.
   constexpr int kN = 24, kBlock = 3;
-  TriangleSoup soup = test::grid_patch(kN, kN);
-  for (auto& p : soup.points) p.z() = 0.08 * std::sin(7.0 * p.x()) * std::cos(5.0 * p.y());
-  const TriMesh mesh = to_trimesh(soup);
-  std::vector<int> face_patch(mesh.n_faces(), 0);
-  for (int j = 0; j < kN; ++j)
-    for (int i = 0; i < kN; ++i) {
-      const auto f = static_cast<std::size_t>(2 * (j * kN + i));
-      face_patch[f] = face_patch[f + 1] = (j / kBlock) * (kN / kBlock) + i / kBlock;
-    }
+  const TriMesh mesh = wavy_grid(kN);
+  std::vector<int> face_patch = block_patches(kN, kBlock);
   // One-face hole patches in every fourth block (their loops are flipped below).
   int n_patches = (kN / kBlock) * (kN / kBlock);
   for (int block = 0; block < (kN / kBlock) * (kN / kBlock); block += 4) {
@@ -782,15 +794,8 @@ TEST(Surfmesh, DiscretisedBordersDoNotDependOnTheThreadCount) {
   // their kinds, owners and every curve's node list are the same bit for bit on 1, 2 and 3
   // threads, and each curve's list runs between its end corners' nodes.
   constexpr int kN = 24, kBlock = 4;
-  TriangleSoup soup = test::grid_patch(kN, kN);
-  for (auto& p : soup.points) p.z() = 0.08 * std::sin(7.0 * p.x()) * std::cos(5.0 * p.y());
-  const TriMesh mesh = to_trimesh(soup);
-  std::vector<int> face_patch(mesh.n_faces(), 0);
-  for (int j = 0; j < kN; ++j)
-    for (int i = 0; i < kN; ++i) {
-      const auto f = static_cast<std::size_t>(2 * (j * kN + i));
-      face_patch[f] = face_patch[f + 1] = (j / kBlock) * (kN / kBlock) + i / kBlock;
-    }
+  const TriMesh mesh = wavy_grid(kN);
+  const std::vector<int> face_patch = block_patches(kN, kBlock);
   Segmentation seg = labelled_segmentation(mesh, face_patch, (kN / kBlock) * (kN / kBlock));
   ASSERT_EQ(seg.curves.size(), 80u);  // 60 between blocks, 20 on the grid's boundary
   std::vector<surfmesh_detail::CurveSource> source(seg.curves.size());

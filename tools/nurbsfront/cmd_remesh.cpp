@@ -90,6 +90,12 @@ struct RemeshArgs {
   std::optional<double> volume_compensation;
   std::optional<double> volume_skip_within;
   bool smoothed_boundary = false;
+  bool project_border_nodes = false;
+  bool no_self_intersection_check = false;
+  bool no_distances = false;
+  // The options the flags without a field above set directly (their defaults are
+  // RemeshOptions' own); run_remesh starts from it.
+  RemeshOptions base;
   std::optional<unsigned> threads;
   std::string report;
   std::string vtk;
@@ -128,7 +134,7 @@ void run_remesh(RemeshArgs& args) {
     args.output = args.files[0];
   }
   if (args.output.empty()) throw InvalidInput("remesh: give the output file (IN OUT, or OUT with --scene)");
-  RemeshOptions options;
+  RemeshOptions options = args.base;
   if (args.size) options.surfmesh.sizing.size = *args.size;
   if (args.relative_size) options.surfmesh.sizing.relative_size = *args.relative_size;
   options.surfmesh.sizing.adaptive = args.adaptive;
@@ -172,6 +178,9 @@ void run_remesh(RemeshArgs& args) {
   if (args.sharp_crease) options.segment.sharp_crease_angle_deg = *args.sharp_crease;
   if (args.unsmoothed_crease_angle) options.surfmesh.unsmoothed_crease_angle_deg = *args.unsmoothed_crease_angle;
   if (args.smoothed_boundary) options.surfmesh.unsmoothed_boundary_curves = false;
+  if (args.project_border_nodes) options.surfmesh.project_border_nodes = true;
+  if (args.no_self_intersection_check) options.stitch.check_self_intersections = false;
+  if (args.no_distances) options.compute_distances = false;
   if (args.tiny_curve_merge) options.surfmesh.tiny_curve_merge_size = *args.tiny_curve_merge;
   if (args.corner_cluster) options.surfmesh.corner_cluster_size = *args.corner_cluster;
   if (args.chord_compensation) options.stitch.chord_compensation = *args.chord_compensation;
@@ -243,6 +252,80 @@ void run_remesh(RemeshArgs& args) {
     throw std::runtime_error("remesh: the report has " + std::to_string(result.report.errors.size()) +
                              " errors (listed above); the mesh was written for inspection");
   }
+}
+
+// The options of the stages' finer settings, bound to RemeshArgs::base (help shows each
+// default); out-of-range values are refused by RemeshOptions::validate().
+void add_expert_options(CLI::App& cmd, RemeshArgs& args) {
+  RemeshOptions& o = args.base;
+  auto add = [&cmd](const std::string& name, auto& field, const std::string& help) {
+    cmd.add_option(name, field, help)->capture_default_str()->group("Finer settings");
+  };
+  // segment
+  add("--normal-smoothing-rings", o.segment.normal_smoothing_rings,
+      "Rings of area-weighted normal averaging behind the slope grouping (>= 0; SegmentOptions)");
+  add("--min-patch-faces", o.segment.min_patch_faces,
+      "Patches with fewer faces join a neighbour where the slope bound allows (0 = off)");
+  add("--border-smoothing-iterations", o.segment.border_smoothing.iterations,
+      "Taubin lambda|mu step pairs smoothing the border curves (>= 0; 0 = input positions)");
+  add("--border-smoothing-lambda", o.segment.border_smoothing.lambda, "Taubin's shrinking step factor (in (0, 1])");
+  add("--border-smoothing-mu", o.segment.border_smoothing.mu, "Taubin's inflating step factor (in [-1, 0])");
+  add("--border-max-displacement", o.segment.border_smoothing.max_displacement,
+      "Smoothed border points stay within this many mean curve edges of their input position (>= 0)");
+  // surfmesh: sizing and per-patch front
+  add("--gradation", o.surfmesh.sizing.gradation, "Sizing gradation: |grad h| <= this - 1 (> 1)");
+  add("--min-size-fraction", o.surfmesh.sizing.min_size_fraction,
+      "Smallest size --adaptive may ask for, as a fraction of the uniform size");
+  add("--front-smoothing-passes", o.surfmesh.smoothing_passes, "Smoothing passes of the 2D front per patch (>= 0)");
+  add("--max-node-offset", o.surfmesh.max_node_offset_edges,
+      "New inner nodes stay within this many mean input edges of their patch's faces along its axis (0 = off)");
+  cmd.add_flag("--project-border-nodes", args.project_border_nodes,
+               "Move border nodes to the mean of their projections onto their patches' fits before meshing "
+               "(always on with a cell grid)")
+      ->group("Finer settings");
+  // surfmesh: fits
+  add("--fit-tolerance", o.surfmesh.fit.relative_tolerance, "Fit residual tolerance in mean input edges");
+  add("--fit-min-spacing", o.surfmesh.fit.min_spacing_edges, "Finest fit lattice spacing in mean input edges");
+  add("--fit-max-levels", o.surfmesh.fit.max_levels, "Fit lattice levels at most");
+  add("--fit-polish-iterations", o.surfmesh.fit.least_squares_iterations,
+      "Conjugate-gradient iterations of the fit's least-squares polish (0 = plain MBA)");
+  add("--fit-fine-smoothing", o.surfmesh.fit.least_squares_fine_smoothing,
+      "Smoothing of the second polish of patches fitted within --fit-fine-below (0 = off)");
+  add("--fit-fine-below", o.surfmesh.fit.fine_below_edges,
+      "Largest residual (mean input edges) after the first polish for the second one");
+  add("--split-rounds", o.surfmesh.fit.split_rounds, "Rounds of splitting patches whose fit leaves their input");
+  add("--large-face-edges", o.surfmesh.fit.large_face_edges,
+      "Input faces longer than this many mean edges are sampled inside for the fit (0 = off; not with a cell grid)");
+  add("--detail-above", o.surfmesh.fit.detail_above_edges,
+      "With --detail-fit: refit patches whose fit misses the input by more than this many mean edges");
+  add("--detail-node-offset", o.surfmesh.fit.detail_node_offset_edges,
+      "With --detail-fit: the refitted patches' new nodes stay within this many mean edges of the input");
+  // stitch
+  add("--optimisation-passes", o.stitch.optimisation_passes,
+      "Rounds of the stitch's flips and smoothing across borders (0 = off)");
+  add("--max-flip-dihedral", o.stitch.max_flip_dihedral_deg,
+      "Largest angle (deg) between an edge's two triangle normals for a flip (in [0, 180))");
+  add("--flip-gain", o.stitch.flip_gain, "Relative alpha gain a flip must bring (>= 0)");
+  add("--smoothing-relaxation", o.stitch.smoothing_relaxation,
+      "Relaxation of a smoothing move towards its triangles' centroid (in (0, 1])");
+  add("--min-normal-dot", o.stitch.min_normal_dot,
+      "Smoothing turns no triangle normal by more than acos(this) (in [-1, 1))");
+  add("--alpha-floor", o.stitch.alpha_floor,
+      "Smoothing keeps the smallest alpha around a node at min(old, this) (in [0, 1])");
+  add("--angle-floor", o.stitch.angle_floor_deg,
+      "Smoothing keeps the smallest angle (deg) around a node at min(old, this) (in [0, 60))");
+  add("--collapse-below-angle", o.stitch.collapse_below_angle_deg,
+      "Collapse the shortest edge of triangles with an angle (deg) below this before the optimisation "
+      "(in [0, 60); 0 = off)");
+  cmd.add_flag("--no-self-intersection-check", args.no_self_intersection_check,
+               "Skip the exact self-intersection check of the output (the most expensive check)")
+      ->group("Finer settings");
+  // distances
+  cmd.add_flag("--no-distances", args.no_distances, "Do not measure the output's distance to the input")
+      ->group("Finer settings");
+  add("--distance-spacing", o.distance.sample_spacing_relative,
+      "Spacing of the distance's area samples, as a fraction of the input's bounding-box diagonal");
+  add("--distance-max-samples", o.distance.max_samples, "Area samples per surface at most (the spacing grows)");
 }
 
 }  // namespace
@@ -428,6 +511,7 @@ void add_remesh_command(CLI::App& app) {
   cmd->add_flag("--smoothed-boundary", args->smoothed_boundary,
                 "Place the border nodes of the input's boundary on its smoothed curve (rounds its corners; "
                 "the default keeps the input's boundary polyline)");
+  add_expert_options(*cmd, *args);
   cmd->add_option("--threads", args->threads, "Worker threads for every stage (default: all hardware threads for segmentation and patches, 2 for the stitch and checks)");
   cmd->add_option("--report", args->report, "Write the report as JSON");
   cmd->add_option("--vtk", args->vtk, "Write the output with per-face patch id and alpha (.vtk/.vtu)");
