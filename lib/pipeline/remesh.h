@@ -49,8 +49,8 @@ struct RemeshOptions {
   //! its two creases, a lens a fraction of h wide) join the neighbour sharing the longest
   //! border that is not so narrow itself, their own faces exempt from the slope bounds (the
   //! neighbour's keep them; the union passes the projection and cliff checks): the fin's two
-  //! rims become one border curve. Counted in RemeshReport::n_narrow_merged. 0 = off
-  //! (default; docs/segment.md "Fin strips, session 18").
+  //! rims become one border curve. Counted in RemeshReport::n_narrow_merged. In [0, 1];
+  //! 0 = off (default; docs/segment.md "Fin strips, session 18").
   double fin_strip_width = 0.0;
   //! On inputs not taken for marching cubes (nor with a cell grid), patches of at most this
   //! many input faces whose every border edge with another patch bends by at most
@@ -88,7 +88,8 @@ struct RemeshOptions {
   //! every patch narrower than this many target edges next to a wider one takes rings of
   //! faces from its wider neighbours across their slope-bounded (non-crease) borders, where
   //! those faces meet the slope bounds for its axis, until it is this wide; the neighbours
-  //! stay connected and this wide, both pass the projection (and cliff) checks, no axis
+  //! stay connected and this wide, the patch passes the projection and cliff checks and
+  //! the neighbours the projection check, no axis
   //! changes (segment's widen_patches; docs/segment.md "Widening narrow patches, session 18").
   //! Crease-bounded strips are not touched. Opt-in: femur 2.10 -> 1.89% obtuse at 0.2, but
   //! armadillo 0.225 -> 0.258%. Counted in RemeshReport::n_narrow_widened. 0 = off (default).

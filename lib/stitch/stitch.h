@@ -178,8 +178,9 @@ struct StitchOptions {
   //! [0, 1]; 0 leaves only the ring's floor (alpha_floor). Default 0 (docs/stitch.md
   //! "Fidelity moves, session 16").
   double fidelity_alpha_floor = 0.0;
-  //! Run the exact self-intersection check on the result (the most expensive check).
-  //! Default true.
+  //! Run the exact self-intersection checks: the check of the result (the most expensive
+  //! check) and the checks that undo moves, collapses and fidelity moves that make crossings;
+  //! false skips all of them, so the result can change and keep crossings. Default true.
   bool check_self_intersections = true;
   //! Worker threads of the checks (results do not depend on it); >= 1. Default 2.
   unsigned n_threads = 2;

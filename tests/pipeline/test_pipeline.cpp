@@ -383,13 +383,6 @@ TEST(Pipeline, OccupancySphereBandFit) {
               r.report.output.quality.alpha_mean);
 }
 
-// Issue 5's bounds on the occupancy torus at 48 cells (tube radius 6.2 cells, the tightest
-// curvature of the occupancy scenes), end to end as the tool runs it: the mean distance to the
-// analytic torus at most a third of the marching-cubes input's and the largest under a quarter
-// voxel, each at the vertices, the triangle centroids and the dense samples. The band fit also
-// takes the volume towards the truth's (the terraced input is 1% below it). With
-// CellGrid::curved_smoothing 0.375 the centroids' mean was 1 / 2.88 of the input's and a node
-// 0.29 voxel out (docs/surfmesh.md, "Torus at 48 cells").
 // The fidelity moves with the distance report: remesh() builds the input's soup and tree once
 // and shares them between the stitch and the distance pass. The mesh is the one the stitch
 // makes with its own tree (the run without the report), the report the one mesh_distance()
@@ -406,6 +399,11 @@ TEST(PipelineSlow, FidelityMovesShareTheInputTreeWithTheDistancePass) {
   ASSERT_EQ(shared.mesh.n_vertices(), own.mesh.n_vertices());
   ASSERT_EQ(shared.mesh.n_faces(), own.mesh.n_faces());
   for (const auto v : own.mesh.vertices()) EXPECT_EQ(shared.mesh.point(v), own.mesh.point(v));
+  for (const auto f : own.mesh.faces()) {
+    auto a = own.mesh.cfv_iter(f);
+    auto b = shared.mesh.cfv_iter(shared.mesh.face_handle(f.idx()));
+    for (int k = 0; k < 3; ++k, ++a, ++b) EXPECT_EQ(a->idx(), b->idx());
+  }
   ASSERT_TRUE(shared.report.output.distance.has_value());
   const DistanceReport want = mesh_distance(to_soup(shared.mesh), to_soup(input), options.distance);
   EXPECT_EQ(shared.report.output.distance->hausdorff, want.hausdorff);
@@ -413,6 +411,13 @@ TEST(PipelineSlow, FidelityMovesShareTheInputTreeWithTheDistancePass) {
   EXPECT_EQ(shared.report.output.distance->relative_volume_change, want.relative_volume_change);
 }
 
+// Issue 5's bounds on the occupancy torus at 48 cells (tube radius 6.2 cells, the tightest
+// curvature of the occupancy scenes), end to end as the tool runs it: the mean distance to the
+// analytic torus at most a third of the marching-cubes input's and the largest under a quarter
+// voxel, each at the vertices, the triangle centroids and the dense samples. The band fit also
+// takes the volume towards the truth's (the terraced input is 1% below it). With
+// CellGrid::curved_smoothing 0.375 the centroids' mean was 1 / 2.88 of the input's and a node
+// 0.29 voxel out (docs/surfmesh.md, "Torus at 48 cells").
 TEST(PipelineSlow, OccupancyTorus48BandFitWithinIssueBounds) {
   const SceneInput in = scene_input("torus", 48, SampleMode::Occupancy);
   RemeshOptions options = fast_options();

@@ -318,7 +318,8 @@ void add_expert_options(CLI::App& cmd, RemeshArgs& args) {
       "Collapse the shortest edge of triangles with an angle (deg) below this before the optimisation "
       "(in [0, 60); 0 = off)");
   cmd.add_flag("--no-self-intersection-check", args.no_self_intersection_check,
-               "Skip the exact self-intersection check of the output (the most expensive check)")
+               "Skip the exact self-intersection checks: the output's check, and with it the stitch's undo of moves "
+               "that make crossings and the pipeline's crossing repair (the output can change and keep crossings)")
       ->group("Finer settings");
   // distances
   cmd.add_flag("--no-distances", args.no_distances, "Do not measure the output's distance to the input")
@@ -403,7 +404,7 @@ void add_remesh_command(CLI::App& app) {
                   "Largest bend (deg) of such a tiny patch's border (default 120)")
       ->check(CLI::Range(0.0, 180.0));
   cmd->add_option("--hairline-merge", args->hairline_merge,
-                  "On inputs not taken for marching cubes, patches narrower than this many target edges facing away "
+                  "On inputs not taken for marching cubes (nor with a cell grid), patches narrower than this many target edges facing away "
                   "from every neighbour join a wider one, their own faces exempt from the slope bound (strips folded back between two "
                   "creases; default 0.05; 0 = off; docs/segment.md \"Hairline patches\")");
   cmd->add_option("--narrow-cad-merge", args->narrow_cad_merge,
