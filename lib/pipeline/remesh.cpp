@@ -299,6 +299,10 @@ RemeshResult remesh(const TriMesh& input, const RemeshOptions& options) {
       (stitch_options.optimisation_passes > 0 || stitch_options.obtuse_repair_rounds > 0 ||
        stitch_options.chord_compensation > 0.0))
     stitch_options.volume_compensation = 0.0;
+  // The split grid's nodes sit on the fit, which with a cell grid (the occupancy band fit) is
+  // off the marching-cubes input by design: DRAM occupancy 128's Hausdorff to the input rose
+  // from 0.89 to 1.05 voxel with them (StitchOptions::obtuse_split_grid).
+  if (surfmesh_options.cell_grid.enabled) stitch_options.obtuse_split_grid = false;
   SurfaceMesh surface = surfmesh_detail::mesh_surface(input, segmentation, surfmesh_options, mean_edge, shares);
   report.seconds_surfmesh = watch.seconds();
 

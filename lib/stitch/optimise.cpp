@@ -868,7 +868,7 @@ class Optimiser {
       }
     }
     if (!plan.on_segment) relaxed_split(h, plan.one_sided, plan.info, a, b, plan.best, plan.m);
-    if (!plan.on_segment && plan.best != 0) grid_split(h, plan.one_sided, plan.info, a, b, plan.best, plan.m);
+    if (!plan.on_segment && plan.best != 0 && options_.obtuse_split_grid) grid_split(h, plan.one_sided, plan.info, a, b, plan.best, plan.m);
     plan.flips = best_flips_;
   }
 
