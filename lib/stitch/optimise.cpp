@@ -937,13 +937,20 @@ class Optimiser {
       const Vec q = project(info, target);
       if (!q.allFinite() || (q - target).norm() > kSplitMaxOffset * (b - a).norm()) return;
       m = q;
-      for (const bool with_flips : {false, true}) {
-        const int n = evaluate_split(h, one_sided, m, false, with_flips, true, flips_);
-        if (n >= 0 && (best < 0 || n < best)) {
-          best = n;
-          best_m = m;
-          best_flips_ = flips_;
-        }
+      take_relaxed_place(h, one_sided, m, best, best_m);
+    }
+  }
+
+  // A place m off the segment for the split of h's edge, evaluated `relaxed` without and with
+  // flips (relaxed_split's and grid_split's candidates): it replaces best (and best_m, the
+  // flips) when it leaves strictly fewer obtuse triangles.
+  void take_relaxed_place(TriMesh::HalfedgeHandle h, bool one_sided, const Vec& m, int& best, Vec& best_m) {
+    for (const bool with_flips : {false, true}) {
+      const int n = evaluate_split(h, one_sided, m, false, with_flips, true, flips_);
+      if (n >= 0 && (best < 0 || n < best)) {
+        best = n;
+        best_m = m;
+        best_flips_ = flips_;
       }
     }
   }
@@ -974,14 +981,7 @@ class Optimiser {
         const Vec target = middle + (i * step) * along + (j * step) * across;
         const Vec m = project(info, target);
         if (!m.allFinite() || (m - target).norm() > kSplitMaxOffset * length) continue;
-        for (const bool with_flips : {false, true}) {
-          const int n = evaluate_split(h, one_sided, m, false, with_flips, true, flips_);
-          if (n >= 0 && (best < 0 || n < best)) {
-            best = n;
-            best_m = m;
-            best_flips_ = flips_;
-          }
-        }
+        take_relaxed_place(h, one_sided, m, best, best_m);
       }
     }
   }
