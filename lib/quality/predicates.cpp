@@ -3,6 +3,8 @@
 
 #include <cmath>
 
+#include "nurbsfront/core/predicates.h"
+
 namespace nurbsfront::quality_detail {
 namespace {
 
@@ -18,30 +20,10 @@ struct Expansion {
 
 constexpr double kEpsilon = 0x1p-53;  // half an ulp of 1: the unit roundoff of double
 // Shewchuk's stage-A error bounds of the plain floating-point determinants.
-constexpr double kOrient2dBound = (3.0 + 16.0 * kEpsilon) * kEpsilon;
 constexpr double kOrient3dBound = (7.0 + 56.0 * kEpsilon) * kEpsilon;
 
-// a + b = x + y exactly, |y| <= ulp(x) / 2 (Knuth's two-sum).
-inline void two_sum(double a, double b, double& x, double& y) {
-  x = a + b;
-  const double b_virtual = x - a;
-  const double a_virtual = x - b_virtual;
-  y = (a - a_virtual) + (b - b_virtual);
-}
-
 // e += b, exactly (Shewchuk's GROW-EXPANSION with zero elimination), in place.
-void grow(Expansion& e, double b) {
-  double q = b;
-  int m = 0;
-  for (int i = 0; i < e.n; ++i) {
-    double sum = 0.0, error = 0.0;
-    two_sum(q, e.c[i], sum, error);
-    if (error != 0.0) e.c[m++] = error;
-    q = sum;
-  }
-  if (q != 0.0) e.c[m++] = q;
-  e.n = m;
-}
+void grow(Expansion& e, double b) { e.n = predicates_detail::grow_expansion(e.c, e.n, b); }
 
 void add(Expansion& e, const Expansion& f) {
   for (int i = 0; i < f.n; ++i) grow(e, f.c[i]);
@@ -70,7 +52,7 @@ Expansion multiply(const Expansion& e, const Expansion& f) {
 // a - b as an exact two-component expansion.
 Expansion difference(double a, double b) {
   double x = 0.0, y = 0.0;
-  two_sum(a, -b, x, y);
+  predicates_detail::two_sum(a, -b, x, y);
   Expansion e;
   if (y != 0.0) e.c[e.n++] = y;
   if (x != 0.0) e.c[e.n++] = x;
@@ -108,13 +90,6 @@ int orient3d_exact(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eig
   return sign(det);
 }
 
-int orient2d_exact(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& c) {
-  // Three points with one coordinate in common lie on an axis-parallel line.
-  if ((a.x() == c.x() && b.x() == c.x()) || (a.y() == c.y() && b.y() == c.y())) return 0;
-  return sign(cross_minor(difference(a.x(), c.x()), difference(b.y(), c.y()), difference(a.y(), c.y()),
-                          difference(b.x(), c.x())));
-}
-
 }  // namespace
 
 int orient3d(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c,
@@ -133,16 +108,6 @@ int orient3d(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Ve
   if (det > bound) return 1;
   if (-det > bound) return -1;
   return orient3d_exact(a, b, c, d);
-}
-
-int orient2d(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& c) {
-  const double left = (a.x() - c.x()) * (b.y() - c.y());
-  const double right = (a.y() - c.y()) * (b.x() - c.x());
-  const double det = left - right;
-  const double bound = kOrient2dBound * (std::abs(left) + std::abs(right));
-  if (det > bound) return 1;
-  if (-det > bound) return -1;
-  return orient2d_exact(a, b, c);
 }
 
 }  // namespace nurbsfront::quality_detail

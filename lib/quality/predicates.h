@@ -9,6 +9,8 @@
 
 #include <Eigen/Core>
 
+#include "nurbsfront/core/predicates.h"
+
 namespace nurbsfront::quality_detail {
 
 //! Sign of det[a - d; b - d; c - d]: +1 when d lies below the plane of (a, b, c) seen
@@ -16,7 +18,8 @@ namespace nurbsfront::quality_detail {
 int orient3d(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c,
              const Eigen::Vector3d& d);
 
-//! Sign of det[a - c; b - c] in 2D: +1 if (a, b, c) turns counter-clockwise, 0 if collinear.
-int orient2d(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& c);
+//! Sign of det[a - c; b - c] in 2D: +1 if (a, b, c) turns counter-clockwise, 0 if collinear
+//! (the front's exact orient2d, nurbsfront/core/predicates.h).
+using nurbsfront::orient2d;
 
 }  // namespace nurbsfront::quality_detail

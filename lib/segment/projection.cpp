@@ -9,6 +9,7 @@
 #include <span>
 
 #include "nurbsfront/core/error.h"
+#include "nurbsfront/core/polygon.h"
 #include "nurbsfront/segment/segment_internal.h"
 
 namespace nurbsfront::segment_detail {
@@ -150,17 +151,6 @@ std::vector<std::pair<int, int>> find_crossings_after(const std::vector<Segment>
   return found;
 }
 
-bool polygon_contains(const std::vector<int>& cycle, const std::vector<Eigen::Vector2d>& xy, const Eigen::Vector2d& q) {
-  bool inside = false;
-  for (std::size_t i = 0, j = cycle.size() - 1; i < cycle.size(); j = i++) {
-    const Eigen::Vector2d& a = xy[cycle[i]];
-    const Eigen::Vector2d& b = xy[cycle[j]];
-    if ((a.y() > q.y()) != (b.y() > q.y()) && q.x() < a.x() + (q.y() - a.y()) * (b.x() - a.x()) / (b.y() - a.y()))
-      inside = !inside;
-  }
-  return inside;
-}
-
 // The vertices of a counter-clockwise cycle lying inside another counter-clockwise cycle,
 // or empty. Cycles of different loops never nest that way when the loops' segments do not
 // cross, and each cycle is tested by one vertex it does not share with the other.
@@ -180,7 +170,9 @@ std::vector<int> nested_ccw_cycle(const std::vector<std::vector<int>>& cycles, c
       const std::vector<int>& in = cycles[inner];
       const std::vector<int>& out = cycles[outer];
       const auto probe = std::find_if(in.begin(), in.end(), [&](int v) { return std::find(out.begin(), out.end(), v) == out.end(); });
-      if (probe != in.end() && polygon_contains(out, xy, xy[*probe])) return in;
+      if (probe == in.end()) continue;
+      const auto corner = [&](std::size_t i) -> const Eigen::Vector2d& { return xy[static_cast<std::size_t>(out[i])]; };
+      if (polygon_contains(out.size(), corner, xy[static_cast<std::size_t>(*probe)])) return in;
     }
   return {};
 }

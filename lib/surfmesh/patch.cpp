@@ -240,19 +240,6 @@ std::vector<std::vector<int>> trace_loops(const std::vector<Eigen::Vector2d>& xy
   return loops;
 }
 
-bool polygon_contains(const std::vector<Eigen::Vector2d>& polygon, const Eigen::Vector2d& q) {
-  bool inside = false;
-  for (std::size_t i = 0, j = polygon.size() - 1; i < polygon.size(); j = i++) {
-    const auto& a = polygon[i];
-    const auto& b = polygon[j];
-    if ((a.y() > q.y()) != (b.y() > q.y())) {
-      const double x = a.x() + (q.y() - a.y()) * (b.x() - a.x()) / (b.y() - a.y());
-      if (q.x() < x) inside = !inside;
-    }
-  }
-  return inside;
-}
-
 bool point_inside_polygon(const std::vector<Eigen::Vector2d>& polygon, Eigen::Vector2d& inside) {
   const std::size_t n = polygon.size();
   if (n < 3) return false;

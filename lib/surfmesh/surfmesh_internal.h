@@ -13,6 +13,7 @@
 
 #include <Eigen/Core>
 
+#include "nurbsfront/core/polygon.h"
 #include "nurbsfront/nurbs/band_fit.h"
 #include "nurbsfront/nurbs/mba.h"
 #include "nurbsfront/segment/segment_internal.h"
@@ -423,8 +424,8 @@ std::size_t clamp_inner_nodes(const TriMesh& mesh, const Segmentation& segmentat
 //! Returns false when no such point was found (a degenerate polygon).
 [[nodiscard]] bool point_inside_polygon(const std::vector<Eigen::Vector2d>& polygon, Eigen::Vector2d& inside);
 
-//! Even-odd point-in-polygon test (floating point).
-[[nodiscard]] bool polygon_contains(const std::vector<Eigen::Vector2d>& polygon, const Eigen::Vector2d& q);
+//! Even-odd point-in-polygon test (floating point; nurbsfront/core/polygon.h).
+using nurbsfront::polygon_contains;
 
 //! mesh_surface() and split_unfitted_patches() with mean_edge = mean_edge_length(input)
 //! given by a caller that already has it (the pipeline computes it once per remesh);
