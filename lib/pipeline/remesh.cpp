@@ -329,8 +329,14 @@ RemeshResult remesh(const TriMesh& input, const RemeshOptions& options) {
   // are sorted, the stages deterministic).
   // A self-intersecting input is not repaired: its output inherits the crossings (the tool
   // names them), and removing them would move the surface away from the input.
-  const bool repair = options.crossing_repair_rounds > 0 && crossing_pairs(stitched.report) > 0 &&
-                      count_self_intersections(to_soup(input), stitch_options.n_threads) == 0;
+  // (The input's crossings counted on its soup and tree of the fidelity moves when built.)
+  const auto input_crossings = [&] {
+    return input_index ? quality_detail::count_self_intersections_with(input_index->soup(), input_index->tree(),
+                                                                       stitch_options.n_threads)
+                       : count_self_intersections(to_soup(input), stitch_options.n_threads);
+  };
+  const bool repair =
+      options.crossing_repair_rounds > 0 && crossing_pairs(stitched.report) > 0 && input_crossings() == 0;
   for (int round = 0; repair && round < options.crossing_repair_rounds; ++round) {
     const std::size_t n_pairs = crossing_pairs(stitched.report);
     if (n_pairs == 0) break;
