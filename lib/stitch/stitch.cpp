@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdint>
 #include <future>
+#include <iterator>
 #include <limits>
 #include <numbers>
 #include <numeric>
@@ -875,6 +876,16 @@ StitchResult stitch(const SurfaceMesh& surface, const TriMesh& input, const Stit
 StitchResult stitch_detail::stitch_with_input_index(const SurfaceMesh& surface, const TriMesh& input,
                                                     const quality_detail::IndexedSoup& input_index,
                                                     const StitchOptions& options) {
+  // The index must be to_soup(input)'s: a cheap check of its sizes (a stale or other mesh's
+  // index would give wrong distances silently).
+  const auto n_vertices = static_cast<std::size_t>(std::distance(input.vertices().begin(), input.vertices().end()));
+  const auto n_faces = static_cast<std::size_t>(std::distance(input.faces().begin(), input.faces().end()));
+  const TriangleSoup& soup = input_index.soup();
+  if (soup.points.size() != n_vertices || soup.triangles.size() != n_faces) {
+    throw InvalidInput("stitch_with_input_index: the input index holds " + std::to_string(soup.points.size()) + " points and " +
+                       std::to_string(soup.triangles.size()) + " triangles, the input mesh " + std::to_string(n_vertices) +
+                       " vertices and " + std::to_string(n_faces) + " faces: build the index from to_soup(input)");
+  }
   return stitch_impl(surface, &input, options, &input_index);
 }
 

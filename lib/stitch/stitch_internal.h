@@ -403,6 +403,7 @@ FidelityResult move_toward_input(const TriMesh& input, const StitchOptions& opti
 //! stitch(surface, input, options) with to_soup(input) and its tree over all faces given
 //! (the fidelity moves query them; the caller builds them once and shares them, e.g. with the
 //! report's distance pass): the same result.
+//! \throw InvalidInput when the index's point or triangle count is not the input's.
 StitchResult stitch_with_input_index(const SurfaceMesh& surface, const TriMesh& input,
                                      const quality_detail::IndexedSoup& input_index, const StitchOptions& options);
 

@@ -25,6 +25,7 @@
 #include "nurbsfront/nurbs/frame.h"
 #include "nurbsfront/nurbs/mba.h"
 #include "nurbsfront/stitch/stitch.h"
+#include "nurbsfront/stitch/stitch_internal.h"
 
 namespace nurbsfront {
 namespace {
@@ -462,6 +463,26 @@ TEST(Stitch, AnObtuseSplitThroughANearbySheetIsUndone) {
   EXPECT_EQ(kept.face_patch.size(), kept.mesh.n_faces());
 }
 
+// The triangles around the vertex of node `node` in r, a feature node (checked: it stays at
+// `where`), and whether one of them is obtuse at it.
+std::size_t triangles_at_node(const StitchResult& r, int node, const Eigen::Vector3d& where, bool& obtuse_at_node) {
+  obtuse_at_node = false;
+  std::size_t n = 0;
+  for (auto v : r.mesh.vertices()) {
+    if (r.vertex_node[static_cast<std::size_t>(v.idx())] != node) continue;
+    EXPECT_EQ(to_eigen(r.mesh.point(v)), where);  // a feature node: it never moves
+    for (auto h : r.mesh.voh_range(v)) {
+      if (r.mesh.is_boundary(h)) continue;
+      ++n;
+      const Eigen::Vector3d p = to_eigen(r.mesh.point(v));
+      const Eigen::Vector3d b = to_eigen(r.mesh.point(r.mesh.to_vertex_handle(h)));
+      const Eigen::Vector3d c = to_eigen(r.mesh.point(r.mesh.to_vertex_handle(r.mesh.next_halfedge_handle(h))));
+      obtuse_at_node = obtuse_at_node || (b - p).dot(c - p) < 0.0;
+    }
+  }
+  return n;
+}
+
 // Issue 5, the largest class on the CAD meshes: a node V of a straight feature border (here
 // the input's boundary, y = 0) with two triangles of its patch. Their angles at V sum to
 // 180 deg, so one of them is at least 90 deg wherever the inner node W goes, and neither a
@@ -480,21 +501,7 @@ TEST(Stitch, AStraightBorderNodeWithTwoTrianglesGetsAThirdOne) {
   const TriMesh input = to_trimesh(fan);
   // V's triangles and whether one of them is obtuse at V.
   auto at_v = [&](const StitchResult& r, bool& obtuse_at_v) {
-    obtuse_at_v = false;
-    std::size_t n = 0;
-    for (auto v : r.mesh.vertices()) {
-      if (r.vertex_node[static_cast<std::size_t>(v.idx())] != kV) continue;
-      EXPECT_EQ(to_eigen(r.mesh.point(v)), fan.points[kV]);  // a feature node: it never moves
-      for (auto h : r.mesh.voh_range(v)) {
-        if (r.mesh.is_boundary(h)) continue;
-        ++n;
-        const Eigen::Vector3d p = to_eigen(r.mesh.point(v));
-        const Eigen::Vector3d b = to_eigen(r.mesh.point(r.mesh.to_vertex_handle(h)));
-        const Eigen::Vector3d c = to_eigen(r.mesh.point(r.mesh.to_vertex_handle(r.mesh.next_halfedge_handle(h))));
-        obtuse_at_v = obtuse_at_v || (b - p).dot(c - p) < 0.0;
-      }
-    }
-    return n;
+    return triangles_at_node(r, kV, fan.points[kV], obtuse_at_v);
   };
   StitchOptions off;
   off.obtuse_split_rounds = 0;
@@ -602,21 +609,7 @@ TEST(Stitch, ASplitOppositeAFixedCornerTakesItsObtuseAngle) {
   const TriMesh input = to_trimesh(fan);
   // C's triangles and whether one of them is obtuse at C.
   auto at_c = [&](const StitchResult& r, bool& obtuse_at_c) {
-    obtuse_at_c = false;
-    std::size_t n = 0;
-    for (auto v : r.mesh.vertices()) {
-      if (r.vertex_node[static_cast<std::size_t>(v.idx())] != kC) continue;
-      EXPECT_EQ(to_eigen(r.mesh.point(v)), fan.points[kC]);  // a feature node: it never moves
-      for (auto h : r.mesh.voh_range(v)) {
-        if (r.mesh.is_boundary(h)) continue;
-        ++n;
-        const Eigen::Vector3d p = to_eigen(r.mesh.point(v));
-        const Eigen::Vector3d b = to_eigen(r.mesh.point(r.mesh.to_vertex_handle(h)));
-        const Eigen::Vector3d c = to_eigen(r.mesh.point(r.mesh.to_vertex_handle(r.mesh.next_halfedge_handle(h))));
-        obtuse_at_c = obtuse_at_c || (b - p).dot(c - p) < 0.0;
-      }
-    }
-    return n;
+    return triangles_at_node(r, kC, fan.points[kC], obtuse_at_c);
   };
   auto options_with = [](int split_rounds, unsigned n_threads) {
     StitchOptions o;
@@ -1522,6 +1515,24 @@ TEST(Stitch, InvalidInputThrows) {
   options = {};
   options.angle_repair_rounds = -1;
   EXPECT_THROW((void)stitch(surface, options), InvalidInput);
+}
+
+// stitch_with_input_index() checks that the index is the input's (its sizes) before any work:
+// another mesh's index, or one missing a triangle, throws; the input's own does not.
+TEST(Stitch, InputIndexOfAnotherMeshThrows) {
+  const TriangleSoup soup = test::icosphere(1);
+  const SurfaceMesh surface = cube_map_surface(soup);
+  const TriMesh input = to_trimesh(soup);
+  StitchOptions options;
+  options.fidelity_distance_edges = 0.25;
+  const quality_detail::IndexedSoup other(to_soup(to_trimesh(test::icosphere(2))), 1);
+  EXPECT_THROW((void)stitch_detail::stitch_with_input_index(surface, input, other, options), InvalidInput);
+  TriangleSoup short_soup = to_soup(input);
+  short_soup.triangles.pop_back();
+  const quality_detail::IndexedSoup missing(std::move(short_soup), 1);
+  EXPECT_THROW((void)stitch_detail::stitch_with_input_index(surface, input, missing, options), InvalidInput);
+  const quality_detail::IndexedSoup own(to_soup(input), 1);
+  EXPECT_NO_THROW((void)stitch_detail::stitch_with_input_index(surface, input, own, options));
 }
 
 TEST(Stitch, ProgressCanCancel) {
