@@ -1883,6 +1883,10 @@ Segmentation segment_detail::widen_patches(Splitter& s, const Segmentation& segm
         }
       }
       // No crease inside p: a ring face with a crease edge to p or to another ring face stays.
+      // The faces dropped keep their stamp on purpose: both faces across a crease inside the
+      // ring go, whatever their order (clearing stamps as faces go would keep the later one
+      // of each pair, depending on the ring's order). No later test reads these stamps: each
+      // (patch, round) has its own ring_stamp.
       std::erase_if(ring, [&](int g) {
         for (int k = 0; k < 3; ++k) {
           const int h = graph.neighbours[g][k];
