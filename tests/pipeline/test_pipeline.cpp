@@ -924,6 +924,20 @@ TriMesh slab_with_fins(bool label_image = false) {
   return prepare_mesh(marching_cubes(grid, mc)).mesh;
 }
 
+// A patch merge of the fin slab (`with`, against the run without it): no report error,
+// fewer patches, the output closed, manifold, oriented, of Euler characteristic 2, without
+// crossings (counted: the runs measure no distances), and no lower mean alpha.
+void expect_fewer_patches_closed_no_worse(const RemeshResult& with, const RemeshResult& without) {
+  const RemeshReport& rep = with.report;
+  EXPECT_TRUE(rep.ok()) << errors_of(rep);
+  EXPECT_LT(rep.n_patches, without.report.n_patches);
+  const TopologyReport& t = rep.output.topology;
+  EXPECT_TRUE(t.is_closed && t.is_manifold && t.is_consistently_oriented);
+  EXPECT_EQ(t.euler_characteristic, 2);
+  EXPECT_EQ(count_self_intersections(to_soup(with.mesh)), 0u);
+  EXPECT_GE(rep.output.quality.alpha_mean, without.report.output.quality.alpha_mean);
+}
+
 TEST(Pipeline, NarrowFinPatchesJoinANeighbour) {
   const TriMesh mesh = slab_with_fins();
   RemeshOptions options = fast_options();
@@ -933,14 +947,8 @@ TEST(Pipeline, NarrowFinPatchesJoinANeighbour) {
   const RemeshResult without = remesh(mesh, options);
   EXPECT_EQ(without.report.n_narrow_merged, 0u);
   const RemeshReport& rep = with.report;
-  EXPECT_TRUE(rep.ok()) << errors_of(rep);
   EXPECT_GE(rep.n_narrow_merged, 1u);
-  EXPECT_LT(rep.n_patches, without.report.n_patches);
-  const TopologyReport& t = rep.output.topology;
-  EXPECT_TRUE(t.is_closed && t.is_manifold && t.is_consistently_oriented);
-  EXPECT_EQ(t.euler_characteristic, 2);
-  EXPECT_EQ(count_self_intersections(to_soup(with.mesh)), 0u);
-  EXPECT_GE(rep.output.quality.alpha_mean, without.report.output.quality.alpha_mean);
+  expect_fewer_patches_closed_no_worse(with, without);
   // No more obtuse triangles (counted: the merged run has fewer triangles, so an equal
   // count is a larger share).
   auto n_obtuse = [](const RemeshResult& r) {
@@ -981,14 +989,8 @@ TEST(Pipeline, FinStripsJoinANeighbourWhenAsked) {
   options.fin_strip_width = 1.0;
   const RemeshResult with = remesh(mesh, options);
   const RemeshReport& rep = with.report;
-  EXPECT_TRUE(rep.ok()) << errors_of(rep);
   EXPECT_GT(rep.n_narrow_merged, without.report.n_narrow_merged);
-  EXPECT_LT(rep.n_patches, without.report.n_patches);
-  const TopologyReport& t = rep.output.topology;
-  EXPECT_TRUE(t.is_closed && t.is_manifold && t.is_consistently_oriented);
-  EXPECT_EQ(t.euler_characteristic, 2);
-  EXPECT_EQ(count_self_intersections(to_soup(with.mesh)), 0u);
-  EXPECT_GE(rep.output.quality.alpha_mean, without.report.output.quality.alpha_mean);
+  expect_fewer_patches_closed_no_worse(with, without);
   // (Obtuse triangles are not asserted: on this slab 6 -> 7, see the docs.) The two strips
   // taken are wider than half a target edge: a bound of 0.5 takes none.
   options.fin_strip_width = 0.5;
