@@ -44,51 +44,9 @@ struct RemeshArgs {
   std::optional<double> size;
   std::optional<double> relative_size;
   std::optional<std::size_t> vertices;
-  bool adaptive = false;
   std::optional<double> detail_fit;
-  double feature_size = SizingOptions{}.feature_size;
-  bool feature_size_everywhere = false;
-  double border_lookahead = SizingOptions{}.border_lookahead;
-  double feature_gradation = SizingOptions{}.feature_gradation;
-  std::optional<int> crossing_repair_rounds;
-  std::optional<double> narrow_merge;
-  std::optional<int> tiny_merge;
-  std::optional<double> tiny_merge_angle;
-  std::optional<double> hairline_merge;
-  std::optional<double> narrow_widen;
-  std::optional<double> narrow_cad_merge;
-  std::optional<double> fin_strip_merge;
-  std::optional<double> fin_rim_width;
-  std::optional<double> fin_rim_angle;
-  std::optional<double> fin_rim_gap;
-  std::optional<double> fin_rim_max_move;
-  std::optional<int> obtuse_repair_rounds;
-  std::optional<int> obtuse_search_steps;
-  std::optional<int> feature_slide_rounds;
-  std::optional<double> feature_slide_cosine_gain;
-  std::optional<int> obtuse_split_rounds;
-  std::optional<double> obtuse_split_feature_angle;
-  std::optional<int> angle_repair_rounds;
-  std::optional<double> fidelity_distance;
-  std::optional<double> fidelity_alpha_floor;
-  std::optional<double> border_input_distance;
-  std::optional<double> corner_angle;
-  std::optional<double> flat_face_edges;
-  std::optional<double> small_patch_offset;
-  std::optional<double> polygon_offset;
-  std::optional<double> chord;
-  std::optional<double> max_slope;
-  std::optional<double> split_above;
-  std::optional<double> crease;
   bool bevel_creases = false;
   bool no_crease_gap = false;
-  std::optional<double> sharp_crease;
-  std::optional<double> unsmoothed_crease_angle;
-  std::optional<double> tiny_curve_merge;
-  std::optional<double> corner_cluster;
-  std::optional<double> chord_compensation;
-  std::optional<double> volume_compensation;
-  std::optional<double> volume_skip_within;
   bool smoothed_boundary = false;
   bool project_border_nodes = false;
   bool no_self_intersection_check = false;
@@ -138,56 +96,14 @@ void run_remesh(RemeshArgs& args) {
   RemeshOptions options = args.base;
   if (args.size) options.surfmesh.sizing.size = *args.size;
   if (args.relative_size) options.surfmesh.sizing.relative_size = *args.relative_size;
-  options.surfmesh.sizing.adaptive = args.adaptive;
   if (args.detail_fit) options.surfmesh.fit.detail_spacing_edges = *args.detail_fit;
-  options.surfmesh.sizing.feature_size = args.feature_size;
-  options.surfmesh.sizing.feature_size_everywhere = args.feature_size_everywhere;
-  options.surfmesh.sizing.border_lookahead = args.border_lookahead;
-  options.surfmesh.sizing.feature_gradation = args.feature_gradation;
-  if (args.crossing_repair_rounds) options.crossing_repair_rounds = *args.crossing_repair_rounds;
-  if (args.narrow_merge) options.narrow_patch_merge = *args.narrow_merge;
-  if (args.tiny_merge) options.tiny_patch_faces = *args.tiny_merge;
-  if (args.tiny_merge_angle) options.tiny_patch_max_dihedral_deg = *args.tiny_merge_angle;
-  if (args.hairline_merge) options.hairline_patch_width = *args.hairline_merge;
-  if (args.narrow_widen) options.narrow_widen_width = *args.narrow_widen;
-  if (args.narrow_cad_merge) options.narrow_cad_patch_width = *args.narrow_cad_merge;
-  if (args.fin_strip_merge) options.fin_strip_width = *args.fin_strip_merge;
-  if (args.fin_rim_width) options.surfmesh.fin_rim_width = *args.fin_rim_width;
-  if (args.fin_rim_angle) options.surfmesh.fin_rim_max_angle_deg = *args.fin_rim_angle;
-  if (args.fin_rim_gap) options.surfmesh.fin_rim_max_gap_edges = *args.fin_rim_gap;
-  if (args.fin_rim_max_move) options.stitch.fin_rim_max_move = *args.fin_rim_max_move;
-  if (args.obtuse_repair_rounds) options.stitch.obtuse_repair_rounds = *args.obtuse_repair_rounds;
-  if (args.obtuse_search_steps) options.stitch.obtuse_search_steps = *args.obtuse_search_steps;
-  if (args.feature_slide_rounds) options.stitch.feature_slide_rounds = *args.feature_slide_rounds;
-  if (args.feature_slide_cosine_gain) options.stitch.feature_slide_cosine_gain = *args.feature_slide_cosine_gain;
-  if (args.obtuse_split_rounds) options.stitch.obtuse_split_rounds = *args.obtuse_split_rounds;
-  if (args.obtuse_split_feature_angle) options.stitch.obtuse_split_feature_angle_deg = *args.obtuse_split_feature_angle;
-  if (args.angle_repair_rounds) options.stitch.angle_repair_rounds = *args.angle_repair_rounds;
-  if (args.fidelity_distance) options.stitch.fidelity_distance_edges = *args.fidelity_distance;
-  if (args.fidelity_alpha_floor) options.stitch.fidelity_alpha_floor = *args.fidelity_alpha_floor;
-  if (args.border_input_distance) options.segment.border_smoothing.max_input_distance = *args.border_input_distance;
-  if (args.corner_angle) options.surfmesh.corner_split_angle_deg = *args.corner_angle;
-  if (args.flat_face_edges) options.surfmesh.fit.flat_face_edges = *args.flat_face_edges;
-  if (args.small_patch_offset) options.surfmesh.small_patch_node_offset_edges = *args.small_patch_offset;
-  if (args.polygon_offset) options.surfmesh.polygon_node_offset_edges = *args.polygon_offset;
-  if (args.chord) options.surfmesh.sizing.chord_error = *args.chord;
-  if (args.max_slope) options.segment.max_slope_deg = *args.max_slope;
-  if (args.split_above) options.surfmesh.fit.split_above_edges = *args.split_above;
-  if (args.crease) options.segment.crease_angle_deg = *args.crease;
   if (args.bevel_creases) options.segment.bevel_creases = true;
   if (args.no_crease_gap) options.crease_gap = false;
-  if (args.sharp_crease) options.segment.sharp_crease_angle_deg = *args.sharp_crease;
-  if (args.unsmoothed_crease_angle) options.surfmesh.unsmoothed_crease_angle_deg = *args.unsmoothed_crease_angle;
   if (args.smoothed_boundary) options.surfmesh.unsmoothed_boundary_curves = false;
   if (args.project_border_nodes) options.surfmesh.project_border_nodes = true;
   if (args.no_self_intersection_check) options.stitch.check_self_intersections = false;
   if (args.no_obtuse_split_grid) options.stitch.obtuse_split_grid = false;
   if (args.no_distances) options.compute_distances = false;
-  if (args.tiny_curve_merge) options.surfmesh.tiny_curve_merge_size = *args.tiny_curve_merge;
-  if (args.corner_cluster) options.surfmesh.corner_cluster_size = *args.corner_cluster;
-  if (args.chord_compensation) options.stitch.chord_compensation = *args.chord_compensation;
-  if (args.volume_compensation) options.stitch.volume_compensation = *args.volume_compensation;
-  if (args.volume_skip_within) options.stitch.volume_compensation_skip_within = *args.volume_skip_within;
   if (args.threads) options.set_threads(*args.threads);
   if (!args.cell_grid.empty()) {
     if (!args.scene.empty()) throw InvalidInput("remesh: --cell-grid applies to an input file (an occupancy scene sets it itself)");
@@ -365,149 +281,149 @@ void add_remesh_command(CLI::App& app) {
                   "scaled by (vertices / N)^(1/p) (p = 2, then measured) and the remesh rerun, at most 4 runs, until within 0.5% "
                   "(remesh_to_vertex_count; docs/pipeline.md)")
       ->check(CLI::Range(std::size_t{4}, std::numeric_limits<std::size_t>::max()));
-  cmd->add_flag("--adaptive", args->adaptive, "Curvature-adaptive sizing (chord error)");
+  cmd->add_flag("--adaptive", args->base.surfmesh.sizing.adaptive, "Curvature-adaptive sizing (chord error)");
   cmd->add_option("--detail-fit", args->detail_fit,
                   "Refit a patch whose fit misses its input by more than 0.25 mean edges on a lattice of this many mean "
                   "edges (e.g. 1; default 0 = off; not with a cell grid) and keep its new nodes within 0.05 mean edges "
                   "of the input: for inputs with detail of 1-2 mean edges (scans, smoothed-image level sets), with "
                   "--adaptive; not for label-image surfaces (it follows their terraces; docs/surfmesh.md \"Detail fit\")");
-  cmd->add_option("--feature-size", args->feature_size,
+  cmd->add_option("--feature-size", args->base.surfmesh.sizing.feature_size,
                   "Size of a patch bounded mostly by feature curves at most F x its width (2 area / perimeter); "
                   "0 = off (default 1; not on marching-cubes surfaces nor where it limits under 1% of the area; "
                   "docs/surfmesh.md \"Feature sizing\")");
-  cmd->add_flag("--feature-size-everywhere", args->feature_size_everywhere,
+  cmd->add_flag("--feature-size-everywhere", args->base.surfmesh.sizing.feature_size_everywhere,
                 "Feature sizing also on marching-cubes surfaces and where it limits under 1% of the area");
-  cmd->add_option("--feature-gradation", args->feature_gradation,
+  cmd->add_option("--feature-gradation", args->base.surfmesh.sizing.feature_gradation,
                   "Feature sizing's sizes grow by at most this - 1 per unit length away from the narrow patches "
                   "(> 1; default 1.25; docs/surfmesh.md \"Feature sizing: a gentler gradation\")");
-  cmd->add_option("--border-lookahead", args->border_lookahead,
+  cmd->add_option("--border-lookahead", args->base.surfmesh.sizing.border_lookahead,
                   "Where the sizes vary (feature or adaptive sizing), discretise the borders with the smallest size "
                   "within this fraction of the size around each point (default 0.35; 0 = the size on the border; "
                   "docs/surfmesh.md \"Border look-ahead\")");
-  cmd->add_option("--crossing-repair-rounds", args->crossing_repair_rounds,
+  cmd->add_option("--crossing-repair-rounds", args->base.crossing_repair_rounds,
                   "Rounds of re-segmenting the patches of crossings the stitch left (default 4; 0 = off; "
                   "docs/segment.md \"Re-segmenting crossing patches\")");
-  cmd->add_option("--fin-rim-width", args->fin_rim_width,
+  cmd->add_option("--fin-rim-width", args->base.surfmesh.fin_rim_width,
                   "On marching-cubes inputs, crease curves beside a strip narrower than this many target edges "
                   "are no features for stitch (fin rims; docs/stitch.md); 0 = off (default 1)");
-  cmd->add_option("--fin-rim-angle", args->fin_rim_angle,
+  cmd->add_option("--fin-rim-angle", args->base.surfmesh.fin_rim_max_angle_deg,
                   "Largest crease angle (deg) of such a fin rim curve (default 120; 180 with --fin-rim-gap inf "
                   "--fin-rim-max-move 0.25: fewer obtuse triangles on CT bone, more small angles)");
-  cmd->add_option("--fin-rim-gap", args->fin_rim_gap,
+  cmd->add_option("--fin-rim-gap", args->base.surfmesh.fin_rim_max_gap_edges,
                   "A fin rim's nodes have their projections onto both sides' fits within this many mean input "
                   "edges (default 0.25; inf = no test)");
-  cmd->add_option("--fin-rim-max-move", args->fin_rim_max_move,
+  cmd->add_option("--fin-rim-max-move", args->base.stitch.fin_rim_max_move,
                   "Stitch moves the nodes of fin rims at most this many mean input edges from where the front "
                   "put them (default inf = no bound; docs/stitch.md \"Fin rims: a bound on the moves\")");
-  cmd->add_option("--narrow-merge", args->narrow_merge,
+  cmd->add_option("--narrow-merge", args->base.narrow_patch_merge,
                   "On marching-cubes inputs, patches narrower than this many target edges join a neighbour "
                   "(default 0.5; 0 = off; docs/segment.md \"Narrow patches\")");
-  cmd->add_option("--tiny-merge", args->tiny_merge,
+  cmd->add_option("--tiny-merge", args->base.tiny_patch_faces,
                   "On inputs not taken for marching cubes, patches of at most this many input faces whose border "
                   "bends by at most --tiny-merge-angle join a neighbour (default 8; 0 = off; docs/segment.md "
                   "\"Tiny patches behind marginal creases\")");
-  cmd->add_option("--tiny-merge-angle", args->tiny_merge_angle,
+  cmd->add_option("--tiny-merge-angle", args->base.tiny_patch_max_dihedral_deg,
                   "Largest bend (deg) of such a tiny patch's border (default 120)")
       ->check(CLI::Range(0.0, 180.0));
-  cmd->add_option("--hairline-merge", args->hairline_merge,
+  cmd->add_option("--hairline-merge", args->base.hairline_patch_width,
                   "On inputs not taken for marching cubes (nor with a cell grid), patches narrower than this many target edges facing away "
                   "from every neighbour join a wider one, their own faces exempt from the slope bound (strips folded back between two "
                   "creases; default 0.05; 0 = off; docs/segment.md \"Hairline patches\")");
-  cmd->add_option("--narrow-cad-merge", args->narrow_cad_merge,
+  cmd->add_option("--narrow-cad-merge", args->base.narrow_cad_patch_width,
                   "On inputs not taken for marching cubes, patches narrower than this many target edges join a wider "
                   "neighbour whichever way they face, their own faces exempt from the slope bound but not folded over "
                   "its plane (opt-in: femur 2.25 -> 1.87% obtuse at 0.3, cheese and couplingdown worse; default 0 = "
                   "off; docs/segment.md \"Narrow patches of CAD-like meshes, session 17\")");
-  cmd->add_option("--fin-strip-merge", args->fin_strip_merge,
+  cmd->add_option("--fin-strip-merge", args->base.fin_strip_width,
                   "On marching-cubes inputs, after the narrow merge, patches still narrower than this many target "
                   "edges join a wider neighbour, their own faces exempt from the slope bound (a thin fin's rim: its "
                   "two creases become one; default 0 = off; docs/segment.md \"Fin strips, session 18\")")
       ->check(CLI::Range(0.0, 1.0));
-  cmd->add_option("--narrow-widen", args->narrow_widen,
+  cmd->add_option("--narrow-widen", args->base.narrow_widen_width,
                   "On inputs not taken for marching cubes, patches narrower than this many target edges take faces "
                   "from their wider neighbours across borders that are no crease, within the slope bound, until "
                   "this wide (opt-in: femur 2.10 -> 1.89% obtuse at 0.2, armadillo worse; default 0 = off; docs/segment.md \"Widening narrow patches, session 18\")");
-  cmd->add_option("--obtuse-repair-rounds", args->obtuse_repair_rounds,
+  cmd->add_option("--obtuse-repair-rounds", args->base.stitch.obtuse_repair_rounds,
                   "Sweeps of the stitch's obtuse repair after its optimisation (default 2; 0 = off; "
                   "docs/stitch.md \"Obtuse repair\")");
-  cmd->add_option("--obtuse-search", args->obtuse_search_steps,
+  cmd->add_option("--obtuse-search", args->base.stitch.obtuse_search_steps,
                   "Halvings of the obtuse repair's search in the plane for nodes the apex steps do not help "
                   "(in [0, 30]; default 5; 0 = off; docs/stitch.md \"Obtuse repair: a search in the plane, session 17\")");
-  cmd->add_option("--feature-slide-rounds", args->feature_slide_rounds,
+  cmd->add_option("--feature-slide-rounds", args->base.stitch.feature_slide_rounds,
                   "Rounds of the stitch's feature slides: nodes of creases and of the boundary slide along their "
                   "curve where that removes an obtuse triangle (default 2; 0 = off; part of the obtuse repair: none when "
                   "--obtuse-repair-rounds is 0; docs/stitch.md \"Feature nodes "
                   "sliding along their curves\")");
-  cmd->add_option("--feature-slide-cosine-gain", args->feature_slide_cosine_gain,
+  cmd->add_option("--feature-slide-cosine-gain", args->base.stitch.feature_slide_cosine_gain,
                   "Also slide a feature node where that raises the cosine of its ring's largest angle by this "
                   "(> 0; default inf = only where an obtuse triangle goes; 0.01: fewer obtuse triangles on elephant, "
                   "couplingdown, rotor, more on pinion; docs/stitch.md \"Feature nodes sliding along their curves\")");
-  cmd->add_option("--obtuse-split-rounds", args->obtuse_split_rounds,
+  cmd->add_option("--obtuse-split-rounds", args->base.stitch.obtuse_split_rounds,
                   "Sweeps of the stitch's obtuse splits (longest edge split at the altitude's foot; default 2; "
                   "0 = off; docs/stitch.md \"Obtuse splits\")");
-  cmd->add_option("--obtuse-split-feature-angle", args->obtuse_split_feature_angle,
+  cmd->add_option("--obtuse-split-feature-angle", args->base.stitch.obtuse_split_feature_angle_deg,
                   "The obtuse splits' angle floor (deg) beside a feature node when the split takes an obtuse angle "
                   "off a node that never moves (default 20; 27.5 or more = the usual floor; docs/surfmesh.md "
                   "\"Cheese's hole walls, session 15\")");
-  cmd->add_option("--angle-repair-rounds", args->angle_repair_rounds,
+  cmd->add_option("--angle-repair-rounds", args->base.stitch.angle_repair_rounds,
                   "Sweeps of the stitch's small-angle repair (flips and collapses at the triangles below 25 deg away "
                   "from features; default 12; 0 = off; docs/stitch.md \"Small angles left after the optimisation\")");
-  cmd->add_option("--fidelity-distance", args->fidelity_distance,
+  cmd->add_option("--fidelity-distance", args->base.stitch.fidelity_distance_edges,
                   "The stitch's fidelity moves: vertices move onto the input where the output is farther from it "
                   "than this many input mean edges (default 0 = off; 0.25 recommended for fidelity; not on label images; docs/stitch.md "
                   "\"Fidelity moves\")");
-  cmd->add_option("--fidelity-alpha-floor", args->fidelity_alpha_floor,
+  cmd->add_option("--fidelity-alpha-floor", args->base.stitch.fidelity_alpha_floor,
                   "The fidelity moves keep each triangle's alpha at min(its old alpha, this) (in [0, 1]; default 0; "
                   "docs/stitch.md \"Fidelity moves, session 16\")");
-  cmd->add_option("--border-input-distance", args->border_input_distance,
+  cmd->add_option("--border-input-distance", args->base.segment.border_smoothing.max_input_distance,
                   "Smoothed border curves stay within this many mean curve edges of the input (>= 0; default "
                   "infinity = no bound; docs/segment.md \"Border curves near the input\")");
-  cmd->add_option("--corner-angle", args->corner_angle,
+  cmd->add_option("--corner-angle", args->base.surfmesh.corner_split_angle_deg,
                   "Patch corners wider than this (deg, in the surface metric) get a node on their bisector "
                   "instead of one closing triangle (in (0, 180]; default 89.5; 180 = off; docs/front2d.md "
                   "\"Corner rule\")");
-  cmd->add_option("--flat-face-edges", args->flat_face_edges,
+  cmd->add_option("--flat-face-edges", args->base.surfmesh.fit.flat_face_edges,
                   "Input faces longer than this many mean edges lying in one plane with two neighbours are "
                   "sampled inside for the fit (default 1.5; 0 = off; not on marching-cubes inputs; "
                   "docs/surfmesh.md \"Flat faces beside a fillet\")");
-  cmd->add_option("--small-patch-offset", args->small_patch_offset,
+  cmd->add_option("--small-patch-offset", args->base.surfmesh.small_patch_node_offset_edges,
                   "Inner nodes of patches of fewer than 40 input faces stay within this many mean edges of "
                   "their faces (default 0.02; 0 = only the 1-edge bound of every patch; docs/surfmesh.md "
                   "\"Small patches keep their nodes on their faces\")");
-  cmd->add_option("--polygon-offset", args->polygon_offset,
+  cmd->add_option("--polygon-offset", args->base.surfmesh.polygon_node_offset_edges,
                   "On inputs that are not marching-cubes surfaces (CAD meshes, scans), inner nodes stay within "
                   "this many mean edges of their patch's faces (default 0.05; 0 = only the 1-edge bound; "
                   "docs/surfmesh.md \"Sharp-edged inputs, session 16\")");
-  cmd->add_option("--chord", args->chord, "Chord error for --adaptive (length units; default 0.05 x size)");
-  cmd->add_option("--max-slope", args->max_slope, "Largest angle (deg) between a face normal and its patch axis (default 60)");
-  cmd->add_option("--split-above", args->split_above,
+  cmd->add_option("--chord", args->base.surfmesh.sizing.chord_error, "Chord error for --adaptive (length units; default 0.05 x size)");
+  cmd->add_option("--max-slope", args->base.segment.max_slope_deg, "Largest angle (deg) between a face normal and its patch axis (default 60)");
+  cmd->add_option("--split-above", args->base.surfmesh.fit.split_above_edges,
                   "Split patches whose fit leaves their input by more than this many mean edges (default 4; 0 = never)");
-  cmd->add_option("--crease", args->crease, "Dihedral angle (deg) above which an edge is a crease (default 80)");
-  cmd->add_option("--sharp-crease", args->sharp_crease,
+  cmd->add_option("--crease", args->base.segment.crease_angle_deg, "Dihedral angle (deg) above which an edge is a crease (default 80)");
+  cmd->add_option("--sharp-crease", args->base.segment.sharp_crease_angle_deg,
                   "Edges bending by at least this (deg) are creases where they form a clean line of at least 8 "
                   "edges between smooth sides, as a CAD mesh's shallow creases (default 15; 0 = off; "
                   "docs/segment.md \"Sharp creases\")");
   cmd->add_flag("--bevel-creases", args->bevel_creases,
                 "Also make creases of the ~45 deg bends of bevelled (marching-cubes) sharp edges: closer to "
                 "the input at box edges, more narrow patches (docs/segment.md)");
-  cmd->add_option("--unsmoothed-crease-angle", args->unsmoothed_crease_angle,
+  cmd->add_option("--unsmoothed-crease-angle", args->base.surfmesh.unsmoothed_crease_angle_deg,
                   "Crease curves sharper than this (deg, 3-ring normals) keep the input's crease instead of "
                   "its smoothed curve (default 100; 0 = every crease: closer at bevelled edges, more obtuse "
                   "triangles; 180 = never; docs/surfmesh.md)");
-  cmd->add_option("--chord-compensation", args->chord_compensation,
+  cmd->add_option("--chord-compensation", args->base.stitch.chord_compensation,
                   "Move the nodes along their normals by this times the chords' mean gap to the surface, so the "
                   "triangles do not lose volume over convex parts (in [0, 2]; default 1; 0 = off; docs/stitch.md)");
-  cmd->add_option("--volume-compensation", args->volume_compensation,
+  cmd->add_option("--volume-compensation", args->base.stitch.volume_compensation,
                   "Then move them by this times the volume between each triangle and its patch's input faces, "
                   "measured along the patch axis (in [0, 2]; default 1; 0 = off; docs/stitch.md)");
-  cmd->add_option("--volume-skip-within", args->volume_skip_within,
+  cmd->add_option("--volume-skip-within", args->base.stitch.volume_compensation_skip_within,
                   "No volume compensation where the closed output already encloses the input's volume within "
                   "this fraction of it (in [0, 0.05]; default 0 = always; 0.0005 skips it on DRAM 256's level set; "
                   "docs/stitch.md \"The volume compensation on level sets, session 15\")");
-  cmd->add_option("--tiny-curve-merge", args->tiny_curve_merge,
+  cmd->add_option("--tiny-curve-merge", args->base.surfmesh.tiny_curve_merge_size,
                   "Merge the two corners of a one-edge border curve shorter than this many target edges "
                   "(default 0.3; 0 = never; not with a cell grid; docs/surfmesh.md)");
-  cmd->add_option("--corner-cluster", args->corner_cluster,
+  cmd->add_option("--corner-cluster", args->base.surfmesh.corner_cluster_size,
                   "Merge corners joined by border curves shorter than this many target edges into one node "
                   "when they all lie within that distance of their mean (in [0, 1]; default 0 = never; "
                   "not with a cell grid; docs/surfmesh.md \"Corner clusters\")");
