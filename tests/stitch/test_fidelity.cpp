@@ -271,6 +271,27 @@ std::vector<std::pair<std::uint32_t, double>> far_samples(const TriMesh& input, 
   return far;
 }
 
+// The sweep's input-side candidates `picked` are exactly `far` (far_samples()): the same
+// samples, with the same distances (within 1e-12 mean edges: far_samples() computes the face
+// samples itself).
+void expect_same_samples(const std::vector<std::pair<std::uint32_t, double>>& picked,
+                         const std::vector<std::pair<std::uint32_t, double>>& far, double mean_edge) {
+  ASSERT_EQ(picked.size(), far.size());
+  for (std::size_t k = 0; k < far.size(); ++k) {
+    EXPECT_EQ(picked[k].first, far[k].first);
+    EXPECT_NEAR(picked[k].second, far[k].second, 1e-12 * mean_edge);
+  }
+}
+
+// fidelity_candidates() at a bound of 0.25 mean edges (issue 6's setting) on the brain's plain
+// stitch, its border nodes fixed.
+stitch_detail::FidelityCandidates quarter_edge_candidates(const Brain& brain, bool walk, int sweeps_before = 0) {
+  StitchOptions options = brain.options;
+  options.fidelity_distance_edges = 0.25;
+  return stitch_detail::fidelity_candidates(brain.input, options, border_nodes(brain.surface, brain.plain),
+                                            brain.surface.input_mean_edge, brain.plain, walk, sweeps_before);
+}
+
 TEST(StitchFidelity, FacesLeftOutHoldNoCandidate) {
   // The first sweep leaves out the samples of the input faces whose corners are within the
   // bound of one output face, and the face samples within the bound of one of their corners'
@@ -281,18 +302,10 @@ TEST(StitchFidelity, FacesLeftOutHoldNoCandidate) {
   const Brain brain;
   const auto& [input, surface, plain_options, plain] = brain;
   ASSERT_TRUE(plain.report.ok());
-  StitchOptions options = plain_options;
-  options.fidelity_distance_edges = 0.25;
-  const double bound = 0.25 * surface.input_mean_edge;
-  const auto picked = stitch_detail::fidelity_candidates(input, options, border_nodes(surface, plain),
-                                                         surface.input_mean_edge, plain, true);
-  const auto far = far_samples(input, plain.mesh, bound);
+  const auto picked = quarter_edge_candidates(brain, true);
+  const auto far = far_samples(input, plain.mesh, 0.25 * surface.input_mean_edge);
   ASSERT_GT(far.size(), 10u);
-  ASSERT_EQ(picked.samples.size(), far.size());
-  for (std::size_t k = 0; k < far.size(); ++k) {
-    EXPECT_EQ(picked.samples[k].first, far[k].first);
-    EXPECT_NEAR(picked.samples[k].second, far[k].second, 1e-12 * surface.input_mean_edge);
-  }
+  expect_same_samples(picked.samples, far, surface.input_mean_edge);
   EXPECT_GT(picked.n_certified, 4 * input.n_faces() * 4 / 5);  // 86% on the brain
 }
 
@@ -307,20 +320,16 @@ TEST(StitchFidelitySlow, LeftOutSamplesAreCheckedAgainAfterLaterMoves) {
   const Brain brain;
   const auto& [input, surface, plain_options, plain] = brain;
   ASSERT_TRUE(plain.report.ok());
-  StitchOptions options = plain_options;
-  options.fidelity_distance_edges = 0.25;
   const double bound = 0.25 * surface.input_mean_edge;
   std::size_t n_promoted_far = 0;
   for (const int before : {1, 2}) {
-    const auto picked = stitch_detail::fidelity_candidates(input, options, border_nodes(surface, plain),
-                                                           surface.input_mean_edge, plain, true, before);
+    const auto picked = quarter_edge_candidates(brain, true, before);
     ASSERT_GT(picked.n_changed_before, 0u) << before;
     EXPECT_GT(picked.n_rechecked, 0u) << before;
     const auto far = far_samples(input, picked.mesh, bound);
-    ASSERT_EQ(picked.samples.size(), far.size()) << before;
-    for (std::size_t k = 0; k < far.size(); ++k) {
-      EXPECT_EQ(picked.samples[k].first, far[k].first) << before;
-      EXPECT_NEAR(picked.samples[k].second, far[k].second, 1e-12 * surface.input_mean_edge) << before;
+    {
+      SCOPED_TRACE(before);
+      expect_same_samples(picked.samples, far, surface.input_mean_edge);
     }
     // Far samples the first sweep had left out.
     for (const auto& [sample, distance] : far) {
@@ -328,6 +337,25 @@ TEST(StitchFidelitySlow, LeftOutSamplesAreCheckedAgainAfterLaterMoves) {
     }
   }
   EXPECT_GT(n_promoted_far, 0u);
+}
+
+TEST(StitchFidelitySlow, RefittedOutputTreeAnswersAsARebuiltOne) {
+  // Reviewer's leftover of session 18. After a sweep's moves and splits, the output's tree is
+  // refitted over the faces it was built on and the faces made get a small tree of their own
+  // (FidelityMover::update_output()). Sweeps that measure everything (walk = false) search
+  // every sample again in those trees: after two sweeps that move and split on the brain at
+  // 0.25 mean edges, the samples the third measures farther than the bound, with their
+  // distances, are exactly those of a tree built anew over its output.
+  const Brain brain;
+  const auto& [input, surface, plain_options, plain] = brain;
+  ASSERT_TRUE(plain.report.ok());
+  const auto picked = quarter_edge_candidates(brain, false, 2);
+  EXPECT_GT(picked.n_changed_before, 10u);
+  EXPECT_GT(picked.mesh.n_vertices(), plain.mesh.n_vertices());  // splits: faces made after the tree
+  EXPECT_EQ(picked.n_walked, 0u);
+  const auto far = far_samples(input, picked.mesh, 0.25 * surface.input_mean_edge);
+  EXPECT_GT(far.size(), 10u);
+  expect_same_samples(picked.samples, far, surface.input_mean_edge);
 }
 
 TEST(StitchFidelitySlow, MovesDoNotDependOnTheThreadCount) {
