@@ -15,6 +15,7 @@
 
 #include "nurbsfront/core/error.h"
 #include "nurbsfront/core/soup.h"
+#include "nurbsfront/core/team.h"
 #include "nurbsfront/core/tolerances.h"
 #include "nurbsfront/segment/segment_internal.h"
 
@@ -1066,6 +1067,10 @@ std::size_t split_folds(const Grouping& grouping, double mean_edge, Scratch& scr
   std::vector<segment_detail::ProjectionCheck> prechecks;
   std::vector<segment_detail::CliffPairs> precliffs;
   std::vector<std::pair<std::vector<int>, std::vector<int>>> prehalves;
+  // The prechecks' threads, kept across the loop: it prechecks the parts of every split
+  // (1 047 small loops on the liver at 2 threads), and parallel::for_chunks started and
+  // joined a thread for each (docs/benchmarks/pipeline.md, session 19).
+  parallel::Team team(workers);
   auto precheck = [&](const std::vector<int>& which) {
     const std::size_t n = patches.faces.size();
     prechecked.resize(n, 0);
@@ -1075,7 +1080,7 @@ std::size_t split_folds(const Grouping& grouping, double mean_edge, Scratch& scr
     precliffs.resize(n);
     prehalves.resize(n);
     if (worker_scratch.size() < workers) worker_scratch.resize(workers);
-    segment_detail::parallel_chunks(which.size(), workers, 1, [&](std::size_t begin, std::size_t end, unsigned worker) {
+    team.for_chunks(which.size(), 1, [&](std::size_t begin, std::size_t end, unsigned worker) {
       if (worker > 0 && !worker_scratch[worker]) worker_scratch[worker] = std::make_unique<Scratch>(mesh);
       Scratch& own = worker == 0 ? scratch : *worker_scratch[worker];
       for (std::size_t i = begin; i < end; ++i) {

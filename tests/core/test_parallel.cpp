@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "nurbsfront/core/parallel.h"
+#include "nurbsfront/core/team.h"
 
 #include <atomic>
 #include <chrono>
@@ -13,6 +14,8 @@
 #include <vector>
 
 #include <gtest/gtest.h>
+
+#include "nurbsfront/core/error.h"
 
 namespace nurbsfront {
 namespace {
@@ -163,6 +166,81 @@ TEST(Parallel, FailedThreadStartLeavesTheWorkToTheRunningThreads) {
       EXPECT_TRUE(parallel::for_chunks_started_by(start, calls.size(), 4, 5, task, monitor));
       EXPECT_EQ(started, n_starts);
       for (const int c : calls) ASSERT_EQ(c, 1) << n_starts << " " << with_monitor;
+    }
+  }
+}
+
+// One team, many loops of varying size and chunk (most of them small, as segment's fold
+// splits): every index once, the one-thread results, worker numbers below the thread count.
+TEST(ParallelTeam, ManyLoopsGiveTheResultsOfOneThread) {
+  for (const unsigned threads : {1U, 2U, 3U, 8U}) {
+    parallel::Team team(threads);
+    EXPECT_EQ(team.threads(), threads);
+    for (int loop = 0; loop < 300; ++loop) {
+      const auto n = static_cast<std::size_t>((loop * 7) % 41);
+      const std::size_t chunk = 1 + static_cast<std::size_t>(loop % 3);
+      std::vector<double> out(n, 0.0);
+      std::vector<int> calls(n, 0);
+      std::atomic<unsigned> highest{0};
+      team.for_chunks(n, chunk, [&](std::size_t begin, std::size_t end, unsigned worker) {
+        unsigned seen = highest.load();
+        while (worker > seen && !highest.compare_exchange_weak(seen, worker)) {
+        }
+        for (std::size_t i = begin; i < end; ++i) {
+          out[i] = value_of(i);
+          ++calls[i];
+        }
+      });
+      for (std::size_t i = 0; i < n; ++i) {
+        ASSERT_EQ(calls[i], 1) << threads << " " << loop << " " << i;
+        ASSERT_EQ(out[i], value_of(i));
+      }
+      EXPECT_LT(highest.load(), threads);
+    }
+  }
+  EXPECT_THROW(parallel::Team(0), InvalidInput);
+}
+
+// The team's workers run: two chunks that wait for each other (with a timeout, so one
+// thread fails instead of hanging) meet on two threads, in each of several loops.
+TEST(ParallelTeam, TwoWorkersRunAtTheSameTimeInEveryLoop) {
+  parallel::Team team(2);
+  for (int loop = 0; loop < 5; ++loop) {
+    std::mutex mutex;
+    std::condition_variable arrived_changed;
+    int arrived = 0, met = 0;
+    std::vector<std::thread::id> ids;
+    team.for_chunks(2, 1, [&](std::size_t, std::size_t, unsigned) {
+      std::unique_lock lock(mutex);
+      ++arrived;
+      ids.push_back(std::this_thread::get_id());
+      arrived_changed.notify_all();
+      if (arrived_changed.wait_for(lock, std::chrono::seconds(20), [&] { return arrived >= 2; })) ++met;
+    });
+    EXPECT_EQ(met, 2) << loop;
+    ASSERT_EQ(ids.size(), 2U);
+    EXPECT_NE(ids[0], ids[1]);
+  }
+}
+
+// A task's exception reaches the caller (from either thread), and the team's next loops run
+// every index again.
+TEST(ParallelTeam, ExceptionReachesTheCallerAndLaterLoopsRun) {
+  for (const unsigned threads : {1U, 2U, 4U}) {
+    parallel::Team team(threads);
+    for (const std::size_t thrower : {std::size_t{0}, std::size_t{37}, std::size_t{99}}) {
+      EXPECT_THROW(team.for_chunks(100, 3,
+                                   [&](std::size_t begin, std::size_t end, unsigned) {
+                                     for (std::size_t i = begin; i < end; ++i)
+                                       if (i == thrower) throw std::runtime_error("index");
+                                   }),
+                   std::runtime_error)
+          << threads << " " << thrower;
+      std::vector<int> calls(100, 0);
+      team.for_chunks(100, 3, [&](std::size_t begin, std::size_t end, unsigned) {
+        for (std::size_t i = begin; i < end; ++i) ++calls[i];
+      });
+      for (const int c : calls) ASSERT_EQ(c, 1) << threads << " " << thrower;
     }
   }
 }
