@@ -11,6 +11,7 @@
 #include <numbers>
 #include <numeric>
 #include <optional>
+#include <tuple>
 #include <vector>
 
 #include <Eigen/Geometry>
@@ -617,23 +618,52 @@ class FidelityMover {
     return input_distance(p, hint);
   }
 
-  // Largest distance to the input of the ring's samples with the vertex at q; stops at the
-  // first sample farther than cap (a value above cap then, not the largest).
-  double ring_to_input(const Ring& ring, const Vec& q,
-                       double cap = std::numeric_limits<double>::infinity()) const {
+  // The ring's largest sample distance to the input with the vertex moved to q, as it is
+  // compared with cap: stops at the first sample farther than cap (a value above cap then).
+  // Leaves out the samples that do not depend on the vertex (its weight exactly 0: the same
+  // points, bit for bit, as at the old place) and the vertex's own place after its first
+  // face. cap must be at least the ring's largest distance at the old place: the left-out
+  // samples are within it, so the answer is above cap exactly when the full one is, and
+  // max(answer, x) > cap exactly when max(full, x) > cap.
+  double moved_ring_to_input(const Ring& ring, const Vec& q, double cap) const {
     double worst = 0.0;
     std::uint32_t hint = UINT32_MAX;
+    bool centre_done = false;
     for (std::size_t k = 0; k < ring.faces.size(); ++k) {
       const auto p = corners_at(ring, k, q);
       for (int i = 0; i <= kSampleSteps; ++i) {
         for (int j = 0; i + j <= kSampleSteps; ++j) {
           const double s = double(i) / kSampleSteps, t = double(j) / kSampleSteps;
-          worst = std::max(worst, input_distance((1.0 - s - t) * p[0] + s * p[1] + t * p[2], hint));
+          const std::array<double, 3> w{1.0 - s - t, s, t};
+          double wc = 0.0;
+          for (std::size_t c = 0; c < 3; ++c) {
+            if (ring.is_centre[k][c] != 0) wc = w[c];
+          }
+          if (wc == 0.0) continue;
+          if (wc == 1.0) {
+            if (centre_done) continue;
+            centre_done = true;
+          }
+          worst = std::max(worst, input_distance(w[0] * p[0] + w[1] * p[1] + w[2] * p[2], hint));
           if (worst > cap) return worst;
         }
       }
     }
     return worst;
+  }
+
+  // The largest distance to the input of face f's samples (triangle_to_input() of its corners
+  // in the mesh's order, given), kept until a move or split changes the face (forget_faces()).
+  double face_to_input(TriMesh::FaceHandle f, const std::array<Vec, 3>& corners) {
+    const auto i = static_cast<std::size_t>(f.idx());
+    if (i >= face_worst_.size()) face_worst_.resize(mesh_.n_faces(), -1.0);
+    if (face_worst_[i] < 0.0) face_worst_[i] = triangle_to_input(corners);
+    return face_worst_[i];
+  }
+  // The faces around v changed (a move of v, or v made by a split and its flips).
+  void forget_faces(TriMesh::VertexHandle v) {
+    face_worst_.resize(mesh_.n_faces(), -1.0);
+    for (auto f : mesh_.vf_range(v)) face_worst_[static_cast<std::size_t>(f.idx())] = -1.0;
   }
 
   // Distance of u to the ring's triangles with the vertex at q.
@@ -729,11 +759,16 @@ class FidelityMover {
       if (!rim_.allows(node, q) || !keeps_shape(ring, p, q)) continue;
       const double gain_distance = input_side ? to_ring(ring, q, probe) : input_distance(q);
       if (gain_distance > (1.0 - kMinGain) * distance) continue;
-      if (!old_worst) old_worst = std::max(old_in, ring_to_input(ring, p));
-      double new_worst = ring_to_input(ring, q, *old_worst);
+      if (!old_worst) {
+        double worst = old_in;
+        for (std::size_t k = 0; k < ring.faces.size(); ++k) worst = std::max(worst, face_to_input(ring.faces[k], ring.corners[k]));
+        old_worst = worst;
+      }
+      double new_worst = moved_ring_to_input(ring, q, *old_worst);
       for (const std::uint32_t i : near) new_worst = std::max(new_worst, to_ring(ring, q, probes_[i]));
       if (new_worst > *old_worst) continue;
       mesh_.set_point(v, to_openmesh(q));
+      forget_faces(v);
       return true;
     }
     return false;
@@ -906,6 +941,7 @@ class FidelityMover {
       const auto e = mesh_.edge_handle(mesh_.find_halfedge(s0, s1));
       if (mesh_.is_flip_ok(e)) mesh_.flip(e);
     }
+    forget_faces(v);
     return v;
   }
 
@@ -935,6 +971,21 @@ class FidelityMover {
     std::vector<std::uint32_t> ids(probe_id_.begin() + static_cast<std::ptrdiff_t>(n_gridded_), probe_id_.end());
     std::sort(ids.begin(), ids.end());
     return ids;
+  }
+  // The output faces whose sample distance to the input is kept (face_to_input()), and of
+  // them those whose kept distance is not the one triangle_to_input() gives for the face
+  // where it is now (tests: none).
+  std::pair<std::size_t, std::size_t> check_kept_face_distances() const {
+    std::size_t n_kept = 0, n_stale = 0;
+    for (std::size_t f = 0; f < face_worst_.size() && f < mesh_.n_faces(); ++f) {
+      if (face_worst_[f] < 0.0) continue;
+      ++n_kept;
+      std::array<Vec, 3> p;
+      std::size_t i = 0;
+      for (auto u : mesh_.fv_range(TriMesh::FaceHandle(static_cast<int>(f)))) p[i++] = point(mesh_, u);
+      if (triangle_to_input(p) != face_worst_[f]) ++n_stale;
+    }
+    return {n_kept, n_stale};
   }
   // When set, a sweep only records its candidates (fidelity_candidates()).
   bool record_only_ = false;
@@ -989,6 +1040,8 @@ class FidelityMover {
   std::vector<std::uint32_t> near_face_;
   std::vector<double> near_distance_;
   std::vector<std::uint32_t> face_start_, face_inputs_;
+  // Per output face its largest sample distance to the input (face_to_input(); -1: not known).
+  std::vector<double> face_worst_;
 };
 
 }  // namespace
@@ -1003,6 +1056,7 @@ FidelityCandidates fidelity_candidates(const TriMesh& input, const StitchOptions
   FidelityMover mover(input, options, bound, reference_edge, rim, walk, result, is_feature,
                       fixed_vertices(result.mesh, result.vertex_node, is_feature), nullptr);
   for (int k = 0; k < sweeps_before; ++k) out.n_changed_before += mover.sweep();
+  std::tie(out.n_kept_face_distances, out.n_stale_face_distances) = mover.check_kept_face_distances();
   mover.record_only_ = true;
   (void)mover.sweep();
   out.mesh = result.mesh;

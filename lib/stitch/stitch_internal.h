@@ -421,6 +421,10 @@ struct FidelityCandidates {
   //! recorded sweep measured.
   std::size_t n_changed_before = 0, n_rechecked = 0, n_promoted = 0;
   std::vector<std::uint32_t> promoted;  //!< the samples made so (sorted; numbered as samples)
+  //! After those sweeps: the output faces whose largest sample distance to the input the
+  //! moves keep (their old rings' distances), and of them those whose kept figure is not
+  //! the one measured afresh where the face is now (0 when the kept figures are right).
+  std::size_t n_kept_face_distances = 0, n_stale_face_distances = 0;
   TriMesh mesh;
 };
 

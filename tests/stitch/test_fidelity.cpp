@@ -358,6 +358,25 @@ TEST(StitchFidelitySlow, RefittedOutputTreeAnswersAsARebuiltOne) {
   expect_same_samples(picked.samples, far, surface.input_mean_edge);
 }
 
+TEST(StitchFidelitySlow, KeptFaceDistancesEqualFreshOnes) {
+  // A move's check reads the old ring's largest sample distance to the input from figures
+  // kept per output face (forgotten where a move or split changes a face). The brain at 0.25
+  // mean edges, after one and after two sweeps that move and split: every kept figure equals
+  // the face's distance measured afresh where it is now, and many are kept.
+  const Brain brain;
+  const auto& [input, surface, plain_options, plain] = brain;
+  ASSERT_TRUE(plain.report.ok());
+  StitchOptions options = plain_options;
+  options.fidelity_distance_edges = 0.25;
+  for (const int before : {1, 2}) {
+    const auto picked = stitch_detail::fidelity_candidates(input, options, border_nodes(surface, plain),
+                                                           surface.input_mean_edge, plain, true, before);
+    ASSERT_GT(picked.n_changed_before, 0u) << before;
+    EXPECT_GT(picked.n_kept_face_distances, 50u) << before;  // 113 and 238
+    EXPECT_EQ(picked.n_stale_face_distances, 0u) << before;
+  }
+}
+
 TEST(StitchFidelitySlow, MovesDoNotDependOnTheThreadCount) {
   // (Slow: 4 s in RelWithDebInfo.) The first sweep's threaded queries (chunks of a fixed size): the same moves and splits,
   // point for point, with one and with two threads.
