@@ -348,6 +348,7 @@ FitOptions plain_fit_options(const SurfMeshOptions& options, double mean_edge, c
   fit.min_spacing = options.fit.min_spacing_edges * mean_edge;
   fit.max_levels = options.fit.max_levels;
   fit.least_squares_iterations = options.fit.least_squares_iterations;
+  fit.final_passes = options.fit.final_passes;
   // Not with adaptive sizing: SurfmeshAdaptiveSlow's flat ellipsoid got 750 instead of 791
   // nodes and 0.0105 instead of 0.0090 max deviation with it (not diagnosed).
   fit.least_squares_fine_smoothing = options.sizing.adaptive ? 0.0 : options.fit.least_squares_fine_smoothing;

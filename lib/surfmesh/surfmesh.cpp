@@ -157,6 +157,8 @@ void PatchFitOptions::validate() const {
   if (max_levels < 1 || max_levels > 20) bad_option("fit.max_levels must be in [1, 20], got " + std::to_string(max_levels));
   if (least_squares_iterations < 0 || least_squares_iterations > 100000)
     bad_option("fit.least_squares_iterations must be in [0, 100000], got " + std::to_string(least_squares_iterations));
+  if (final_passes < 0 || final_passes > 1000)
+    bad_option("fit.final_passes must be in [0, 1000], got " + std::to_string(final_passes));
   if (!(std::isfinite(least_squares_fine_smoothing) && least_squares_fine_smoothing >= 0.0))
     bad_option("fit.least_squares_fine_smoothing must be finite and >= 0, got " + std::to_string(least_squares_fine_smoothing));
   if (!(std::isfinite(fine_below_edges) && fine_below_edges >= 0.0))

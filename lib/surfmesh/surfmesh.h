@@ -108,6 +108,10 @@ struct PatchFitOptions {
   //! the sphere at 128 cells, all of nurbsfront's Hausdorff there; 25-30 iterations give
   //! nearly all of the gain). 0 = plain MBA. Default 30.
   int least_squares_iterations = 30;
+  //! BA passes on the finest lattice before the polish (FitOptions::final_passes), also in
+  //! split_unfitted_patches' check fits. With the polish on they only move its start.
+  //! In [0, 1000]. Default 0.
+  int final_passes = 0;
   //! Smoothing of a second polish for patches whose data the first one fits within
   //! fine_below_edges (FitOptions::least_squares_fine_smoothing): the first polish's
   //! smoothing (1e-3) holds the coefficients at the edge of the data near MBA's biased

@@ -1429,6 +1429,8 @@ TEST(Surfmesh, BadOptionsAndMismatchedSegmentation) {
       [](SurfMeshOptions& o) { o.sizing.min_size_fraction = 0.0; },
       [](SurfMeshOptions& o) { o.fit.relative_tolerance = std::nan(""); },
       [](SurfMeshOptions& o) { o.fit.max_levels = 0; },
+      [](SurfMeshOptions& o) { o.fit.final_passes = -1; },
+      [](SurfMeshOptions& o) { o.fit.final_passes = 1001; },
       [](SurfMeshOptions& o) { o.fit.least_squares_fine_smoothing = -1.0; },
       [](SurfMeshOptions& o) { o.fit.fine_below_edges = std::nan(""); },
       [](SurfMeshOptions& o) { o.fit.detail_spacing_edges = -1.0; },

@@ -207,6 +207,8 @@ void add_expert_options(CLI::App& cmd, RemeshArgs& args) {
   add("--fit-max-levels", o.surfmesh.fit.max_levels, "Fit lattice levels at most");
   add("--fit-polish-iterations", o.surfmesh.fit.least_squares_iterations,
       "Conjugate-gradient iterations of the fit's least-squares polish (0 = plain MBA)");
+  add("--fit-final-passes", o.surfmesh.fit.final_passes,
+      "BA passes on the finest fit lattice before the polish (also in the split check fits)");
   add("--fit-fine-smoothing", o.surfmesh.fit.least_squares_fine_smoothing,
       "Smoothing of the second polish of patches fitted within --fit-fine-below (0 = off)");
   add("--fit-fine-below", o.surfmesh.fit.fine_below_edges,
