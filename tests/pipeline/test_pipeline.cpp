@@ -1241,6 +1241,43 @@ TEST(Pipeline, ExemptMarksCarryAcrossMergeCalls) {
   EXPECT_EQ(second.patches.size(), 2u);
 }
 
+// Session 19 (docs/segment.md "Fin strips: a corner guard, session 19"): the corner guard of
+// merge_into_neighbours(). The pleats grid's first strip runs between two corners at each end
+// of the mesh's boundary rows (the ends of its two border curves); joined to the middle plane,
+// the two ends of the curve it shares with that plane are left with two sides (the plane and
+// the boundary): 2 corners lost. A bound of 1 refuses the join (the strip keeps its corners,
+// where the output has nodes on the input), 2 or no guard accept it; the other corners are kept.
+TEST(Pipeline, FinStripCornerGuardRefusesAJoinThatTakesCornersAway) {
+  const TriMesh mesh = grid_with_two_pleats();
+  const RemeshOptions options = fast_options();
+  const double mean_edge = mean_edge_length(mesh);
+  const double width = options.hairline_patch_width * 1.5 * mean_edge;
+  segment_detail::SplitterPtr splitter;
+  const Segmentation seg = segment_detail::segment(mesh, options.segment, mean_edge, &splitter);
+  ASSERT_EQ(seg.patches.size(), 4u);
+  const std::vector<int> strips = narrow_patches(mesh, seg, width);
+  ASSERT_EQ(strips.size(), 2u);
+  const std::vector<int> first{strips[0]};
+  const auto merged = [&](int max_lost_corners) {
+    return segment_detail::merge_into_neighbours(*splitter, seg, first, true, true, false, nullptr, max_lost_corners)
+        .patches.size();
+  };
+  EXPECT_EQ(merged(-1), 3u);
+  EXPECT_EQ(merged(2), 3u);
+  EXPECT_EQ(merged(1), 4u);
+  EXPECT_EQ(merged(0), 4u);
+  // The corners of the accepted join: the strip's four curve ends were corners (3 sides); the
+  // two on the far curve stay corners (the left plane, the middle one, the boundary).
+  const Segmentation joined = segment_detail::merge_into_neighbours(*splitter, seg, first, true, true, false, nullptr, 2);
+  EXPECT_EQ(joined.corners.size() + 2, seg.corners.size());
+  // Not guarded by default (the pipeline passes RemeshOptions::fin_strip_max_lost_corners).
+  EXPECT_EQ(segment_detail::merge_into_neighbours(*splitter, seg, first, true, true, false).patches.size(), 3u);
+  EXPECT_EQ(options.fin_strip_max_lost_corners, 1);
+  RemeshOptions bad = options;
+  bad.fin_strip_max_lost_corners = -2;
+  EXPECT_THROW(bad.validate(), InvalidInput);
+}
+
 // A 12 x 12 grid of side 1 (turned) with a steep step across it: the plane rises by 0.02 at
 // x = 1/2 through one column of faces tilted 70 deg from the planes (raw normal . z = 0.34:
 // outside the 60 deg slope cone, above the 0.1 orientation floor).

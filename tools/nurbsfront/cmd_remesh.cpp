@@ -58,6 +58,7 @@ struct RemeshArgs {
   std::optional<double> narrow_widen;
   std::optional<double> narrow_cad_merge;
   std::optional<double> fin_strip_merge;
+  std::optional<int> fin_strip_max_lost_corners;
   std::optional<double> fin_rim_width;
   std::optional<double> fin_rim_angle;
   std::optional<double> fin_rim_gap;
@@ -152,6 +153,7 @@ void run_remesh(RemeshArgs& args) {
   if (args.narrow_widen) options.narrow_widen_width = *args.narrow_widen;
   if (args.narrow_cad_merge) options.narrow_cad_patch_width = *args.narrow_cad_merge;
   if (args.fin_strip_merge) options.fin_strip_width = *args.fin_strip_merge;
+  if (args.fin_strip_max_lost_corners) options.fin_strip_max_lost_corners = *args.fin_strip_max_lost_corners;
   if (args.fin_rim_width) options.surfmesh.fin_rim_width = *args.fin_rim_width;
   if (args.fin_rim_angle) options.surfmesh.fin_rim_max_angle_deg = *args.fin_rim_angle;
   if (args.fin_rim_gap) options.surfmesh.fin_rim_max_gap_edges = *args.fin_rim_gap;
@@ -421,8 +423,13 @@ void add_remesh_command(CLI::App& app) {
   cmd->add_option("--fin-strip-merge", args->fin_strip_merge,
                   "On marching-cubes inputs, after the narrow merge, patches still narrower than this many target "
                   "edges join a wider neighbour, their own faces exempt from the slope bound (a thin fin's rim: its "
-                  "two creases become one; default 0 = off; docs/segment.md \"Fin strips, session 18\")")
+                  "two creases become one; 0 = off; default 0.25, with the corner guard below; docs/segment.md \"Fin strips, session 18\")")
       ->check(CLI::Range(0.0, 1.0));
+  cmd->add_option("--fin-strip-max-lost-corners", args->fin_strip_max_lost_corners,
+                  "The fin-strip merge's corner guard: a strip joins a neighbour only if at most this many of its "
+                  "corners (vertices where 3+ patches meet) are left with two patches (a fin's tip is pinned by its "
+                  "corners; -1 = no guard; default 1; docs/segment.md \"Fin strips: a corner guard, session 19\")")
+      ->check(CLI::Range(-1, 1000000));
   cmd->add_option("--narrow-widen", args->narrow_widen,
                   "On inputs not taken for marching cubes, patches narrower than this many target edges take faces "
                   "from their wider neighbours across borders that are no crease, within the slope bound, until "
