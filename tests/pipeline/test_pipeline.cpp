@@ -972,7 +972,7 @@ TEST(Pipeline, FinStripsJoinANeighbourWhenAsked) {
   const TriMesh mesh = slab_with_fins();
   RemeshOptions options = fast_options();
   options.compute_distances = false;
-  EXPECT_EQ(options.fin_strip_width, 0.0);
+  EXPECT_EQ(options.fin_strip_width, 0.25);
   // Without the narrow merge (whose slope bounds take one strip of this slab): every strip
   // left to the fin-strip merge.
   options.narrow_patch_merge = 0.0;
@@ -1242,40 +1242,28 @@ TEST(Pipeline, ExemptMarksCarryAcrossMergeCalls) {
 }
 
 // Session 19 (docs/segment.md "Fin strips: a corner guard, session 19"): the corner guard of
-// merge_into_neighbours(). The pleats grid's first strip runs between two corners at each end
-// of the mesh's boundary rows (the ends of its two border curves); joined to the middle plane,
-// the two ends of the curve it shares with that plane are left with two sides (the plane and
-// the boundary): 2 corners lost. A bound of 1 refuses the join (the strip keeps its corners,
-// where the output has nodes on the input), 2 or no guard accept it; the other corners are kept.
+// the fin-strip merge on the fin slab's two strips (narrow merge off, F = 1). One strip's
+// join would leave 2 of its corners with two sides (its tip no longer pinned by output nodes
+// on the input): refused at a bound of 1 and 0; the other loses at most 1: joined at 1, refused
+// at 0; without the guard or at 2 both join. Every output ok, closed, manifold, chi 2.
 TEST(Pipeline, FinStripCornerGuardRefusesAJoinThatTakesCornersAway) {
-  const TriMesh mesh = grid_with_two_pleats();
-  const RemeshOptions options = fast_options();
-  const double mean_edge = mean_edge_length(mesh);
-  const double width = options.hairline_patch_width * 1.5 * mean_edge;
-  segment_detail::SplitterPtr splitter;
-  const Segmentation seg = segment_detail::segment(mesh, options.segment, mean_edge, &splitter);
-  ASSERT_EQ(seg.patches.size(), 4u);
-  const std::vector<int> strips = narrow_patches(mesh, seg, width);
-  ASSERT_EQ(strips.size(), 2u);
-  const std::vector<int> first{strips[0]};
-  const auto merged = [&](int max_lost_corners) {
-    return segment_detail::merge_into_neighbours(*splitter, seg, first, true, true, false, nullptr, max_lost_corners)
-        .patches.size();
-  };
-  EXPECT_EQ(merged(-1), 3u);
-  EXPECT_EQ(merged(2), 3u);
-  EXPECT_EQ(merged(1), 4u);
-  EXPECT_EQ(merged(0), 4u);
-  // The corners of the accepted join: the strip's four curve ends were corners (3 sides); the
-  // two on the far curve stay corners (the left plane, the middle one, the boundary).
-  const Segmentation joined = segment_detail::merge_into_neighbours(*splitter, seg, first, true, true, false, nullptr, 2);
-  EXPECT_EQ(joined.corners.size() + 2, seg.corners.size());
-  // Not guarded by default (the pipeline passes RemeshOptions::fin_strip_max_lost_corners).
-  EXPECT_EQ(segment_detail::merge_into_neighbours(*splitter, seg, first, true, true, false).patches.size(), 3u);
+  const TriMesh mesh = slab_with_fins();
+  RemeshOptions options = fast_options();
+  options.compute_distances = false;
+  options.narrow_patch_merge = 0.0;
+  options.fin_strip_width = 1.0;
   EXPECT_EQ(options.fin_strip_max_lost_corners, 1);
-  RemeshOptions bad = options;
-  bad.fin_strip_max_lost_corners = -2;
-  EXPECT_THROW(bad.validate(), InvalidInput);
+  for (const auto& [guard, n_merged] : std::vector<std::pair<int, std::size_t>>{{-1, 2}, {2, 2}, {1, 1}, {0, 0}}) {
+    options.fin_strip_max_lost_corners = guard;
+    const RemeshResult r = remesh(mesh, options);
+    EXPECT_EQ(r.report.n_narrow_merged, n_merged) << "guard " << guard;
+    EXPECT_TRUE(r.report.ok()) << errors_of(r.report);
+    const TopologyReport& t = r.report.output.topology;
+    EXPECT_TRUE(t.is_closed && t.is_manifold && t.is_consistently_oriented);
+    EXPECT_EQ(t.euler_characteristic, 2);
+  }
+  options.fin_strip_max_lost_corners = -2;
+  EXPECT_THROW((void)remesh(mesh, options), InvalidInput);
 }
 
 // A 12 x 12 grid of side 1 (turned) with a steep step across it: the plane rises by 0.02 at
