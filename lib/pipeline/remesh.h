@@ -50,8 +50,16 @@ struct RemeshOptions {
   //! border that is not so narrow itself, their own faces exempt from the slope bounds (the
   //! neighbour's keep them; the union passes the projection and cliff checks): the fin's two
   //! rims become one border curve. Counted in RemeshReport::n_narrow_merged. In [0, 1];
-  //! 0 = off (default; docs/segment.md "Fin strips, session 18").
-  double fin_strip_width = 0.0;
+  //! 0 = off. Default 0.25, with the corner guard below (headsq@500 obtuse 2.21 -> 2.00%,
+  //! @1150 4.43 -> 4.22%, Hausdorff kept; docs/segment.md "Fin strips, session 18" and
+  //! "Fin strips: a corner guard, session 19").
+  double fin_strip_width = 0.25;
+  //! The corner guard of that merge: a strip joins a neighbour only if at most this many of
+  //! its vertices where 3+ sides meet (patches, or the input's boundary as one) are left with
+  //! two: a fin's tip is pinned by its corners, and without them the output cut headsq@1150's
+  //! tips off by up to 1.14 mean edges (docs/segment.md "Fin strips: a corner guard, session
+  //! 19"). -1 = no guard; >= -1. Default 1.
+  int fin_strip_max_lost_corners = 1;
   //! On inputs not taken for marching cubes (nor with a cell grid), patches of at most this
   //! many input faces whose every border edge with another patch bends by at most
   //! tiny_patch_max_dihedral_deg (segment's tiny_patches) join a neighbour after segmentation,

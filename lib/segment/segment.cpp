@@ -1702,7 +1702,7 @@ Segmentation segment_detail::split(Splitter& s, const Segmentation& segmentation
 Segmentation segment_detail::merge_into_neighbours(Splitter& s, const Segmentation& segmentation,
                                                    const std::vector<int>& which, const bool with_borders,
                                                    const bool hairlines, const bool steep,
-                                                   std::vector<std::uint8_t>* exempt_faces) {
+                                                   std::vector<std::uint8_t>* exempt_faces, const int max_lost_corners) {
   check_edit(s, segmentation, which, "merge_patches_into_neighbours");
   if (s.mesh.n_faces() == 0 || which.empty()) return segmentation;
   s.prepare();
@@ -1747,18 +1747,50 @@ Segmentation segment_detail::merge_into_neighbours(Splitter& s, const Segmentati
                              [&](int f) { return s.normals.raw[f].dot(axis) >= grouping.cos_slope; });
         }))
       continue;
+    // The corners among p's vertices (3+ sides meet: patches, or the input's boundary as one),
+    // counted before a join; a join that leaves more than max_lost_corners of them with two
+    // sides is refused (the corner guard).
+    std::vector<int> corners;
+    const auto n_sides = [&](int v) {
+      int ids[16];
+      int n = 0;
+      bool open = false;
+      for (auto h : s.mesh.voh_range(TriMesh::VertexHandle(v))) {
+        const auto f = s.mesh.face_handle(h);
+        if (!f.is_valid()) {
+          open = true;
+          continue;
+        }
+        const int id = patches.face_patch[f.idx()];
+        if (std::find(ids, ids + n, id) == ids + n && n < 16) ids[n++] = id;
+      }
+      return n + (open ? 1 : 0);
+    };
+    if (max_lost_corners >= 0) {
+      for (const int f : faces)
+        for (int i = 0; i < 3; ++i) corners.push_back(s.graph.vertices[f][i]);
+      std::sort(corners.begin(), corners.end());
+      corners.erase(std::unique(corners.begin(), corners.end()), corners.end());
+      std::erase_if(corners, [&](int v) { return n_sides(v) < 3; });
+    }
     // Joins p to q if the union fits an axis (faces joined across creases are island faces).
     const auto join = [&](int q) {
       auto& target = patches.faces[static_cast<std::size_t>(q)];
       const std::size_t n_target = target.size();
       target.insert(target.end(), faces.begin(), faces.end());
       for (const int f : faces) patches.face_patch[f] = q;
+      // The corner guard: a fin's tip is pinned by its corners (the output has nodes there, on
+      // the input); joined away, they leave the tip to the smoothed curve and the fit
+      // (headsq@1150: 1.14 mean edges off, docs/segment.md "Fin strips: a corner guard").
+      const bool keeps_corners =
+          max_lost_corners < 0 ||
+          std::count_if(corners.begin(), corners.end(), [&](int v) { return n_sides(v) < 3; }) <= max_lost_corners;
       // The neighbour's axis, else the union's area-weighted mean raw normal.
       Eigen::Vector3d mean = Eigen::Vector3d::Zero();
       for (const int f : target) mean += s.normals.area[f] * s.normals.raw[f];
       std::vector<Eigen::Vector3d> axes{patches.axes[static_cast<std::size_t>(q)]};
       if (mean.norm() > 0.0) axes.push_back(mean.normalized());
-      for (const Eigen::Vector3d& axis : axes) {
+      for (const Eigen::Vector3d& axis : keeps_corners ? axes : std::vector<Eigen::Vector3d>{}) {
         // A hairline's own faces are exempt from the bounds (and those of the hairlines
         // joined to q before): a strip folded back between two creases faces away from both
         // sides (docs/segment.md "Hairline patches").

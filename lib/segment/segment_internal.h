@@ -214,10 +214,15 @@ using SplitterPtr = std::unique_ptr<Splitter, SplitterDeleter>;
 //! before (exempt from the bounds), 2 for a steep patch's face joined before (exempt from the
 //! slope cone, not from the raw floor); read and extended, so the marks of an earlier call
 //! hold in a later one (sized to the mesh's faces when empty).
+//! max_lost_corners >= 0 (the pipeline's fin-strip merge; docs/segment.md "Fin strips: a
+//! corner guard, session 19"): a listed patch joins a neighbour only if at most that many of
+//! its vertices where 3+ sides meet (patches, the input's boundary counting as one side) are
+//! left with fewer than 3 by the join; -1 = no guard.
 [[nodiscard]] Segmentation merge_into_neighbours(Splitter& splitter, const Segmentation& segmentation,
                                                  const std::vector<int>& which, bool with_borders = true,
                                                  bool hairlines = false, bool steep = false,
-                                                 std::vector<std::uint8_t>* exempt = nullptr);
+                                                 std::vector<std::uint8_t>* exempt = nullptr,
+                                                 int max_lost_corners = -1);
 
 //! The pipeline's widening of narrow slope-bounded patches (docs/segment.md "Widening narrow
 //! patches, session 18"): each listed patch p, in the order given, takes rings of faces from
