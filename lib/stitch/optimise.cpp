@@ -13,6 +13,7 @@
 #include <optional>
 #include <queue>
 #include <span>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Geometry>
@@ -97,7 +98,13 @@ class Optimiser {
  public:
   Optimiser(const SurfaceMesh& surface, const StitchOptions& options, StitchResult& result,
             const std::vector<std::uint8_t>& is_feature)
-      : surface_(surface), options_(options), mesh_(result.mesh), face_patch_(result.face_patch), is_feature_(is_feature) {
+      : surface_(surface),
+        options_(options),
+        mesh_(result.mesh),
+        face_patch_(result.face_patch),
+        is_feature_(is_feature),
+        vertex_node_of_(result.vertex_node) {
+    if (options.flip_feature_chords) collect_feature_pieces();
     const double diagonal = bounding_box(mesh_).diagonal();
     min_double_area_ = 2.0 * tolerance::kDegenerateAreaRelative * diagonal * diagonal;
     cos_dihedral_ = std::cos(options.max_flip_dihedral_deg * std::numbers::pi / 180.0);
@@ -1305,8 +1312,34 @@ class Optimiser {
     return q.n2.dot(old_normal) > 0.0 && q.n3.dot(old_normal) > 0.0;
   }
 
+  // feature_pieces_ from SurfaceMesh::curve_nodes (an open curve runs from corner to corner;
+  // a closed one, its first node no corner, also joins its last node to its first).
+  void collect_feature_pieces() {
+    if (surface_.curve_nodes.size() != surface_.curve_is_feature.size()) return;
+    has_feature_pieces_ = true;
+    auto add = [this](int x, int y) { feature_pieces_.emplace_back(std::min(x, y), std::max(x, y)); };
+    for (std::size_t c = 0; c < surface_.curve_nodes.size(); ++c) {
+      if (surface_.curve_is_feature[c] == 0) continue;
+      const std::vector<int>& list = surface_.curve_nodes[c];
+      for (std::size_t k = 0; k + 1 < list.size(); ++k) add(list[k], list[k + 1]);
+      if (list.size() >= 3 && surface_.node_kind[static_cast<std::size_t>(list.front())] != NodeKind::Corner) add(list.back(), list.front());
+    }
+    std::sort(feature_pieces_.begin(), feature_pieces_.end());
+  }
+
+  // Whether the nodes of u and w are next to each other along a feature curve (a split's
+  // node is on none: its pieces of a crease lie between two patches, never inside one).
+  bool is_feature_piece(TriMesh::VertexHandle u, TriMesh::VertexHandle w) const {
+    const int x = vertex_node_of_[static_cast<std::size_t>(u.idx())];
+    const int y = vertex_node_of_[static_cast<std::size_t>(w.idx())];
+    return std::binary_search(feature_pieces_.begin(), feature_pieces_.end(), std::pair<int, int>(std::min(x, y), std::max(x, y)));
+  }
+
   // An edge between two patches lies on a border curve; it may flip only when the curve
-  // is known (one end is a border node) and is not a feature.
+  // is known (one end is a border node) and is not a feature. An edge inside a patch joining
+  // two nodes of one feature curve (or a corner and a feature curve's node) is locked too,
+  // unless StitchOptions::flip_feature_chords and the two nodes are no neighbours along a
+  // feature curve (feature_pieces_): a chord across the patch, not a piece of the crease.
   bool is_locked(TriMesh::EdgeHandle e) const {
     const auto h = mesh_.halfedge_handle(e, 0);
     const int pf = face_patch_[static_cast<std::size_t>(mesh_.face_handle(h).idx())];
@@ -1317,7 +1350,9 @@ class Optimiser {
     const int curve = a.curve >= 0 ? a.curve : b.curve;
     const bool on_curve = (a.curve >= 0 || a.is_corner) && (b.curve >= 0 || b.is_corner) &&
                           (a.curve < 0 || b.curve < 0 || a.curve == b.curve);
-    if (on_curve && curve >= 0 && surface_.curve_is_feature[static_cast<std::size_t>(curve)]) return true;
+    if (on_curve && curve >= 0 && surface_.curve_is_feature[static_cast<std::size_t>(curve)]) {
+      return pf != pg || !has_feature_pieces_ || is_feature_piece(mesh_.from_vertex_handle(h), mesh_.to_vertex_handle(h));
+    }
     if (pf == pg) return false;
     return !on_curve || curve < 0;
   }
@@ -1333,6 +1368,13 @@ class Optimiser {
   std::vector<int>& face_patch_;  // grows with obtuse splits
   const std::vector<std::uint8_t>& is_feature_;
   std::vector<NodeInfo> nodes_;
+  // The node of each vertex (StitchResult::vertex_node: it grows with the splits).
+  const std::vector<int>& vertex_node_of_;
+  // StitchOptions::flip_feature_chords: the pairs of nodes next to each other along a feature
+  // curve (SurfaceMesh::curve_nodes; lower id first, sorted), and whether they are known (a
+  // hand-made SurfaceMesh without curve_nodes: every such chord stays locked).
+  std::vector<std::pair<int, int>> feature_pieces_;
+  bool has_feature_pieces_ = false;
   std::vector<std::vector<int>> corner_patches_;
   std::vector<RingTriangle> ring_;
   double min_double_area_ = 0.0;

@@ -32,6 +32,12 @@ struct StitchOptions {
   //! Largest angle (deg) between the normals of the two triangles of an edge, before and
   //! after a flip, for the flip to be allowed, in [0, 180). Default 30.
   double max_flip_dihedral_deg = 30.0;
+  //! An edge inside a patch whose two ends lie on one feature curve (or at a corner and on a
+  //! feature curve) but are no neighbours along it (a chord across the patch, not a piece of
+  //! the crease) may flip like any edge inside a patch; false: locked like the crease's
+  //! pieces, as before session 19 (docs/stitch.md "Chords between the nodes of a crease,
+  //! session 19"). Default true.
+  bool flip_feature_chords = true;
   //! Relative gain a flip must bring: the smaller alpha of the two new triangles must
   //! exceed (1 + flip_gain) times the smaller of the two old ones (>= 0). Default 1e-3.
   double flip_gain = 1e-3;

@@ -162,6 +162,11 @@ StitchOptions strip_options(int slide_rounds) {
   StitchOptions o;
   o.feature_slide_rounds = slide_rounds;
   o.obtuse_split_rounds = 0;  // the slides alone (splits would add nodes)
+  // Nor the flips of the chords from the strip's corners across it (flip_feature_chords):
+  // with them this strip keeps 5 obtuse triangles without slides (6 without both) and 3 with
+  // two rounds of slides (0 without the chord flips; docs/stitch.md "Chords between the
+  // nodes of a crease, session 19").
+  o.flip_feature_chords = false;
   o.n_threads = 1;
   return o;
 }
@@ -213,6 +218,129 @@ TEST(StitchSlide, FacingCreaseNodesSlideApartAlongTheirCurves) {
   const StitchResult r3 = stitch(s.surface, input, two);
   ASSERT_EQ(r3.mesh.n_vertices(), r.mesh.n_vertices());
   for (auto v : r.mesh.vertices()) EXPECT_EQ(to_eigen(r3.mesh.point(v)), to_eigen(r.mesh.point(v)));
+}
+
+// StitchOptions::flip_feature_chords (docs/stitch.md "Chords between the nodes of a crease,
+// session 19"): a flat patch 0 above a crease K (corner k0, nodes k1, k2, corner k3; k1 dips
+// 0.25 below the line) whose chord k0-k2 closes the triangle (k0, k1, k2), obtuse at k1
+// (152 deg); a wall (patch 1) hangs from K, the rest is the input's boundary, so every node is
+// fixed and only a flip can help. The chord is no piece of K but both its ends are on K: it
+// was locked like K's pieces. With the option it flips to k1-c: no obtuse triangle, K's pieces
+// kept; without it the obtuse triangle stays.
+struct ChordFan {
+  TriangleSoup soup;
+  SurfaceMesh surface;
+  std::vector<int> k, wall;
+  int c = -1, t = -1;
+};
+
+ChordFan make_chord_fan() {
+  ChordFan s;
+  const Eigen::Matrix3d turn = Eigen::AngleAxisd(0.4, Eigen::Vector3d(3.0, -1.0, 2.0).normalized()).toRotationMatrix();
+  auto add = [&](double x, double y, double z) {
+    s.soup.points.push_back(turn * Eigen::Vector3d(x, y, z));
+    return static_cast<int>(s.soup.points.size()) - 1;
+  };
+  const std::array<std::array<double, 2>, 4> ks{{{0.0, 0.0}, {1.0, -0.25}, {2.0, 0.0}, {3.0, 0.0}}};
+  for (const auto& q : ks) s.k.push_back(add(q[0], q[1], 0.0));
+  // The wall's bottom row under K's ends and the middles of its pieces (acute triangles).
+  const std::array<std::array<double, 2>, 5> ws{{{-0.1, 0.0}, {0.5, -0.125}, {1.5, -0.125}, {2.5, 0.0}, {3.1, 0.0}}};
+  for (const auto& q : ws) s.wall.push_back(add(q[0], q[1], -0.87));
+  s.c = add(1.1, 1.0, 0.0);
+  s.t = add(2.5, 1.1, 0.0);
+  std::vector<int> face_patch;
+  auto tri = [&](int p, int u, int v, int w) {
+    const Eigen::Vector3d up = turn * (p == 0 ? Eigen::Vector3d(0.0, 0.0, 1.0) : Eigen::Vector3d(0.0, -1.0, 0.0));
+    const auto& q = s.soup.points;
+    const double side = (q[static_cast<std::size_t>(v)] - q[static_cast<std::size_t>(u)])
+                            .cross(q[static_cast<std::size_t>(w)] - q[static_cast<std::size_t>(u)])
+                            .dot(up);
+    if (side < 0.0) std::swap(v, w);
+    s.soup.triangles.push_back({static_cast<std::uint32_t>(u), static_cast<std::uint32_t>(v), static_cast<std::uint32_t>(w)});
+    face_patch.push_back(p);
+  };
+  tri(0, s.k[0], s.k[1], s.k[2]);
+  tri(0, s.k[0], s.k[2], s.c);
+  tri(0, s.c, s.k[2], s.t);
+  tri(0, s.k[2], s.k[3], s.t);
+  for (int i = 0; i < 4; ++i) tri(1, s.k[i], s.wall[i], s.wall[i + 1]);
+  for (int i = 0; i < 3; ++i) tri(1, s.k[i], s.wall[i + 1], s.k[i + 1]);
+  SurfaceMesh& m = s.surface;
+  m.nodes = s.soup.points;
+  for (const auto& t : s.soup.triangles) m.triangles.push_back({int(t[0]), int(t[1]), int(t[2])});
+  m.triangle_patch = face_patch;
+  // Curves: 0 the crease K, 1 patch 0's boundary (k3, t, c, k0), 2 the wall's boundary.
+  m.curve_is_feature = {1, 1, 1};
+  m.curve_nodes = {s.k, {s.k[3], s.t, s.c, s.k[0]}, {s.k[0]}};
+  m.curve_nodes[2].insert(m.curve_nodes[2].end(), s.wall.begin(), s.wall.end());
+  m.curve_nodes[2].push_back(s.k[3]);
+  m.node_kind.assign(m.nodes.size(), NodeKind::Border);
+  m.node_owner.assign(m.nodes.size(), -1);
+  for (std::size_t c = 0; c < m.curve_nodes.size(); ++c) {
+    for (const int node : m.curve_nodes[c]) m.node_owner[static_cast<std::size_t>(node)] = static_cast<int>(c);
+  }
+  for (const int node : {s.k[0], s.k[3]}) {
+    m.node_kind[static_cast<std::size_t>(node)] = NodeKind::Corner;
+    m.node_owner[static_cast<std::size_t>(node)] = -1;
+  }
+  m.n_border_nodes = m.nodes.size();
+  for (int p = 0; p < 2; ++p) {
+    std::vector<Eigen::Vector3d> points, centroids, normals;
+    std::set<std::uint32_t> vertices;
+    for (std::size_t t = 0; t < s.soup.triangles.size(); ++t) {
+      if (face_patch[t] != p) continue;
+      const auto& tr = s.soup.triangles[t];
+      const auto& q = s.soup.points;
+      normals.push_back((q[tr[1]] - q[tr[0]]).cross(q[tr[2]] - q[tr[0]]).normalized());
+      centroids.push_back((q[tr[0]] + q[tr[1]] + q[tr[2]]) / 3.0);
+      for (auto v : tr) vertices.insert(v);
+    }
+    for (auto v : vertices) points.push_back(s.soup.points[v]);
+    PatchSurface fitted;
+    fitted.frame = patch_frame(centroids, normals);
+    FitOptions fit;
+    fit.max_levels = 3;
+    fitted.field = fit_height_field(fitted.frame.to_local(points), fit).field;
+    m.surfaces.push_back(fitted);
+  }
+  m.patches.resize(2);
+  m.target_size = 1.0;
+  m.input_mean_edge = 1.0;
+  return s;
+}
+
+TEST(StitchFeatureChords, AChordBetweenTwoNodesOfACreaseFlips) {
+  const ChordFan s = make_chord_fan();
+  const TriMesh input = to_trimesh(s.soup);
+  StitchOptions o;
+  o.obtuse_split_rounds = 0;  // the flip alone (a split of the chord would add a node)
+  o.n_threads = 1;
+  o.flip_feature_chords = false;
+  const StitchResult locked = stitch(s.surface, input, o);
+  ASSERT_TRUE(locked.report.ok());
+  EXPECT_EQ(obtuse_faces(locked), 1u);  // (k0, k1, k2): every node is fixed, the chord locked
+  o.flip_feature_chords = true;
+  const StitchResult r = stitch(s.surface, input, o);
+  ASSERT_TRUE(r.report.ok());
+  EXPECT_EQ(obtuse_faces(r), 0u);
+  EXPECT_GT(r.report.n_flips, locked.report.n_flips);
+  EXPECT_TRUE(r.report.output.topology.is_manifold);
+  EXPECT_EQ(r.report.output.topology.euler_characteristic, 1);
+  EXPECT_EQ(r.report.output.topology.n_boundary_loops, 1u);
+  ASSERT_EQ(r.mesh.n_vertices(), s.soup.points.size());
+  // Every node in place; K's pieces are still edges, the chord k0-k2 is gone, k1-c is there.
+  auto vertex = [&](int node) -> TriMesh::VertexHandle {
+    for (auto v : r.mesh.vertices()) {
+      if (r.vertex_node[static_cast<std::size_t>(v.idx())] == node) return v;
+    }
+    return TriMesh::VertexHandle();
+  };
+  for (auto v : r.mesh.vertices()) {
+    EXPECT_EQ(to_eigen(r.mesh.point(v)), s.soup.points[static_cast<std::size_t>(r.vertex_node[static_cast<std::size_t>(v.idx())])]);
+  }
+  for (int i = 0; i < 3; ++i) EXPECT_TRUE(r.mesh.find_halfedge(vertex(s.k[i]), vertex(s.k[i + 1])).is_valid()) << i;
+  EXPECT_FALSE(r.mesh.find_halfedge(vertex(s.k[0]), vertex(s.k[2])).is_valid());
+  EXPECT_TRUE(r.mesh.find_halfedge(vertex(s.k[1]), vertex(s.c)).is_valid());
 }
 
 TEST(StitchSlide, NegativeRoundsAreRefused) {

@@ -51,6 +51,7 @@ struct RemeshArgs {
   bool project_border_nodes = false;
   bool no_self_intersection_check = false;
   bool no_obtuse_split_grid = false;
+  bool no_flip_feature_chords = false;
   bool no_distances = false;
   // The options the flags without a field above set directly (their defaults are
   // RemeshOptions' own); run_remesh starts from it.
@@ -103,6 +104,7 @@ void run_remesh(RemeshArgs& args) {
   if (args.project_border_nodes) options.surfmesh.project_border_nodes = true;
   if (args.no_self_intersection_check) options.stitch.check_self_intersections = false;
   if (args.no_obtuse_split_grid) options.stitch.obtuse_split_grid = false;
+  if (args.no_flip_feature_chords) options.stitch.flip_feature_chords = false;
   if (args.no_distances) options.compute_distances = false;
   if (args.threads) options.set_threads(*args.threads);
   if (!args.cell_grid.empty()) {
@@ -237,6 +239,10 @@ void add_expert_options(CLI::App& cmd, RemeshArgs& args) {
   add("--collapse-below-angle", o.stitch.collapse_below_angle_deg,
       "Collapse the shortest edge of triangles with an angle (deg) below this before the optimisation "
       "(in [0, 60); 0 = off)");
+  cmd.add_flag("--no-flip-feature-chords", args.no_flip_feature_chords,
+               "Edges inside a patch between two nodes of one crease (no neighbours along it) stay locked as "
+               "before session 19 (docs/stitch.md \"Chords between the nodes of a crease, session 19\")")
+      ->group("Finer settings");
   cmd.add_flag("--no-obtuse-split-grid", args.no_obtuse_split_grid,
                "The obtuse splits try no grid of places for their node (off anyway with a cell grid; "
                "docs/stitch.md \"Split nodes on a grid, session 18\")")
