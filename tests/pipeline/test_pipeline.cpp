@@ -1417,6 +1417,9 @@ TriMesh fin_surface(double wobble) {
 TEST(Pipeline, FinRimCurvesAreNoFeatures) {
   const TriMesh mesh = fin_surface(0.02);
   RemeshOptions options = fast_options();
+  // The fits of session 18 (8 final BA passes): with session 19's default (0) the slab keeps
+  // 10 obtuse triangles with and without the rim curves, so there is no gain to assert.
+  options.surfmesh.fit.final_passes = 8;
   const RemeshResult with = remesh(mesh, options);
   options.surfmesh.fin_rim_width = 0.0;
   const RemeshResult without = remesh(mesh, options);
