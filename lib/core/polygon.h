@@ -15,6 +15,7 @@ namespace nurbsfront {
 //! Eigen::Vector2d or a reference to one). False for n < 3 (no crossing).
 template <class PointAt>
 [[nodiscard]] bool polygon_contains(std::size_t n, const PointAt& point, const Eigen::Vector2d& q) {
+  if (n < 3) return false;
   bool inside = false;
   for (std::size_t i = 0, j = n - 1; i < n; j = i++) {
     const Eigen::Vector2d& a = point(i);

@@ -217,7 +217,7 @@ TEST(ParallelTeam, TwoWorkersRunAtTheSameTimeInEveryLoop) {
       arrived_changed.notify_all();
       if (arrived_changed.wait_for(lock, std::chrono::seconds(20), [&] { return arrived >= 2; })) ++met;
     });
-    EXPECT_EQ(met, 2) << loop;
+    ASSERT_EQ(met, 2) << "loop " << loop << ": a worker did not run beside the caller within 20 s";
     ASSERT_EQ(ids.size(), 2U);
     EXPECT_NE(ids[0], ids[1]);
   }

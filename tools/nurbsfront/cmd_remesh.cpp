@@ -349,9 +349,9 @@ void add_remesh_command(CLI::App& app) {
       ->check(CLI::Range(0.0, 1.0));
   cmd->add_option("--fin-strip-max-lost-corners", args->base.fin_strip_max_lost_corners,
                   "The fin-strip merge's corner guard: a strip joins a neighbour only if at most this many of its "
-                  "corners (vertices where 3+ patches meet) are left with two patches (a fin's tip is pinned by its "
-                  "corners; -1 = no guard; default 1; docs/segment.md \"Fin strips: a corner guard, session 19\")")
-      ->check(CLI::Range(-1, 1000000));
+                  "corners (vertices with 3+ sides: patches, or the input's boundary as one) are left with two (a fin's "
+                  "tip is pinned by its corners; >= -1, -1 = no guard; default 1; docs/segment.md \"Fin strips: a corner "
+                  "guard, session 19\")");
   cmd->add_option("--narrow-widen", args->base.narrow_widen_width,
                   "On inputs not taken for marching cubes, patches narrower than this many target edges take faces "
                   "from their wider neighbours across borders that are no crease, within the slope bound, until "
