@@ -364,13 +364,9 @@ TEST(StitchFidelitySlow, KeptFaceDistancesEqualFreshOnes) {
   // mean edges, after one and after two sweeps that move and split: every kept figure equals
   // the face's distance measured afresh where it is now, and many are kept.
   const Brain brain;
-  const auto& [input, surface, plain_options, plain] = brain;
-  ASSERT_TRUE(plain.report.ok());
-  StitchOptions options = plain_options;
-  options.fidelity_distance_edges = 0.25;
+  ASSERT_TRUE(brain.plain.report.ok());
   for (const int before : {1, 2}) {
-    const auto picked = stitch_detail::fidelity_candidates(input, options, border_nodes(surface, plain),
-                                                           surface.input_mean_edge, plain, true, before);
+    const auto picked = quarter_edge_candidates(brain, true, before);
     ASSERT_GT(picked.n_changed_before, 0u) << before;
     EXPECT_GT(picked.n_kept_face_distances, 50u) << before;  // 113 and 238
     EXPECT_EQ(picked.n_stale_face_distances, 0u) << before;

@@ -23,6 +23,61 @@
 namespace nurbsfront {
 namespace {
 
+// Appends the triangle (u, v, w) of patch p to the soup, ordered so that its normal points
+// along `up` (the patch's outward side).
+void add_facing_triangle(TriangleSoup& soup, std::vector<int>& face_patch, int p, int u, int v, int w,
+                         const Eigen::Vector3d& up) {
+  const auto& q = soup.points;
+  const double side = (q[static_cast<std::size_t>(v)] - q[static_cast<std::size_t>(u)])
+                          .cross(q[static_cast<std::size_t>(w)] - q[static_cast<std::size_t>(u)])
+                          .dot(up);
+  if (side < 0.0) std::swap(v, w);
+  soup.triangles.push_back({static_cast<std::uint32_t>(u), static_cast<std::uint32_t>(v), static_cast<std::uint32_t>(w)});
+  face_patch.push_back(p);
+}
+
+// The SurfaceMesh of a hand-made soup whose curves (m.curve_nodes, m.curve_is_feature) are
+// set: its nodes and triangles, every node a border node of the curve listing it last, the
+// given corners, and each of the n_patches patches fitted over its own faces.
+void finish_surface(SurfaceMesh& m, const TriangleSoup& soup, const std::vector<int>& face_patch,
+                    const std::vector<int>& corners, int n_patches) {
+  m.nodes = soup.points;
+  for (const auto& t : soup.triangles) m.triangles.push_back({int(t[0]), int(t[1]), int(t[2])});
+  m.triangle_patch = face_patch;
+  m.node_kind.assign(m.nodes.size(), NodeKind::Border);
+  m.node_owner.assign(m.nodes.size(), -1);
+  for (std::size_t c = 0; c < m.curve_nodes.size(); ++c) {
+    for (const int node : m.curve_nodes[c]) m.node_owner[static_cast<std::size_t>(node)] = static_cast<int>(c);
+  }
+  for (const int node : corners) {
+    m.node_kind[static_cast<std::size_t>(node)] = NodeKind::Corner;
+    m.node_owner[static_cast<std::size_t>(node)] = -1;
+  }
+  m.n_border_nodes = m.nodes.size();
+  for (int p = 0; p < n_patches; ++p) {
+    std::vector<Eigen::Vector3d> points, centroids, normals;
+    std::set<std::uint32_t> vertices;
+    for (std::size_t t = 0; t < soup.triangles.size(); ++t) {
+      if (face_patch[t] != p) continue;
+      const auto& tr = soup.triangles[t];
+      const auto& q = soup.points;
+      normals.push_back((q[tr[1]] - q[tr[0]]).cross(q[tr[2]] - q[tr[0]]).normalized());
+      centroids.push_back((q[tr[0]] + q[tr[1]] + q[tr[2]]) / 3.0);
+      for (auto v : tr) vertices.insert(v);
+    }
+    for (auto v : vertices) points.push_back(soup.points[v]);
+    PatchSurface fitted;
+    fitted.frame = patch_frame(centroids, normals);
+    FitOptions fit;
+    fit.max_levels = 3;
+    fitted.field = fit_height_field(fitted.frame.to_local(points), fit).field;
+    m.surfaces.push_back(fitted);
+  }
+  m.patches.resize(static_cast<std::size_t>(n_patches));
+  m.target_size = 1.0;
+  m.input_mean_edge = 1.0;
+}
+
 // A U-shaped open surface, turned by a generic rotation: a flat strip (patch 0, width 0.8)
 // between two straight crease curves A and B (90 deg to the walls) whose nodes face each other
 // one piece (1) apart, those of B shifted by +-0.1 from A's, so that each quad of the strip
@@ -62,14 +117,7 @@ Strip make_strip() {
   // Triangles, each oriented along its patch's outward normal (+z, -y, +y before the turn).
   auto tri = [&](int p, int u, int v, int w) {
     const Eigen::Vector3d local(0.0, p == 0 ? 0.0 : (p == 1 ? -1.0 : 1.0), p == 0 ? 1.0 : 0.0);
-    const Eigen::Vector3d up = turn * local;
-    const auto& q = s.soup.points;
-    const double side = (q[static_cast<std::size_t>(v)] - q[static_cast<std::size_t>(u)])
-                            .cross(q[static_cast<std::size_t>(w)] - q[static_cast<std::size_t>(u)])
-                            .dot(up);
-    if (side < 0.0) std::swap(v, w);
-    s.soup.triangles.push_back({static_cast<std::uint32_t>(u), static_cast<std::uint32_t>(v), static_cast<std::uint32_t>(w)});
-    s.face_patch.push_back(p);
+    add_facing_triangle(s.soup, s.face_patch, p, u, v, w, turn * local);
   };
   for (int i = 0; i < Strip::kPieces; ++i) {
     tri(0, s.a[i], s.a[i + 1], s.b[i + 1]);
@@ -84,9 +132,6 @@ Strip make_strip() {
   // The SurfaceMesh: curves 0 (A) and 1 (B) are creases, 2 and 3 the walls' boundaries
   // (from a crease's end along the bottom to its other end).
   SurfaceMesh& m = s.surface;
-  m.nodes = s.soup.points;
-  for (const auto& t : s.soup.triangles) m.triangles.push_back({int(t[0]), int(t[1]), int(t[2])});
-  m.triangle_patch = s.face_patch;
   m.curve_is_feature = {1, 1, 1, 1};
   m.curve_nodes = {s.a, s.b, {}, {}};
   for (int c = 2; c <= 3; ++c) {
@@ -97,39 +142,8 @@ Strip make_strip() {
     list.insert(list.end(), row.begin(), row.end());
     list.push_back(top.back());
   }
-  m.node_kind.assign(m.nodes.size(), NodeKind::Border);
-  m.node_owner.assign(m.nodes.size(), -1);
-  for (std::size_t c = 0; c < m.curve_nodes.size(); ++c) {
-    for (const int node : m.curve_nodes[c]) m.node_owner[static_cast<std::size_t>(node)] = static_cast<int>(c);
-  }
   s.corners = {s.a.front(), s.a.back(), s.b.front(), s.b.back()};
-  for (const int node : s.corners) {
-    m.node_kind[static_cast<std::size_t>(node)] = NodeKind::Corner;
-    m.node_owner[static_cast<std::size_t>(node)] = -1;
-  }
-  m.n_border_nodes = m.nodes.size();
-  for (int p = 0; p < 3; ++p) {
-    std::vector<Eigen::Vector3d> points, centroids, normals;
-    std::set<std::uint32_t> vertices;
-    for (std::size_t t = 0; t < s.soup.triangles.size(); ++t) {
-      if (s.face_patch[t] != p) continue;
-      const auto& tr = s.soup.triangles[t];
-      const auto& q = s.soup.points;
-      normals.push_back((q[tr[1]] - q[tr[0]]).cross(q[tr[2]] - q[tr[0]]).normalized());
-      centroids.push_back((q[tr[0]] + q[tr[1]] + q[tr[2]]) / 3.0);
-      for (auto v : tr) vertices.insert(v);
-    }
-    for (auto v : vertices) points.push_back(s.soup.points[v]);
-    PatchSurface fitted;
-    fitted.frame = patch_frame(centroids, normals);
-    FitOptions fit;
-    fit.max_levels = 3;
-    fitted.field = fit_height_field(fitted.frame.to_local(points), fit).field;
-    m.surfaces.push_back(fitted);
-  }
-  m.patches.resize(3);
-  m.target_size = 1.0;
-  m.input_mean_edge = 1.0;
+  finish_surface(m, s.soup, s.face_patch, s.corners, 3);
   return s;
 }
 
@@ -251,13 +265,7 @@ ChordFan make_chord_fan() {
   std::vector<int> face_patch;
   auto tri = [&](int p, int u, int v, int w) {
     const Eigen::Vector3d up = turn * (p == 0 ? Eigen::Vector3d(0.0, 0.0, 1.0) : Eigen::Vector3d(0.0, -1.0, 0.0));
-    const auto& q = s.soup.points;
-    const double side = (q[static_cast<std::size_t>(v)] - q[static_cast<std::size_t>(u)])
-                            .cross(q[static_cast<std::size_t>(w)] - q[static_cast<std::size_t>(u)])
-                            .dot(up);
-    if (side < 0.0) std::swap(v, w);
-    s.soup.triangles.push_back({static_cast<std::uint32_t>(u), static_cast<std::uint32_t>(v), static_cast<std::uint32_t>(w)});
-    face_patch.push_back(p);
+    add_facing_triangle(s.soup, face_patch, p, u, v, w, up);
   };
   tri(0, s.k[0], s.k[1], s.k[2]);
   tri(0, s.k[0], s.k[2], s.c);
@@ -266,46 +274,12 @@ ChordFan make_chord_fan() {
   for (int i = 0; i < 4; ++i) tri(1, s.k[i], s.wall[i], s.wall[i + 1]);
   for (int i = 0; i < 3; ++i) tri(1, s.k[i], s.wall[i + 1], s.k[i + 1]);
   SurfaceMesh& m = s.surface;
-  m.nodes = s.soup.points;
-  for (const auto& t : s.soup.triangles) m.triangles.push_back({int(t[0]), int(t[1]), int(t[2])});
-  m.triangle_patch = face_patch;
   // Curves: 0 the crease K, 1 patch 0's boundary (k3, t, c, k0), 2 the wall's boundary.
   m.curve_is_feature = {1, 1, 1};
   m.curve_nodes = {s.k, {s.k[3], s.t, s.c, s.k[0]}, {s.k[0]}};
   m.curve_nodes[2].insert(m.curve_nodes[2].end(), s.wall.begin(), s.wall.end());
   m.curve_nodes[2].push_back(s.k[3]);
-  m.node_kind.assign(m.nodes.size(), NodeKind::Border);
-  m.node_owner.assign(m.nodes.size(), -1);
-  for (std::size_t c = 0; c < m.curve_nodes.size(); ++c) {
-    for (const int node : m.curve_nodes[c]) m.node_owner[static_cast<std::size_t>(node)] = static_cast<int>(c);
-  }
-  for (const int node : {s.k[0], s.k[3]}) {
-    m.node_kind[static_cast<std::size_t>(node)] = NodeKind::Corner;
-    m.node_owner[static_cast<std::size_t>(node)] = -1;
-  }
-  m.n_border_nodes = m.nodes.size();
-  for (int p = 0; p < 2; ++p) {
-    std::vector<Eigen::Vector3d> points, centroids, normals;
-    std::set<std::uint32_t> vertices;
-    for (std::size_t t = 0; t < s.soup.triangles.size(); ++t) {
-      if (face_patch[t] != p) continue;
-      const auto& tr = s.soup.triangles[t];
-      const auto& q = s.soup.points;
-      normals.push_back((q[tr[1]] - q[tr[0]]).cross(q[tr[2]] - q[tr[0]]).normalized());
-      centroids.push_back((q[tr[0]] + q[tr[1]] + q[tr[2]]) / 3.0);
-      for (auto v : tr) vertices.insert(v);
-    }
-    for (auto v : vertices) points.push_back(s.soup.points[v]);
-    PatchSurface fitted;
-    fitted.frame = patch_frame(centroids, normals);
-    FitOptions fit;
-    fit.max_levels = 3;
-    fitted.field = fit_height_field(fitted.frame.to_local(points), fit).field;
-    m.surfaces.push_back(fitted);
-  }
-  m.patches.resize(2);
-  m.target_size = 1.0;
-  m.input_mean_edge = 1.0;
+  finish_surface(m, s.soup, face_patch, {s.k[0], s.k[3]}, 2);
   return s;
 }
 
