@@ -7,10 +7,8 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
-#include <condition_variable>
 #include <exception>
 #include <memory>
-#include <mutex>
 #include <string>
 
 #include "nurbsfront/core/error.h"
@@ -33,22 +31,31 @@ constexpr std::size_t kSplitCheckStride = 4;
 constexpr double kDefaultChordRelative = 0.05;
 
 // Runs task(i) for every i in [0, n) on `threads` workers (parallel::for_chunks, one index
-// per chunk). Progress is reported from the calling thread (fraction f0 .. f1); returning
-// false from the callback stops the workers and throws Cancelled. A task's exception is
-// rethrown here after the workers joined.
+// per chunk). The calling thread is worker 0 and reports the progress (fraction f0 .. f1)
+// after each of its own indices and once at the end; returning false from the callback
+// stops the workers and throws Cancelled. A task's exception is rethrown here after the
+// workers joined. (A for_chunks monitor instead would be woken by the workers after every
+// index: on the liver's 2 028 patches about 6 000 wake-ups of the calling thread, each
+// taking a core from a worker; docs/benchmarks/pipeline.md, session 20.)
 template <class Task>
 void run_parallel(std::size_t n, unsigned threads, const ProgressCallback& progress, double f0, double f1, const Task& task) {
   constexpr std::string_view kStage = "surfmesh: patches";
   if (n == 0) return;
-  const bool finished = parallel::for_chunks(
-      n, threads, 1,
-      [&](std::size_t begin, std::size_t end, unsigned) {
-        for (std::size_t i = begin; i < end; ++i) task(i);
-      },
-      [&](std::size_t done) {
-        return !progress || progress(kStage, f0 + (f1 - f0) * static_cast<double>(done) / static_cast<double>(n));
-      });
-  if (!finished) throw Cancelled();
+  const auto fraction = [&](std::size_t done) {
+    return f0 + (f1 - f0) * static_cast<double>(done) / static_cast<double>(n);
+  };
+  std::atomic<std::size_t> done{0};
+  std::size_t reported = 0;  // written by worker 0 (the calling thread) only
+  parallel::for_chunks(n, threads, 1, [&](std::size_t begin, std::size_t end, unsigned worker) {
+    for (std::size_t i = begin; i < end; ++i) {
+      task(i);
+      const std::size_t now = done.fetch_add(1) + 1;
+      if (worker != 0 || !progress) continue;
+      reported = now;
+      if (!progress(kStage, fraction(now))) throw Cancelled();
+    }
+  });
+  if (progress && reported != n && !progress(kStage, f1)) throw Cancelled();
 }
 
 // Moves each border node to the mean of its vertical projections onto the fitted surfaces

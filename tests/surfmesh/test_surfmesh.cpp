@@ -17,6 +17,8 @@
 #include <numeric>
 #include <set>
 #include <string>
+#include <string_view>
+#include <thread>
 #include <variant>
 
 #include "fixtures/shapes.h"
@@ -1462,10 +1464,46 @@ TEST(Surfmesh, BadOptionsAndMismatchedSegmentation) {
   EXPECT_THROW((void)mesh_surface(mesh, broken, {}), InvalidInput);
 }
 
+// The patch loops' progress comes from the calling thread (worker 0 of the loop, after each
+// of its patches, and once at the end), rising to 1; the meshes do not depend on the
+// thread count or on a callback being set.
+TEST(Surfmesh, PatchProgressFromTheCallingThreadAndSameMeshOnAnyThreadCount) {
+  const TriMesh mesh = scene_mesh("sphere", 24, SampleMode::LevelSet);
+  const Segmentation seg = segment(mesh);
+  ASSERT_GE(seg.patches.size(), 6u);
+  SurfMeshOptions quiet;
+  quiet.threads = 1;
+  const SurfaceMesh one = mesh_surface(mesh, seg, quiet);
+  for (const int threads : {1, 2, 4}) {
+    SurfMeshOptions options;
+    options.threads = threads;
+    const std::thread::id caller = std::this_thread::get_id();
+    std::vector<double> fractions;
+    bool other_thread = false;
+    options.progress = [&](std::string_view stage, double fraction) {
+      other_thread = other_thread || std::this_thread::get_id() != caller;
+      if (stage == "surfmesh: patches") fractions.push_back(fraction);
+      return true;
+    };
+    const SurfaceMesh sm = mesh_surface(mesh, seg, options);
+    EXPECT_FALSE(other_thread) << threads;
+    ASSERT_FALSE(fractions.empty()) << threads;
+    EXPECT_TRUE(std::is_sorted(fractions.begin(), fractions.end())) << threads;
+    EXPECT_GE(fractions.front(), 0.0) << threads;
+    EXPECT_EQ(fractions.back(), 1.0) << threads;
+    EXPECT_EQ(sm.nodes, one.nodes) << threads;
+    EXPECT_EQ(sm.triangles, one.triangles) << threads;
+    quiet.threads = threads;
+    const SurfaceMesh silent = mesh_surface(mesh, seg, quiet);
+    EXPECT_EQ(silent.nodes, one.nodes) << threads;
+    EXPECT_EQ(silent.triangles, one.triangles) << threads;
+  }
+}
+
 TEST(Surfmesh, CancelledByProgress) {
   const TriMesh mesh = scene_mesh("sphere", 16, SampleMode::LevelSet);
   const Segmentation seg = segment(mesh);
-  for (const int threads : {1, 2}) {
+  for (const int threads : {1, 2, 4}) {
     SurfMeshOptions options;
     options.threads = threads;
     int calls = 0;
