@@ -95,6 +95,12 @@ class Optimiser {
     std::vector<std::array<TriMesh::VertexHandle, 2>> flips;
   };
 
+  // Scratch of plan_edge_split (one per thread): the flips of a split tried and of the best
+  // one so far.
+  struct SplitScratch {
+    std::vector<std::array<TriMesh::VertexHandle, 2>> flips, best_flips;
+  };
+
  public:
   Optimiser(const SurfaceMesh& surface, const StitchOptions& options, StitchResult& result,
             const std::vector<std::uint8_t>& is_feature)
@@ -771,6 +777,61 @@ class Optimiser {
     auto mark = [&](TriMesh::FaceHandle g) {
       if (g.is_valid() && static_cast<std::size_t>(g.idx()) < n_faces) changed[static_cast<std::size_t>(g.idx())] = 1;
     };
+    // The plans of the faces obtuse at the start, taken ahead on the threads on the mesh as it
+    // is now (two or more threads). A plan reads the faces around the corners a, b, c of its
+    // face and d across (a, b) (and of the vertices across the edges of those triangles, for
+    // the flips and the far piece): all of them around a, b, c, d or a neighbour of theirs. A
+    // split or flip of the sweep marks every vertex of the faces it changed (`touched`; no
+    // vertex moves, other faces keep their corners and patches), so a plan is the serial
+    // sweep's when none of those vertices is marked; else the face is planned again here.
+    std::vector<int> ahead_of(n_faces, -1);
+    std::vector<SplitPlan> ahead;
+    if (options_.n_threads >= 2) {
+      std::vector<int> faces;
+      for (std::size_t fi = 0; fi < n_faces; ++fi) {
+        if (opposite[fi].is_valid()) faces.push_back(static_cast<int>(fi));
+      }
+      ahead.resize(faces.size());
+      std::vector<SplitScratch> scratch(options_.n_threads);
+      std::vector<SplitPlan> far_scratch(options_.n_threads);
+      constexpr std::size_t kPlanChunk = 8;
+      parallel::for_chunks(faces.size(), options_.n_threads, kPlanChunk, [&](std::size_t begin, std::size_t end, unsigned worker) {
+        for (std::size_t k = begin; k < end; ++k) {
+          const auto fi = static_cast<std::size_t>(faces[k]);
+          ahead_of[fi] = static_cast<int>(k);
+          plan_face_split(opposite[fi], vertex_node, is_feature, refused, scratch[worker], ahead[k], far_scratch[worker]);
+        }
+      });
+    }
+    std::vector<std::uint8_t> touched(ahead.empty() ? 0 : mesh_.n_vertices(), 0);
+    auto touch_face = [&](TriMesh::FaceHandle g) {
+      if (touched.empty() || !g.is_valid()) return;
+      for (auto u : mesh_.fv_range(g)) {
+        const auto i = static_cast<std::size_t>(u.idx());
+        if (i >= touched.size()) touched.resize(i + 1, 0);
+        touched[i] = 1;
+      }
+    };
+    auto is_touched = [&](TriMesh::VertexHandle v) {
+      const auto i = static_cast<std::size_t>(v.idx());
+      return i >= touched.size() || touched[i] != 0;
+    };
+    // Whether no vertex around a, b, c (h's triangle) and d (across h) is touched.
+    auto untouched_around = [&](TriMesh::HalfedgeHandle h) {
+      const auto o = mesh_.opposite_halfedge_handle(h);
+      std::array<TriMesh::VertexHandle, 4> corners{mesh_.from_vertex_handle(h), mesh_.to_vertex_handle(h),
+                                                   mesh_.to_vertex_handle(mesh_.next_halfedge_handle(h)),
+                                                   mesh_.is_boundary(o) ? TriMesh::VertexHandle()
+                                                                        : mesh_.to_vertex_handle(mesh_.next_halfedge_handle(o))};
+      for (const auto v : corners) {
+        if (!v.is_valid()) continue;
+        if (is_touched(v)) return false;
+        for (auto u : mesh_.vv_range(v)) {
+          if (is_touched(u)) return false;
+        }
+      }
+      return true;
+    };
     SplitPlan plan, far;
     for (std::size_t fi = 0; fi < n_faces; ++fi) {
       const TriMesh::FaceHandle f(static_cast<int>(fi));
@@ -778,19 +839,10 @@ class Optimiser {
       const TriMesh::HalfedgeHandle h = changed[fi] != 0 ? obtuse_opposite(f) : opposite[fi];
       NURBSFRONT_DEBUG_ASSERT(changed[fi] != 0 || h == obtuse_opposite(f));  // the cache is never stale
       if (!h.is_valid()) continue;
-      const Vec c = point(mesh_, mesh_.to_vertex_handle(mesh_.next_halfedge_handle(h)));
-      plan_edge_split(h, c, vertex_node, is_feature, refused, plan);
-      // The far piece of a strip (docs/stitch.md "Far pieces of strips"): split instead when
-      // that leaves fewer obtuse triangles. Only a plan that flips h relieves f (the two plans'
-      // counts are over different triangles otherwise; reviewer, session 15).
-      const TriMesh::HalfedgeHandle g = far_piece(h);
-      if (g.is_valid()) {
-        plan_edge_split(g, c, vertex_node, is_feature, refused, far);
-        const auto ha = mesh_.from_vertex_handle(h), hb = mesh_.to_vertex_handle(h);
-        const bool flips_h = std::any_of(far.flips.begin(), far.flips.end(), [&](const auto& e) {
-          return (e[0] == ha && e[1] == hb) || (e[0] == hb && e[1] == ha);
-        });
-        if (flips_h && far.best >= 0 && (plan.best < 0 || far.best < plan.best)) std::swap(plan, far);
+      if (changed[fi] == 0 && ahead_of[fi] >= 0 && untouched_around(h)) {
+        std::swap(plan, ahead[static_cast<std::size_t>(ahead_of[fi])]);
+      } else {
+        plan_face_split(h, vertex_node, is_feature, refused, split_scratch_, plan, far);
       }
       if (plan.best < 0) continue;
       const auto o = mesh_.opposite_halfedge_handle(plan.h);
@@ -801,7 +853,10 @@ class Optimiser {
       const int patch_d = plan.one_sided ? -1 : face_patch_[static_cast<std::size_t>(mesh_.face_handle(o).idx())];
       const auto vc = mesh_.to_vertex_handle(mesh_.next_halfedge_handle(plan.h));
       mesh_.split_edge(mesh_.edge_handle(plan.h), v);
-      for (auto face : mesh_.vf_range(v)) mark(face);  // the two split faces and the new ones
+      for (auto face : mesh_.vf_range(v)) {  // the two split faces and the new ones
+        mark(face);
+        touch_face(face);
+      }
       face_patch_.resize(mesh_.n_faces(), -1);
       for (auto e : mesh_.vf_range(v)) {
         int& patch = face_patch_[static_cast<std::size_t>(e.idx())];
@@ -820,13 +875,34 @@ class Optimiser {
         const auto e = mesh_.edge_handle(mesh_.find_halfedge(u, w));
         if (mesh_.is_flip_ok(e)) {
           mesh_.flip(e);
-          mark(mesh_.face_handle(mesh_.halfedge_handle(e, 0)));
-          mark(mesh_.face_handle(mesh_.halfedge_handle(e, 1)));
+          for (const int k : {0, 1}) {
+            mark(mesh_.face_handle(mesh_.halfedge_handle(e, k)));
+            touch_face(mesh_.face_handle(mesh_.halfedge_handle(e, k)));
+          }
           ++n_split_flips_;
         }
       }
     }
     return n_splits;
+  }
+
+  // The split of a face whose obtuse corner c is opposite h (split_sweep): the plan of h's
+  // edge, or of the far piece of a strip (docs/stitch.md "Far pieces of strips") when that
+  // leaves fewer obtuse triangles. Only a plan that flips h relieves the face (the two plans'
+  // counts are over different triangles otherwise; reviewer, session 15). `far`: scratch.
+  void plan_face_split(TriMesh::HalfedgeHandle h, const std::vector<int>& vertex_node,
+                       const std::vector<std::uint8_t>& is_feature, const std::vector<std::array<int, 2>>& refused,
+                       SplitScratch& scratch, SplitPlan& plan, SplitPlan& far) const {
+    const Vec c = point(mesh_, mesh_.to_vertex_handle(mesh_.next_halfedge_handle(h)));
+    plan_edge_split(h, c, vertex_node, is_feature, refused, scratch, plan);
+    const TriMesh::HalfedgeHandle g = far_piece(h);
+    if (!g.is_valid()) return;
+    plan_edge_split(g, c, vertex_node, is_feature, refused, scratch, far);
+    const auto ha = mesh_.from_vertex_handle(h), hb = mesh_.to_vertex_handle(h);
+    const bool flips_h = std::any_of(far.flips.begin(), far.flips.end(), [&](const auto& e) {
+      return (e[0] == ha && e[1] == hb) || (e[0] == hb && e[1] == ha);
+    });
+    if (flips_h && far.best >= 0 && (plan.best < 0 || far.best < plan.best)) std::swap(plan, far);
   }
 
   // The halfedge (a, b) of face f opposite its obtuse corner c ((a - c) . (b - c) < 0; the
@@ -847,7 +923,7 @@ class Optimiser {
   // passes (or the edge is refused or may not be split).
   void plan_edge_split(TriMesh::HalfedgeHandle h, const Vec& apex, const std::vector<int>& vertex_node,
                        const std::vector<std::uint8_t>& is_feature, const std::vector<std::array<int, 2>>& refused,
-                       SplitPlan& plan) {
+                       SplitScratch& scratch, SplitPlan& plan) const {
     plan.h = h;
     plan.best = -1;
     const auto va = mesh_.from_vertex_handle(h), vb = mesh_.to_vertex_handle(h);
@@ -859,24 +935,25 @@ class Optimiser {
     const double foot = std::clamp((apex - a).dot(b - a) / (b - a).squaredNorm(), kSplitMin, 1.0 - kSplitMin);
     // The best of: the foot, the midpoint; each without and with flips (fewest obtuse
     // triangles; the first of equals).
-    best_flips_.clear();
+    scratch.best_flips.clear();
     for (const double t : {foot, 0.5}) {
       const Vec m0 = a + t * (b - a);
       const Vec m = plan.on_segment ? m0 : project(plan.info, m0);
       // Not far off the edge: a fit far off there (a border of a patch fitted badly).
       if (!m.allFinite() || (m - m0).norm() > kSplitMaxOffset * (b - a).norm()) continue;
       for (const bool with_flips : {false, true}) {
-        const int n = evaluate_split(h, plan.one_sided, m, plan.on_segment, with_flips, false, flips_);
+        const int n = evaluate_split(h, plan.one_sided, m, plan.on_segment, with_flips, false, scratch.flips);
         if (n >= 0 && (plan.best < 0 || n < plan.best)) {
           plan.best = n;
           plan.m = m;
-          best_flips_ = flips_;
+          scratch.best_flips = scratch.flips;
         }
       }
     }
-    if (!plan.on_segment) relaxed_split(h, plan.one_sided, plan.info, a, b, plan.best, plan.m);
-    if (!plan.on_segment && plan.best != 0 && options_.obtuse_split_grid) grid_split(h, plan.one_sided, plan.info, a, b, plan.best, plan.m);
-    plan.flips = best_flips_;
+    if (!plan.on_segment) relaxed_split(h, plan.one_sided, plan.info, a, b, scratch, plan.best, plan.m);
+    if (!plan.on_segment && plan.best != 0 && options_.obtuse_split_grid)
+      grid_split(h, plan.one_sided, plan.info, a, b, scratch, plan.best, plan.m);
+    plan.flips = scratch.best_flips;
   }
 
   // The far piece of a strip (issue 5; docs/stitch.md "Far pieces of strips"): h is the edge
@@ -923,19 +1000,19 @@ class Optimiser {
   // floor (at angle_floor_deg itself the DRAM scene's smallest angle away from features fell
   // 27.4 -> 25.2 deg), and a split that moves an obtuse angle off a fixed node passes. Updates
   // best (fewest obtuse new triangles; only a strictly better one replaces it), best_m and
-  // best_flips_ as split_sweep's own candidates do.
-  void relaxed_split(TriMesh::HalfedgeHandle h, bool one_sided, const NodeInfo& info, const Vec& a, const Vec& b, int& best,
-                     Vec& best_m) {
+  // the best flips as split_sweep's own candidates do.
+  void relaxed_split(TriMesh::HalfedgeHandle h, bool one_sided, const NodeInfo& info, const Vec& a, const Vec& b,
+                     SplitScratch& scratch, int& best, Vec& best_m) const {
     const auto o = mesh_.opposite_halfedge_handle(h);
     const Vec c = point(mesh_, mesh_.to_vertex_handle(mesh_.next_halfedge_handle(h)));
     const Vec d = one_sided ? Vec::Zero() : point(mesh_, mesh_.to_vertex_handle(mesh_.next_halfedge_handle(o)));
     Vec m = best >= 0 ? best_m : Vec(0.5 * (a + b));
     for (int iteration = 0; iteration < kRelaxedSplitIterations; ++iteration) {
       // The ring of m after the split with flips: a, c, b (, d) and the far corners of the flips.
-      (void)evaluate_split(h, one_sided, m, false, true, true, flips_);
+      (void)evaluate_split(h, one_sided, m, false, true, true, scratch.flips);
       Vec sum = a + b + c + (one_sided ? Vec::Zero() : d);
       int n_ring = one_sided ? 3 : 4;
-      for (const auto& [u, w] : flips_) {
+      for (const auto& [u, w] : scratch.flips) {
         const auto g = mesh_.find_halfedge(w, u);
         sum += point(mesh_, mesh_.to_vertex_handle(mesh_.next_halfedge_handle(g)));
         ++n_ring;
@@ -944,20 +1021,21 @@ class Optimiser {
       const Vec q = project(info, target);
       if (!q.allFinite() || (q - target).norm() > kSplitMaxOffset * (b - a).norm()) return;
       m = q;
-      take_relaxed_place(h, one_sided, m, best, best_m);
+      take_relaxed_place(h, one_sided, m, scratch, best, best_m);
     }
   }
 
   // A place m off the segment for the split of h's edge, evaluated `relaxed` without and with
   // flips (relaxed_split's and grid_split's candidates): it replaces best (and best_m, the
   // flips) when it leaves strictly fewer obtuse triangles.
-  void take_relaxed_place(TriMesh::HalfedgeHandle h, bool one_sided, const Vec& m, int& best, Vec& best_m) {
+  void take_relaxed_place(TriMesh::HalfedgeHandle h, bool one_sided, const Vec& m, SplitScratch& scratch, int& best,
+                          Vec& best_m) const {
     for (const bool with_flips : {false, true}) {
-      const int n = evaluate_split(h, one_sided, m, false, with_flips, true, flips_);
+      const int n = evaluate_split(h, one_sided, m, false, with_flips, true, scratch.flips);
       if (n >= 0 && (best < 0 || n < best)) {
         best = n;
         best_m = m;
-        best_flips_ = flips_;
+        scratch.best_flips = scratch.flips;
       }
     }
   }
@@ -972,8 +1050,8 @@ class Optimiser {
   // split's node (not more than kSplitMaxOffset of the edge off) and evaluated `relaxed`
   // without and with flips, in this fixed order; a candidate replaces best only when it
   // leaves strictly fewer obtuse triangles (the first of equals).
-  void grid_split(TriMesh::HalfedgeHandle h, bool one_sided, const NodeInfo& info, const Vec& a, const Vec& b, int& best,
-                  Vec& best_m) {
+  void grid_split(TriMesh::HalfedgeHandle h, bool one_sided, const NodeInfo& info, const Vec& a, const Vec& b,
+                  SplitScratch& scratch, int& best, Vec& best_m) const {
     if (one_sided) return;
     const Vec c = point(mesh_, mesh_.to_vertex_handle(mesh_.next_halfedge_handle(h)));
     if ((a - c).dot(b - c) >= 0.0) return;
@@ -988,7 +1066,7 @@ class Optimiser {
         const Vec target = middle + (i * step) * along + (j * step) * across;
         const Vec m = project(info, target);
         if (!m.allFinite() || (m - target).norm() > kSplitMaxOffset * length) continue;
-        take_relaxed_place(h, one_sided, m, best, best_m);
+        take_relaxed_place(h, one_sided, m, scratch, best, best_m);
       }
     }
   }
@@ -1424,8 +1502,8 @@ class Optimiser {
   // split_sweep's node ids and feature flags (they grow with the splits).
   const std::vector<int>* vertex_node_ = nullptr;
   const std::vector<std::uint8_t>* is_split_feature_ = nullptr;
-  // Scratch of split_sweep: the flips of a split tried and of the best one so far.
-  std::vector<std::array<TriMesh::VertexHandle, 2>> flips_, best_flips_;
+  // split_sweep's scratch on the calling thread (SplitScratch).
+  SplitScratch split_scratch_;
 
  public:
   std::size_t n_split_flips_ = 0;  // flips made by split_sweep
