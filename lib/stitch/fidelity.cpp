@@ -5,6 +5,7 @@
 // does not grow (issue 6: the fits smooth folds narrower than their lattice).
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -508,19 +509,35 @@ class FidelityMover {
     n_gridded_ = probes_.size();
     if (probes_.empty()) return;
     grid_origin_ = probes_[0];
-    for (const Vec& p : probes_) grid_origin_ = grid_origin_.cwiseMin(p);
+    Vec top_corner = probes_[0];
+    for (const Vec& p : probes_) {
+      grid_origin_ = grid_origin_.cwiseMin(p);
+      top_corner = top_corner.cwiseMax(p);
+    }
     grid_cell_ = cell > 0.0 ? cell : 1.0;
-    // By cell key, then sample (a stable radix sort of the samples in order).
+    // By cell key, then sample (a stable radix sort of the samples in order). Sorted by the
+    // cells packed into as many bits as the grid's extent needs (3 radix passes where the
+    // 21-bit fields of grid_key() took 5; the same order), unpacked into grid keys after.
+    // The largest cell on each axis is the cell of the samples' largest coordinates
+    // (cell_of() does not decrease along an axis).
+    const auto top = cell_of(top_corner);
+    std::array<int, 3> bits{};
+    for (std::size_t k = 0; k < 3; ++k) bits[k] = static_cast<int>(std::bit_width(static_cast<std::uint64_t>(top[k])));
     std::vector<std::uint64_t> keys(probes_.size());
     grid_items_.resize(probes_.size());
     for (std::uint32_t i = 0; i < probes_.size(); ++i) {
-      keys[i] = grid_key(cell_of(probes_[i]));
+      const auto c = cell_of(probes_[i]);
+      keys[i] = (static_cast<std::uint64_t>(c[0]) << (bits[1] + bits[2])) | (static_cast<std::uint64_t>(c[1]) << bits[2]) |
+                static_cast<std::uint64_t>(c[2]);
       grid_items_[i] = i;
     }
     quality_detail::radix_sort(keys, grid_items_);
+    const std::uint64_t mask1 = (std::uint64_t{1} << bits[1]) - 1, mask2 = (std::uint64_t{1} << bits[2]) - 1;
     for (std::size_t k = 0; k < keys.size(); ++k) {
       if (k == 0 || keys[k] != keys[k - 1]) {
-        grid_keys_.push_back(keys[k]);
+        const std::uint64_t key = keys[k];
+        grid_keys_.push_back(grid_key({static_cast<std::int64_t>(key >> (bits[1] + bits[2])),
+                                       static_cast<std::int64_t>((key >> bits[2]) & mask1), static_cast<std::int64_t>(key & mask2)}));
         grid_start_.push_back(static_cast<std::uint32_t>(k));
       }
     }

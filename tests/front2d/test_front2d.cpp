@@ -287,6 +287,20 @@ TEST(Front2d, PreDiscretisedBoundaryIsNotSplit) {
   EXPECT_GE(s.mean_alpha, 0.9);
 }
 
+// The obtuse angles of m: how many in all, and how many at a vertex v with marked(v).
+template <class Marked>
+std::pair<int, int> obtuse_angles(const Mesh2d& m, Marked marked) {
+  std::pair<int, int> count{0, 0};
+  for (const auto& t : m.triangles)
+    for (int i = 0; i < 3; ++i) {
+      const Vec& a = m.points[t[i]];
+      if ((m.points[t[(i + 1) % 3]] - a).dot(m.points[t[(i + 2) % 3]] - a) >= 0) continue;
+      ++count.first;
+      if (marked(t[i])) ++count.second;
+    }
+  return count;
+}
+
 // A sheared strip 1 x 0.31 with fixed border nodes (6 pieces along, 2 across: the surface
 // mesher's narrow patch), two corners of 95 deg and two of 85 deg. The old rule closes each
 // 95-deg corner with one triangle (obtuse at the corner); the corner rule puts a node on its
@@ -306,15 +320,7 @@ TEST(Front2d, ObtuseBorderCornerGetsANodeOnItsBisector) {
   for (int i = 0; i < n; ++i) p.segments.push_back({i, (i + 1) % n});
   // Obtuse triangles in all, and those with the obtuse angle at one of the four corners.
   auto obtuse = [&](const Mesh2d& m) {
-    std::pair<int, int> count{0, 0};
-    for (const auto& t : m.triangles)
-      for (int i = 0; i < 3; ++i) {
-        const Vec& a = m.points[t[i]];
-        if ((m.points[t[(i + 1) % 3]] - a).dot(m.points[t[(i + 2) % 3]] - a) >= 0) continue;
-        ++count.first;
-        if (std::find(corner_index.begin(), corner_index.end(), t[i]) != corner_index.end()) ++count.second;
-      }
-    return count;
+    return obtuse_angles(m, [&](int v) { return std::find(corner_index.begin(), corner_index.end(), v) != corner_index.end(); });
   };
   FrontOptions o = uniform(0.167);
   o.split_segments = false;
@@ -356,17 +362,7 @@ TEST(Front2d, CornerRuleAtBorderNodesBetweenNewPoints) {
     const auto n_input = static_cast<int>(p.points.size());
     for (int i = 0; i < n_input; ++i) p.segments.push_back({i, (i + 1) % n_input});
     // Obtuse angles in all, and those at input nodes.
-    auto obtuse = [&](const Mesh2d& m) {
-      std::pair<int, int> count{0, 0};
-      for (const auto& t : m.triangles)
-        for (int i = 0; i < 3; ++i) {
-          const Vec& a = m.points[t[i]];
-          if ((m.points[t[(i + 1) % 3]] - a).dot(m.points[t[(i + 2) % 3]] - a) >= 0) continue;
-          ++count.first;
-          if (t[i] < n_input) ++count.second;
-        }
-      return count;
-    };
+    auto obtuse = [&](const Mesh2d& m) { return obtuse_angles(m, [&](int v) { return v < n_input; }); };
     FrontOptions o = uniform(0.18);
     o.split_segments = false;
     o.corner_split_angle_deg = 180.0;

@@ -95,28 +95,6 @@ TEST(StitchFidelitySlow, MovesAndSplitsBringTheBrainCloserToItsInputAndKeepItsSh
   }
 }
 
-TEST(StitchFidelitySlow, SharedInputIndexGivesTheSameStitch) {
-  // The input's soup and tree built by the caller (the pipeline shares them with the distance
-  // pass): the same moves, splits and mesh as the stitch that builds its own.
-  const Brain brain;
-  const auto& [input, surface, plain_options, plain] = brain;
-  StitchOptions options = plain_options;
-  options.fidelity_distance_edges = 0.25;
-  const StitchResult own = stitch(surface, input, options);
-  const quality_detail::IndexedSoup index(to_soup(input), 2);
-  const StitchResult shared = stitch_detail::stitch_with_input_index(surface, input, index, options);
-  EXPECT_GT(own.report.n_fidelity_moves, 10u);
-  EXPECT_EQ(shared.report.n_fidelity_moves, own.report.n_fidelity_moves);
-  EXPECT_EQ(shared.report.n_fidelity_splits, own.report.n_fidelity_splits);
-  ASSERT_EQ(shared.mesh.n_vertices(), own.mesh.n_vertices());
-  ASSERT_EQ(shared.mesh.n_faces(), own.mesh.n_faces());
-  for (const auto v : own.mesh.vertices()) EXPECT_EQ(shared.mesh.point(v), own.mesh.point(v));
-  for (const auto f : own.mesh.faces()) {
-    auto a = own.mesh.fv_range(f).begin();
-    for (const auto w : shared.mesh.fv_range(f)) EXPECT_EQ(w, *a++);
-  }
-}
-
 TEST(StitchFidelity, ZeroLeavesTheStitchAsItWasAndBadBoundsThrow) {
   const Brain brain;
   const auto& [input, surface, plain_options, plain] = brain;
@@ -440,7 +418,10 @@ TEST(StitchFidelitySlow, AlphaFloorHoldsForEveryMovedTriangle) {
 TEST(StitchFidelitySlow, QuarterEdgeBoundBringsTheBrainCloserToItsInput) {
   // A bound of 0.25 mean edges (issue 6's setting): on the brain the moves shrink the
   // two-sided distance to the input by a tenth at least, add no obtuse triangle, keep the
-  // smallest angle away from features at min(before, 25 deg) and the topology.
+  // smallest angle away from features at min(before, 25 deg) and the topology. With the
+  // input's soup and tree built by the caller (the pipeline shares them with the distance
+  // pass): the same moves, splits and mesh as the stitch that builds its own (this stitch,
+  // shared with the test of that since session 20).
   const Brain brain;
   const auto& [input, surface, plain_options, plain] = brain;
   ASSERT_TRUE(plain.report.ok());
@@ -459,6 +440,18 @@ TEST(StitchFidelitySlow, QuarterEdgeBoundBringsTheBrainCloserToItsInput) {
   sampling.sample_spacing_relative = 0.01;
   EXPECT_LT(mesh_distance(to_soup(moved.mesh), reference, sampling).hausdorff,
             0.9 * mesh_distance(to_soup(plain.mesh), reference, sampling).hausdorff);
+
+  const quality_detail::IndexedSoup index(to_soup(input), 2);
+  const StitchResult shared = stitch_detail::stitch_with_input_index(surface, input, index, quarter);
+  EXPECT_EQ(shared.report.n_fidelity_moves, moved.report.n_fidelity_moves);
+  EXPECT_EQ(shared.report.n_fidelity_splits, moved.report.n_fidelity_splits);
+  ASSERT_EQ(shared.mesh.n_vertices(), moved.mesh.n_vertices());
+  ASSERT_EQ(shared.mesh.n_faces(), moved.mesh.n_faces());
+  for (const auto v : moved.mesh.vertices()) EXPECT_EQ(shared.mesh.point(v), moved.mesh.point(v));
+  for (const auto f : moved.mesh.faces()) {
+    auto a = moved.mesh.fv_range(f).begin();
+    for (const auto w : shared.mesh.fv_range(f)) EXPECT_EQ(w, *a++);
+  }
 }
 
 TEST(StitchFidelity, LabelImageStaircaseIsLeftAsItWas) {

@@ -71,6 +71,9 @@ std::string input_self_intersections(const TriMesh& input, unsigned threads) {
 }
 
 void print_error(std::string_view message) {
+  // Many library messages start with "nurbsfront: " already: the prefix once.
+  constexpr std::string_view kPrefix = "nurbsfront: ";
+  if (message.starts_with(kPrefix)) message.remove_prefix(kPrefix.size());
   std::cerr << "nurbsfront: error: " << message << '\n';
 }
 

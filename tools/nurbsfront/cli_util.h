@@ -22,7 +22,8 @@ std::string lower_extension(const std::filesystem::path& path);
 //! self-intersections come from its input.
 std::string input_self_intersections(const TriMesh& input, unsigned threads);
 
-//! Prints "nurbsfront: error: <message>" on stderr.
+//! Prints "nurbsfront: error: <message>" on stderr (a leading "nurbsfront: " of the message,
+//! as the library's exceptions often have, dropped: the prefix once).
 void print_error(std::string_view message);
 
 }  // namespace nurbsfront::cli
