@@ -62,6 +62,8 @@ struct Settings {
   //! set (unset: the library's defaults).
   std::optional<double> fidelity_distance;
   std::optional<double> border_input_distance;
+  //! --fidelity-gate G (report mode): StitchOptions::fidelity_gate_edges for the nurbsfront rows.
+  std::optional<double> fidelity_gate;
 };
 
 RemeshOptions remesh_options(unsigned threads, bool detail = false) {
@@ -80,6 +82,7 @@ RemeshOptions report_options(const Settings& s, bool detail) {
   RemeshOptions options = remesh_options(s.threads, detail);
   if (s.fidelity_distance) options.stitch.fidelity_distance_edges = *s.fidelity_distance;
   if (s.border_input_distance) options.segment.border_smoothing.max_input_distance = *s.border_input_distance;
+  if (s.fidelity_gate) options.stitch.fidelity_gate_edges = *s.fidelity_gate;
   return options;
 }
 
@@ -474,6 +477,7 @@ int run_report(const Settings& s) {
          << (s.filter.empty() ? "" : " --filter '" + s.filter + "'") << (s.detail ? " --detail" : "")
          << (s.fidelity_distance ? " --fidelity-distance " + fmt("%g", *s.fidelity_distance) : "")
          << (s.border_input_distance ? " --border-input-distance " + fmt("%g", *s.border_input_distance) : "")
+         << (s.fidelity_gate ? " --fidelity-gate " + fmt("%g", *s.fidelity_gate) : "")
          << "` (nurbsfront threads: " << s.threads
          << "); load average (1, 5, 15 min) before: " << load_before << ", after: " << load_average() << " on "
          << sysconf(_SC_NPROCESSORS_ONLN) << " cores.";
@@ -577,13 +581,14 @@ int main(int argc, char** argv) {
     else if (a == "--roundness-angle") s.roundness_angle = std::stod(value("--roundness-angle"));
     else if (a == "--fidelity-distance") s.fidelity_distance = std::stod(value("--fidelity-distance"));
     else if (a == "--border-input-distance") s.border_input_distance = std::stod(value("--border-input-distance"));
+    else if (a == "--fidelity-gate") s.fidelity_gate = std::stod(value("--fidelity-gate"));
     else if (a == "--help" || a == "-h") {
       std::cout << "bench_compare [--quick] [--filter REGEX] [--threads N] [--roundness-angle DEG] [--detail]\n"
-                   "              [--fidelity-distance F] [--border-input-distance B]\n"
+                   "              [--fidelity-distance F] [--border-input-distance B] [--fidelity-gate G]\n"
                    "              [--report [--md FILE] [--json FILE] [--write-dir DIR]] [benchmark flags]\n"
                    "Without --report: Google Benchmark timings (Remesh/, Decimate/, DecimateRoundness/ per input).\n"
                    "--detail (with --report): nurbsfront with --adaptive --detail-fit 1 at the default run's vertex count.\n"
-                   "--fidelity-distance F, --border-input-distance B (with --report): the nurbsfront rows with remesh's\n"
+                   "--fidelity-distance F, --border-input-distance B, --fidelity-gate G (with --report): the nurbsfront rows with remesh's\n"
                    "  options of those names (default: the library's).\n";
       return 0;
     } else rest.push_back(argv[i]);

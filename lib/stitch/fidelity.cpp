@@ -65,7 +65,8 @@ class FidelityMover {
  public:
   FidelityMover(const TriMesh& input, const StitchOptions& options, double bound, double cell, const FinRimBound& rim,
                 bool incremental, StitchResult& result, std::vector<std::uint8_t>& is_feature,
-                std::vector<std::uint8_t> fixed, const quality_detail::IndexedSoup* input_index)
+                std::vector<std::uint8_t> fixed, const quality_detail::IndexedSoup* input_index,
+                const FidelityGate* gate = nullptr)
       : options_(options), bound_(bound), cell_(cell), rim_(rim), incremental_(incremental), cheap_first_(incremental),
         mesh_(result.mesh), result_(result),
         is_feature_(is_feature), fixed_(std::move(fixed)) {
@@ -76,9 +77,33 @@ class FidelityMover {
     const TriangleSoup& input_soup = input_index_->soup();
     // The input's samples: its vertices here; the first sweep adds the centroid and edge
     // midpoints of the faces it cannot show within the bound (select_probes()).
-    probes_ = input_soup.points;
-    probe_id_.resize(probes_.size());
-    std::iota(probe_id_.begin(), probe_id_.end(), 0U);
+    // With a gate only the input faces it measures and their corners (vertex_probe_: each input
+    // vertex's sample, UINT32_MAX for none), and only the output vertices of its patches'
+    // triangles (the vertices splits make later are measured too).
+    if (gate != nullptr && !gate->input_face.empty()) {
+      scope_face_ = gate->input_face;
+      vertex_probe_.assign(input_soup.points.size(), UINT32_MAX);
+      for (std::size_t f = 0; f < scope_face_.size(); ++f) {
+        if (scope_face_[f] == 0) continue;
+        for (const std::uint32_t v : input_soup.triangles[f]) vertex_probe_[v] = 0;
+      }
+      for (std::uint32_t v = 0; v < vertex_probe_.size(); ++v) {
+        if (vertex_probe_[v] == UINT32_MAX) continue;
+        vertex_probe_[v] = static_cast<std::uint32_t>(probes_.size());
+        probes_.push_back(input_soup.points[v]);
+        probe_id_.push_back(v);
+      }
+      scope_output_.assign(mesh_.n_vertices(), 0);
+      for (auto f : mesh_.faces()) {
+        const int patch = result.face_patch[static_cast<std::size_t>(f.idx())];
+        if (patch < 0 || static_cast<std::size_t>(patch) >= gate->patch.size() || gate->patch[static_cast<std::size_t>(patch)] == 0) continue;
+        for (auto u : mesh_.fv_range(f)) scope_output_[static_cast<std::size_t>(u.idx())] = 1;
+      }
+    } else {
+      probes_ = input_soup.points;
+      probe_id_.resize(probes_.size());
+      std::iota(probe_id_.begin(), probe_id_.end(), 0U);
+    }
     const double diagonal = bounding_box(mesh_).diagonal();
     min_double_area_ = 2.0 * tolerance::kDegenerateAreaRelative * diagonal * diagonal;
     sin_floor_ = std::sin(options.angle_floor_deg * std::numbers::pi / 180.0);
@@ -113,7 +138,7 @@ class FidelityMover {
       std::uint32_t input_hint = UINT32_MAX;
       for (std::size_t k = begin; k < end; ++k) {
         const std::size_t i = full ? vertex_order[k] : k;
-        if (changed[i] == 0 || fixed_[i] != 0) continue;
+        if (changed[i] == 0 || fixed_[i] != 0 || !output_in_scope(i)) continue;
         const Vec p = point(mesh_, TriMesh::VertexHandle(static_cast<int>(i)));
         vertex_target_[i] = closest_input(p, input_hint);
         vertex_distance_[i] = (p - vertex_target_[i]).norm();
@@ -362,9 +387,12 @@ class FidelityMover {
       });
       for (const std::uint8_t w : walked) (w != 0 ? n_walked_ : n_searched_) += 1;
     };
-    const std::size_t n_vertices = probes_.size();
+    const std::size_t n_vertices = probes_.size();  // the input vertices measured
+    const std::size_t n_input_vertices = input_soup().points.size();
     locate(quality_detail::morton_order(probes_), 0);
     const std::size_t n_faces = input_soup().triangles.size();
+    // An input vertex's sample (all of them without a gate).
+    auto sample_of = [&](std::uint32_t v) { return vertex_probe_.empty() ? v : vertex_probe_[v]; };
     // Per input face the output face that holds it wholly within the bound (UINT32_MAX: none).
     std::vector<std::uint32_t> certified(n_faces, UINT32_MAX);
     auto to_face2 = [&](const Vec& u, std::uint32_t g) {
@@ -373,7 +401,9 @@ class FidelityMover {
           .squaredNorm();
     };
     parallel::for_each_index(n_faces, options_.n_threads, kQueryChunk, [&](std::size_t f) {
-      const auto& t = input_soup().triangles[f];
+      if (!input_face_in_scope(f)) return;
+      const auto& tv = input_soup().triangles[f];
+      const std::array<std::uint32_t, 3> t{sample_of(tv[0]), sample_of(tv[1]), sample_of(tv[2])};
       for (int k = 0; k < 3; ++k) {
         const std::uint32_t g = near_face_[t[static_cast<std::size_t>(k)]];
         if (k > 0 && g == near_face_[t[0]]) continue;
@@ -381,7 +411,7 @@ class FidelityMover {
         bool within = true;
         for (int j = 0; j < 3 && within; ++j) {
           const std::uint32_t v = t[static_cast<std::size_t>(j)];
-          within = (j == k ? near_distance_[v] * near_distance_[v] : to_face2(input_soup().points[v], g)) <= bound2;
+          within = (j == k ? near_distance_[v] * near_distance_[v] : to_face2(probes_[v], g)) <= bound2;
         }
         if (within) {
           certified[f] = g;
@@ -393,7 +423,13 @@ class FidelityMover {
     // (bit k of kept[f]: sample k is kept).
     // Per face sample its vouching output face (UINT32_MAX: kept as a sample).
     std::vector<std::array<std::uint32_t, 4>> vouch(n_faces);
+    // (kOutOfScope: a face the gate does not measure: no sample, vouched for by none.)
+    constexpr std::uint32_t kOutOfScope = UINT32_MAX - 1;
     parallel::for_each_index(n_faces, options_.n_threads, kQueryChunk, [&](std::size_t f) {
+      if (!input_face_in_scope(f)) {
+        vouch[f].fill(kOutOfScope);
+        return;
+      }
       if (certified[f] != UINT32_MAX) {
         vouch[f].fill(certified[f]);
         return;
@@ -403,8 +439,9 @@ class FidelityMover {
       for (std::size_t k = 0; k < u.size(); ++k) {
         vouch[f][k] = UINT32_MAX;
         for (std::size_t j = 0; j < 3; ++j) {
-          if (to_face2(u[k], near_face_[t[j]]) <= bound2) {
-            vouch[f][k] = near_face_[t[j]];
+          const std::uint32_t g = near_face_[sample_of(t[j])];
+          if (to_face2(u[k], g) <= bound2) {
+            vouch[f][k] = g;
             break;
           }
         }
@@ -414,6 +451,7 @@ class FidelityMover {
     // checks them again where that face changed (recheck_left_out()).
     vouched_start_.assign(out.triangles.size() + 1, 0);
     for (std::size_t f = 0; f < n_faces; ++f) {
+      if (vouch[f][0] == kOutOfScope) continue;
       const auto u = face_samples(f);
       for (std::size_t k = 0; k < u.size(); ++k) {
         if (vouch[f][k] != UINT32_MAX) {
@@ -421,7 +459,7 @@ class FidelityMover {
           ++vouched_start_[vouch[f][k] + 1];
           continue;
         }
-        probe_id_.push_back(static_cast<std::uint32_t>(n_vertices + 4 * f + k));
+        probe_id_.push_back(static_cast<std::uint32_t>(n_input_vertices + 4 * f + k));
         probes_.push_back(u[k]);
       }
     }
@@ -431,7 +469,7 @@ class FidelityMover {
       std::vector<std::uint32_t> at(vouched_start_.begin(), vouched_start_.end() - 1);
       for (std::size_t f = 0; f < n_faces; ++f) {
         for (std::size_t k = 0; k < 4; ++k) {
-          if (vouch[f][k] != UINT32_MAX) vouched_items_[at[vouch[f][k]]++] = static_cast<std::uint32_t>(4 * f + k);
+          if (vouch[f][k] != UINT32_MAX && vouch[f][k] != kOutOfScope) vouched_items_[at[vouch[f][k]]++] = static_cast<std::uint32_t>(4 * f + k);
         }
       }
     }
@@ -442,6 +480,10 @@ class FidelityMover {
     build_probe_grid(cell_);
     just_selected_ = true;
   }
+
+  // Whether the gate measures input face f, output vertex i (everything without a gate).
+  bool input_face_in_scope(std::size_t f) const { return scope_face_.empty() || scope_face_[f] != 0; }
+  bool output_in_scope(std::size_t i) const { return scope_output_.empty() || i >= scope_output_.size() || scope_output_[i] != 0; }
 
   // Input face f's samples besides its corners: its centroid and edge midpoints.
   std::array<Vec, 4> face_samples(std::size_t f) const {
@@ -1056,6 +1098,10 @@ class FidelityMover {
   double sin_floor_ = 0.0;
   std::vector<std::uint32_t> near_face_;
   std::vector<double> near_distance_;
+  // The gate's scope (empty: everything): input faces and output vertices measured, each input
+  // vertex's sample (UINT32_MAX: not measured).
+  std::vector<std::uint8_t> scope_face_, scope_output_;
+  std::vector<std::uint32_t> vertex_probe_;
   std::vector<std::uint32_t> face_start_, face_inputs_;
   // Per output face its largest sample distance to the input (face_to_input(); -1: not known).
   std::vector<double> face_worst_;
@@ -1090,10 +1136,57 @@ FidelityCandidates fidelity_candidates(const TriMesh& input, const StitchOptions
   return out;
 }
 
+FidelityGate fidelity_gate(const SurfaceMesh& surface, const TriMesh& input, const StitchOptions& options) {
+  FidelityGate gate;
+  if (!(options.fidelity_gate_edges > 0.0) || surface.input_face_patch.size() != input.n_faces() ||
+      surface.surfaces.size() != surface.patches.size()) {
+    return gate;
+  }
+  const double bound = options.fidelity_gate_edges * surface.input_mean_edge;
+  // Faces with a corner farther from their patch's fit than the gate, along the patch's axis
+  // (a face of no patch: measured).
+  std::vector<std::uint8_t> far(input.n_faces(), 0);
+  parallel::for_each_index(input.n_faces(), options.n_threads, kQueryChunk, [&](std::size_t f) {
+    const int p = surface.input_face_patch[f];
+    if (p < 0 || static_cast<std::size_t>(p) >= surface.surfaces.size()) {
+      far[f] = 1;
+      return;
+    }
+    if (!(surface.patches[static_cast<std::size_t>(p)].fit_max_residual > bound)) return;
+    const PatchSurface& fit = surface.surfaces[static_cast<std::size_t>(p)];
+    for (auto v : input.fv_range(TriMesh::FaceHandle(static_cast<int>(f)))) {
+      const Vec local = fit.frame.to_local(point(input, v));
+      if (std::abs(local.z() - fit.field.value(local.x(), local.y())) > bound) {
+        far[f] = 1;
+        return;
+      }
+    }
+  });
+  // Measured: those faces and the faces around their corners.
+  std::vector<std::uint8_t> near_far(input.n_vertices(), 0);
+  for (auto f : input.faces()) {
+    if (far[static_cast<std::size_t>(f.idx())] == 0) continue;
+    for (auto v : input.fv_range(f)) near_far[static_cast<std::size_t>(v.idx())] = 1;
+  }
+  gate.input_face.assign(input.n_faces(), 0);
+  for (auto f : input.faces()) {
+    for (auto v : input.fv_range(f)) {
+      if (near_far[static_cast<std::size_t>(v.idx())] != 0) gate.input_face[static_cast<std::size_t>(f.idx())] = 1;
+    }
+  }
+  // Output vertices measured: those of the patches with a measured face.
+  gate.patch.assign(surface.patches.size(), 0);
+  for (std::size_t f = 0; f < gate.input_face.size(); ++f) {
+    const int p = surface.input_face_patch[f];
+    if (gate.input_face[f] != 0 && p >= 0 && static_cast<std::size_t>(p) < gate.patch.size()) gate.patch[static_cast<std::size_t>(p)] = 1;
+  }
+  return gate;
+}
+
 FidelityResult move_toward_input(const TriMesh& input, const StitchOptions& options,
                                  std::vector<std::uint8_t>& is_feature, double reference_edge, const FinRimBound& rim,
                                  StitchResult& result, bool incremental,
-                                 const quality_detail::IndexedSoup* input_index) {
+                                 const quality_detail::IndexedSoup* input_index, const FidelityGate* gate) {
   FidelityResult out;
   const double bound = options.fidelity_distance_edges * reference_edge;
   TriMesh& mesh = result.mesh;
@@ -1103,7 +1196,7 @@ FidelityResult move_toward_input(const TriMesh& input, const StitchOptions& opti
   if (options.check_self_intersections) before = mesh;
   const std::vector<Vec> start = vertex_points(mesh);
   FidelityMover mover(input, options, bound, reference_edge, rim, incremental, result, is_feature,
-                      fixed_vertices(mesh, result.vertex_node, is_feature), input_index);
+                      fixed_vertices(mesh, result.vertex_node, is_feature), input_index, gate);
   for (int round = 0; round < kFidelityRounds; ++round) {
     if (mover.sweep() == 0) break;
     ++out.n_sweeps_changing;

@@ -47,6 +47,7 @@ void StitchOptions::validate() const {
   if (!(collapse_below_angle_deg >= 0.0 && collapse_below_angle_deg < 60.0)) fail("collapse_below_angle_deg must be in [0, 60)");
   if (!(fidelity_distance_edges >= 0.0 && std::isfinite(fidelity_distance_edges)))
     fail("fidelity_distance_edges must be finite and >= 0");
+  if (!(fidelity_gate_edges >= 0.0 && std::isfinite(fidelity_gate_edges))) fail("fidelity_gate_edges must be finite and >= 0");
   if (!(fidelity_alpha_floor >= 0.0 && fidelity_alpha_floor <= 1.0)) fail("fidelity_alpha_floor must be in [0, 1]");
   if (!(fin_rim_max_move >= 0.0)) fail("fin_rim_max_move must be >= 0 (infinity: no bound)");
   if (n_threads == 0) fail("n_threads must be >= 1");
@@ -727,9 +728,10 @@ StitchResult stitch_impl(const SurfaceMesh& surface, const TriMesh* input, const
   // "Fidelity moves: where they apply").
   if (options.fidelity_distance_edges > 0.0 && input != nullptr && pairs.empty() && mesh.n_faces() > 0 &&
       !is_label_staircase()) {
+    const stitch_detail::FidelityGate gate = stitch_detail::fidelity_gate(surface, *input, options);
     const stitch_detail::FidelityResult fidelity = stitch_detail::move_toward_input(
         *input, options, feature, surface.input_mean_edge, stitch_detail::fin_rim_bound(surface, options), result, true,
-        input_index);
+        input_index, &gate);
     report.n_fidelity_moves = fidelity.n_moved;
     report.n_fidelity_moves_undone = fidelity.n_undone;
     report.n_fidelity_splits = fidelity.n_split;

@@ -357,6 +357,19 @@ struct SplitResult {
 SplitResult split_obtuse(const SurfaceMesh& surface, const StitchOptions& options, std::vector<std::uint8_t>& is_feature,
                          StitchResult& result, const std::vector<std::array<int, 2>>& refused);
 
+//! Where the fidelity moves measure (StitchOptions::fidelity_gate_edges).
+struct FidelityGate {
+  //! Per input face: 1 when measured (a corner of it, or of a face sharing a corner with it,
+  //! is farther from its patch's fit than the gate). Empty: everything is measured.
+  std::vector<std::uint8_t> input_face;
+  std::vector<std::uint8_t> patch;  //!< per patch: 1 when it holds a measured face (its output vertices are measured)
+};
+
+//! The gate of options.fidelity_gate_edges over surface (its fits, input_face_patch): empty
+//! (everywhere) for a gate of 0 or when input_face_patch does not hold one patch per input face.
+//! The fits are evaluated on options.n_threads (the same gate for any count).
+FidelityGate fidelity_gate(const SurfaceMesh& surface, const TriMesh& input, const StitchOptions& options);
+
 //! What move_toward_input() did.
 struct FidelityResult {
   std::size_t n_moved = 0;   //!< vertices left at another place
@@ -395,10 +408,12 @@ struct FidelityResult {
 //! whose checks read a changed place are tried. false measures and tries everything in
 //! every sweep. input_index: to_soup(input) and its tree when the caller has them (shared
 //! with the report's distance pass; nullptr: built here); the same result either way.
+//! gate: where the moves measure (StitchOptions::fidelity_gate_edges; nullptr or empty: everywhere).
 FidelityResult move_toward_input(const TriMesh& input, const StitchOptions& options,
                                  std::vector<std::uint8_t>& is_feature, double reference_edge, const FinRimBound& rim,
                                  StitchResult& result, bool incremental = true,
-                                 const quality_detail::IndexedSoup* input_index = nullptr);
+                                 const quality_detail::IndexedSoup* input_index = nullptr,
+                                 const FidelityGate* gate = nullptr);
 
 //! stitch(surface, input, options) with to_soup(input) and its tree over all faces given
 //! (the fidelity moves query them; the caller builds them once and shares them, e.g. with the

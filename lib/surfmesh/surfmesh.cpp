@@ -270,6 +270,7 @@ SurfaceMesh surfmesh_detail::mesh_surface(const TriMesh& input, const Segmentati
   const double h = uniform_size(options.sizing, mean_edge);
   out.input_mean_edge = mean_edge;
   out.target_size = h;
+  out.input_face_patch = segmentation.face_patch;
   SizeAt size_at = [h](const Eigen::Vector3d&) { return h; };
   SizeAt front_size;  // empty: the front meshes with the uniform h
   if (options.sizing.callback) {

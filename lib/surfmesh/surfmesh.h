@@ -412,6 +412,9 @@ struct SurfaceMesh {
   //! counts every corner as a feature corner.
   std::vector<std::vector<int>> curve_nodes;
   std::vector<PatchMeshReport> patches; //!< one per patch
+  //! Patch of every input face (the segmentation's face_patch; empty in a hand-made
+  //! SurfaceMesh): the stitch's fidelity gate (StitchOptions::fidelity_gate_edges) reads it.
+  std::vector<int> input_face_patch;
   double target_size = 0.0;             //!< the resolved uniform target edge length
   double input_mean_edge = 0.0;         //!< mean edge length of the input
   //! Chords (edges between two border nodes that are not a border segment) that two patches

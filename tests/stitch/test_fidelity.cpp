@@ -374,6 +374,64 @@ TEST(StitchFidelitySlow, MovesDoNotDependOnTheThreadCount) {
   EXPECT_EQ(one.face_patch, two.face_patch);
 }
 
+TEST(StitchFidelitySlow, GateMeasuresOnlyWhereTheFitsMiss) {
+  // (Slow: the brain's moves twice.) StitchOptions::fidelity_gate_edges: the measured input
+  // faces are those sharing a corner with a face one of whose corners its patch's fit misses by
+  // more than the gate along the patch's axis (computed here face by face); with the gate at
+  // the bound (0.25) the moves still bring the brain closer to its input; with the gate above
+  // every patch's miss nothing moves.
+  const Brain brain;
+  const auto& [input, surface, plain_options, plain] = brain;
+  ASSERT_EQ(surface.input_face_patch.size(), input.n_faces());
+  StitchOptions options = plain_options;
+  options.fidelity_distance_edges = 0.25;
+  options.fidelity_gate_edges = 0.25;
+  const double bound = options.fidelity_gate_edges * surface.input_mean_edge;
+  std::vector<std::uint8_t> near_miss(input.n_vertices(), 0);
+  std::size_t n_missing_faces = 0;
+  for (const auto f : input.faces()) {
+    const PatchSurface& fit = surface.surfaces[static_cast<std::size_t>(surface.input_face_patch[static_cast<std::size_t>(f.idx())])];
+    bool misses = false;
+    for (const auto v : input.fv_range(f)) {
+      const Eigen::Vector3d local = fit.frame.to_local(to_eigen(input.point(v)));
+      misses = misses || std::abs(local.z() - fit.field.value(local.x(), local.y())) > bound;
+    }
+    if (!misses) continue;
+    ++n_missing_faces;
+    for (const auto v : input.fv_range(f)) near_miss[static_cast<std::size_t>(v.idx())] = 1;
+  }
+  const stitch_detail::FidelityGate gate = stitch_detail::fidelity_gate(surface, input, options);
+  ASSERT_EQ(gate.input_face.size(), input.n_faces());
+  std::size_t n_measured = 0;
+  for (const auto f : input.faces()) {
+    bool expected = false;
+    for (const auto v : input.fv_range(f)) expected = expected || near_miss[static_cast<std::size_t>(v.idx())] != 0;
+    EXPECT_EQ(gate.input_face[static_cast<std::size_t>(f.idx())] != 0, expected) << "face " << f.idx();
+    n_measured += expected ? 1 : 0;
+  }
+  EXPECT_GT(n_missing_faces, 0u);
+  EXPECT_LT(n_measured, input.n_faces());  // the gate leaves some faces out
+
+  const StitchResult gated = stitch(surface, input, options);
+  ASSERT_TRUE(gated.report.ok());
+  EXPECT_GT(gated.report.n_fidelity_moves, 10u);
+  const TriangleSoup reference = to_soup(input);
+  DistanceOptions sampling;
+  sampling.sample_spacing_relative = 0.01;
+  EXPECT_LT(mesh_distance(to_soup(gated.mesh), reference, sampling).hausdorff,
+            mesh_distance(to_soup(plain.mesh), reference, sampling).hausdorff);
+
+  double largest_miss = 0.0;
+  for (const auto& p : surface.patches) largest_miss = std::max(largest_miss, p.fit_max_residual / surface.input_mean_edge);
+  options.fidelity_gate_edges = largest_miss + 0.01;
+  const StitchResult none = stitch(surface, input, options);
+  EXPECT_EQ(none.report.n_fidelity_moves + none.report.n_fidelity_splits, 0u);
+  ASSERT_EQ(none.mesh.n_vertices(), plain.mesh.n_vertices());
+  for (const auto v : plain.mesh.vertices()) EXPECT_EQ(none.mesh.point(v), plain.mesh.point(v));
+  options.fidelity_gate_edges = -1.0;
+  EXPECT_THROW((void)stitch(surface, input, options), InvalidInput);
+}
+
 double alpha_of(const TriMesh& mesh, TriMesh::FaceHandle f) {
   std::vector<Eigen::Vector3d> p;
   for (const auto v : mesh.fv_range(f)) p.push_back(to_eigen(mesh.point(v)));

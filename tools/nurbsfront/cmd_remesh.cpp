@@ -385,6 +385,9 @@ void add_remesh_command(CLI::App& app) {
                   "The stitch's fidelity moves: vertices move onto the input where the output is farther from it "
                   "than this many input mean edges (default 0 = off; 0.25 recommended for fidelity; not on label images; docs/stitch.md "
                   "\"Fidelity moves\")");
+  cmd->add_option("--fidelity-gate", args->base.stitch.fidelity_gate_edges,
+                  "The fidelity moves measure only around the input vertices their patch's fit misses by more than this "
+                  "many input mean edges (>= 0; default 0 = everywhere; docs/stitch.md \"Fidelity moves, session 20\")");
   cmd->add_option("--fidelity-alpha-floor", args->base.stitch.fidelity_alpha_floor,
                   "The fidelity moves keep each triangle's alpha at min(its old alpha, this) (in [0, 1]; default 0; "
                   "docs/stitch.md \"Fidelity moves, session 16\")");
