@@ -47,6 +47,8 @@ void RemeshOptions::validate() const {
   if (!(std::isfinite(fin_strip_width) && fin_strip_width >= 0.0 && fin_strip_width <= 1.0))
     throw InvalidInput("remesh: fin_strip_width must be in [0, 1]");
   if (fin_strip_max_lost_corners < -1) throw InvalidInput("remesh: fin_strip_max_lost_corners must be >= -1");
+  if (!(fin_strip_pin_angle_deg >= 0.0 && fin_strip_pin_angle_deg <= 180.0))
+    throw InvalidInput("remesh: fin_strip_pin_angle_deg must be in [0, 180]");
   if (!(std::isfinite(narrow_cad_patch_width) && narrow_cad_patch_width >= 0.0))
     throw InvalidInput("remesh: narrow_cad_patch_width must be finite and >= 0");
   if (!(std::isfinite(narrow_widen_width) && narrow_widen_width >= 0.0))
@@ -234,14 +236,15 @@ RemeshResult remesh(const TriMesh& input, const RemeshOptions& options) {
   // orientation floor); the number of patches merged away.
   // The faces the hairline and steep merges joined, kept across their two calls.
   std::vector<std::uint8_t> exempt_faces;
-  auto merge_narrower_than = [&](double width, bool hairlines, bool steep, int max_lost_corners = -1) -> std::size_t {
+  auto merge_narrower_than = [&](double width, bool hairlines, bool steep, int max_lost_corners = -1,
+                                 double pin_below_deg = 0.0) -> std::size_t {
     const double h = surfmesh_detail::uniform_size(surfmesh_options.sizing, mean_edge);
     const std::vector<int> narrow = segment_detail::narrow_patches(input, first_segmentation, width * h, input_threads);
     if (narrow.empty()) return 0;
     const std::size_t n_before = first_segmentation.patches.size();
     first_segmentation =
         segment_detail::merge_into_neighbours(*splitter, first_segmentation, narrow, false, hairlines, steep, &exempt_faces,
-                                              max_lost_corners);
+                                              max_lost_corners, pin_below_deg);
     return n_before - first_segmentation.patches.size();
   };
   if (options.narrow_patch_merge > 0.0 && surfmesh_detail::marching_cubes_lattice(input_lattice()) &&
@@ -253,7 +256,8 @@ RemeshResult remesh(const TriMesh& input, const RemeshOptions& options) {
   // fin_strip_max_lost_corners of their corners away (the corner guard, session 19).
   if (options.fin_strip_width > 0.0 && surfmesh_detail::marching_cubes_lattice(input_lattice()) &&
       !surfmesh_detail::label_image_staircase(input_lattice()))
-    report.n_narrow_merged += merge_narrower_than(options.fin_strip_width, true, false, options.fin_strip_max_lost_corners);
+    report.n_narrow_merged += merge_narrower_than(options.fin_strip_width, true, false, options.fin_strip_max_lost_corners,
+                                                  options.fin_strip_pin_angle_deg);
   // Tiny patches behind marginal creases (a coarse CAD-like mesh's bends) join a neighbour.
   if (options.tiny_patch_faces > 0 && !surfmesh_options.cell_grid.enabled &&
       !surfmesh_detail::marching_cubes_lattice(input_lattice()))

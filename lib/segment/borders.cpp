@@ -108,7 +108,8 @@ void hold_near_input(const TriMesh& mesh, const BorderCurve& curve, const std::v
 }  // namespace
 
 Borders extract_borders(const TriMesh& mesh, const std::vector<int>& face_patch,
-                        const BorderSmoothingOptions& options, const unsigned workers) {
+                        const BorderSmoothingOptions& options, const unsigned workers,
+                        const std::vector<int>* pinned) {
   const auto n_vertices = static_cast<int>(mesh.n_vertices());
   const auto n_edges = static_cast<int>(mesh.n_edges());
   auto patch_of = [&](OpenMesh::HalfedgeHandle h) {
@@ -146,6 +147,12 @@ Borders extract_borders(const TriMesh& mesh, const std::vector<int>& face_patch,
       is_corner[v] = corner || (degree > 0 && degree != 2) ? 1 : 0;
     }
   });
+  // Pinned vertices end their curves where they lie on a border (a closed curve through one
+  // becomes an open curve from it to itself).
+  if (pinned != nullptr)
+    for (const int v : *pinned)
+      for (const auto out : mesh.voh_range(mesh.vertex_handle(static_cast<unsigned>(v))))
+        if (is_border[mesh.edge_handle(out).idx()] != 0) is_corner[v] = 1;
   Borders borders;
   for (int v = 0; v < n_vertices; ++v)
     if (is_corner[v] != 0) borders.corners.push_back(v);

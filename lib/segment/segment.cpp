@@ -1412,8 +1412,9 @@ FaceNormals prepare_normals(FaceGraph& graph, const SegmentOptions& options, Seg
 // The border curves and corners of a segmentation's face -> patch map, and each patch's
 // list of its curves (replacing any it had).
 void attach_borders(const TriMesh& mesh, const SegmentOptions& options, Segmentation& result) {
-  segment_detail::Borders borders = segment_detail::extract_borders(mesh, result.face_patch, options.border_smoothing,
-                                                                    segment_detail::worker_count(options.threads));
+  segment_detail::Borders borders =
+      segment_detail::extract_borders(mesh, result.face_patch, options.border_smoothing,
+                                      segment_detail::worker_count(options.threads), &result.pinned_corners);
   for (Patch& patch : result.patches) patch.curves.clear();
   for (std::size_t c = 0; c < borders.curves.size(); ++c) {
     const BorderCurve& curve = borders.curves[c];
@@ -1542,11 +1543,15 @@ Patches editable_patches(const Segmentation& segmentation) {
   return patches;
 }
 
-// The edited patches renumbered, with their curves; counts and island faces as given.
+// The edited patches renumbered, with their curves; counts, island faces and pinned corners as
+// given.
 Segmentation finish_edit(const segment_detail::Splitter& s, Patches& patches,
                          std::size_t n_fold_splits, std::size_t n_islands_absorbed, std::vector<int> island_faces,
-                         bool with_borders) {
+                         bool with_borders, std::vector<int> pinned_corners) {
   Segmentation result;
+  std::sort(pinned_corners.begin(), pinned_corners.end());
+  pinned_corners.erase(std::unique(pinned_corners.begin(), pinned_corners.end()), pinned_corners.end());
+  result.pinned_corners = std::move(pinned_corners);
   result.n_fold_splits = n_fold_splits;
   result.n_bevel_crease_edges = s.n_bevel_crease_edges;
   result.sharp_crease_edges = s.sharp_crease_edges;
@@ -1648,6 +1653,7 @@ Segmentation segment_detail::split(Splitter& s, const Segmentation& segmentation
   result.sharp_crease_edges = s.sharp_crease_edges;
   result.n_islands_absorbed = segmentation.n_islands_absorbed;  // they stay where they are
   result.island_faces = segmentation.island_faces;
+  result.pinned_corners = segmentation.pinned_corners;
   const Grouping grouping = splitter_grouping(s);
   Patches patches = editable_patches(segmentation);
   // The last result again: its patches that are not split pass split_folds' checks as they did.
@@ -1702,7 +1708,10 @@ Segmentation segment_detail::split(Splitter& s, const Segmentation& segmentation
 Segmentation segment_detail::merge_into_neighbours(Splitter& s, const Segmentation& segmentation,
                                                    const std::vector<int>& which, const bool with_borders,
                                                    const bool hairlines, const bool steep,
-                                                   std::vector<std::uint8_t>* exempt_faces, const int max_lost_corners) {
+                                                   std::vector<std::uint8_t>* exempt_faces, const int max_lost_corners,
+                                                   const double pin_below_deg) {
+  const bool pin_lost_corners = max_lost_corners >= 0 && pin_below_deg > 0.0;
+  const double cos_pin = std::cos(radians(std::min(pin_below_deg, 180.0)));
   check_edit(s, segmentation, which, "merge_patches_into_neighbours");
   if (s.mesh.n_faces() == 0 || which.empty()) return segmentation;
   s.prepare();
@@ -1710,6 +1719,8 @@ Segmentation segment_detail::merge_into_neighbours(Splitter& s, const Segmentati
   Patches patches = editable_patches(segmentation);
   Scratch scratch(s.mesh);
   std::vector<int> island_faces = segmentation.island_faces;
+  std::vector<int> pinned = segmentation.pinned_corners;  // ascending
+  const auto is_pinned = [&](int v) { return std::binary_search(pinned.begin(), pinned.end(), v); };
   std::size_t n_merged = 0;
   // Hairlines go only into a patch that is not listed itself (a wide one).
   std::vector<int> listed = hairlines ? which : std::vector<int>{};
@@ -1747,9 +1758,11 @@ Segmentation segment_detail::merge_into_neighbours(Splitter& s, const Segmentati
                              [&](int f) { return s.normals.raw[f].dot(axis) >= grouping.cos_slope; });
         }))
       continue;
-    // The corners among p's vertices (3+ sides meet: patches, or the input's boundary as one),
-    // counted before a join; a join that leaves more than max_lost_corners of them with two
-    // sides is refused (the corner guard).
+    // The corners among p's vertices (3+ sides meet: patches, or the input's boundary as one;
+    // or pinned), counted before a join; a join that leaves more than max_lost_corners of them
+    // with two sides is refused (the corner guard). With pin_lost_corners, a corner left with
+    // two sides is pinned instead (it stays a curve end) and only one left inside the union
+    // counts.
     std::vector<int> corners;
     const auto n_sides = [&](int v) {
       int ids[16];
@@ -1771,8 +1784,45 @@ Segmentation segment_detail::merge_into_neighbours(Splitter& s, const Segmentati
         for (int i = 0; i < 3; ++i) corners.push_back(s.graph.vertices[f][i]);
       std::sort(corners.begin(), corners.end());
       corners.erase(std::unique(corners.begin(), corners.end()), corners.end());
-      std::erase_if(corners, [&](int v) { return n_sides(v) < 3; });
+      std::erase_if(corners, [&](int v) { return n_sides(v) < 3 && !(pin_lost_corners && is_pinned(v)); });
     }
+    // Whether the border through v (two sides) turns by more than a pin allows: the angle at v
+    // between the border vertices kPinWalk edges away on both sides below pin_below_deg (a
+    // fin's tip); a vertex with other than two border edges is pinned.
+    constexpr int kPinWalk = 2;
+    const auto is_border = [&](OpenMesh::HalfedgeHandle h) {
+      const OpenMesh::FaceHandle f = s.mesh.face_handle(h), g = s.mesh.opposite_face_handle(h);
+      return !f.is_valid() || !g.is_valid() || patches.face_patch[f.idx()] != patches.face_patch[g.idx()];
+    };
+    const auto is_sharp = [&](int v) {
+      if (pin_below_deg >= 180.0) return true;
+      std::array<Eigen::Vector3d, 2> ends;
+      int n_ends = 0;
+      for (auto out : s.mesh.voh_range(TriMesh::VertexHandle(v))) {
+        if (!is_border(out)) continue;
+        if (n_ends == 2) return true;
+        OpenMesh::HalfedgeHandle h = out;
+        for (int step = 1; step < kPinWalk; ++step) {
+          OpenMesh::HalfedgeHandle next;
+          int n_next = 0;
+          for (auto o : s.mesh.voh_range(s.mesh.to_vertex_handle(h)))
+            if (o != s.mesh.opposite_halfedge_handle(h) && is_border(o)) {
+              next = o;
+              ++n_next;
+            }
+          if (n_next != 1) break;
+          h = next;
+        }
+        ends[static_cast<std::size_t>(n_ends++)] = s.graph.points[s.mesh.to_vertex_handle(h).idx()];
+      }
+      if (n_ends != 2) return true;
+      const Eigen::Vector3d a = ends[0] - s.graph.points[v], b = ends[1] - s.graph.points[v];
+      return a.dot(b) > cos_pin * a.norm() * b.norm();
+    };
+    const auto is_lost = [&](int v) {
+      const int n = n_sides(v);
+      return n < 3 && !(pin_lost_corners && n == 2);
+    };
     // Joins p to q if the union fits an axis (faces joined across creases are island faces).
     const auto join = [&](int q) {
       auto& target = patches.faces[static_cast<std::size_t>(q)];
@@ -1783,8 +1833,7 @@ Segmentation segment_detail::merge_into_neighbours(Splitter& s, const Segmentati
       // the input); joined away, they leave the tip to the smoothed curve and the fit
       // (headsq@1150: 1.14 mean edges off, docs/segment.md "Fin strips: a corner guard").
       const bool keeps_corners =
-          max_lost_corners < 0 ||
-          std::count_if(corners.begin(), corners.end(), [&](int v) { return n_sides(v) < 3; }) <= max_lost_corners;
+          max_lost_corners < 0 || std::count_if(corners.begin(), corners.end(), is_lost) <= max_lost_corners;
       // The neighbour's axis, else the union's area-weighted mean raw normal.
       Eigen::Vector3d mean = Eigen::Vector3d::Zero();
       for (const int f : target) mean += s.normals.area[f] * s.normals.raw[f];
@@ -1812,6 +1861,10 @@ Segmentation segment_detail::merge_into_neighbours(Splitter& s, const Segmentati
         island_faces.insert(island_faces.end(), faces.begin(), faces.end());
         if (hairlines)
           for (const int f : faces) exempt[static_cast<std::size_t>(f)] = steep ? 2 : 1;
+        if (pin_lost_corners)
+          for (const int v : corners)
+            if (n_sides(v) == 2 && !is_pinned(v) && is_sharp(v))
+              pinned.insert(std::upper_bound(pinned.begin(), pinned.end(), v), v);
         faces.clear();
         return true;
       }
@@ -1828,7 +1881,7 @@ Segmentation segment_detail::merge_into_neighbours(Splitter& s, const Segmentati
   }
   if (n_merged == 0) return segmentation;
   return finish_edit(s, patches, segmentation.n_fold_splits, segmentation.n_islands_absorbed + n_merged,
-                     std::move(island_faces), with_borders);
+                     std::move(island_faces), with_borders, std::move(pinned));
 }
 
 Segmentation segment_detail::widen_patches(Splitter& s, const Segmentation& segmentation, const std::vector<int>& which,
@@ -1974,7 +2027,7 @@ Segmentation segment_detail::widen_patches(Splitter& s, const Segmentation& segm
   if (n_widened != nullptr) *n_widened = n_changed;
   if (n_changed == 0) return segmentation;
   return finish_edit(s, patches, segmentation.n_fold_splits, segmentation.n_islands_absorbed, segmentation.island_faces,
-                     with_borders);
+                     with_borders, segmentation.pinned_corners);
 }
 
 Segmentation segment_detail::bisect_patches(Splitter& s, const Segmentation& segmentation, const std::vector<int>& which) {
@@ -2003,7 +2056,8 @@ Segmentation segment_detail::bisect_patches(Splitter& s, const Segmentation& seg
   const std::size_t n_fold_splits =
       segmentation.n_fold_splits + split_folds(grouping, s.mean_edge, scratch, patches, work,
                                                segment_detail::worker_count(s.options.threads), s.worker_scratch);
-  return finish_edit(s, patches, n_fold_splits, segmentation.n_islands_absorbed, segmentation.island_faces, true);
+  return finish_edit(s, patches, n_fold_splits, segmentation.n_islands_absorbed, segmentation.island_faces, true,
+                     segmentation.pinned_corners);
 }
 
 Segmentation segment_detail::with_borders(const TriMesh& mesh, const SegmentOptions& options, Segmentation segmentation) {

@@ -155,6 +155,11 @@ struct Segmentation {
   //! Vertices where three or more sides meet (patches, or patches and the input's
   //! boundary): the ends of the open curves. Ascending.
   std::vector<int> corners;
+  //! Input vertices kept as corners (curve ends) although only two sides meet there: the
+  //! tips of fin strips merged into a neighbour (the pipeline's fin-strip merge with pinned
+  //! tips, docs/segment.md "Fin strips: pinned tips, session 20"). Ascending; edits keep
+  //! them; one that is no border vertex (inside a patch) is no corner.
+  std::vector<int> pinned_corners;
   std::size_t n_crease_edges = 0;     //!< crease edges (above the crease angle, or bevel bends)
   std::size_t n_bevel_crease_edges = 0;  //!< of those, bends of bevelled edges (SegmentOptions::bevel_creases)
   //! The input edges made creases as sharp crease edges (SegmentOptions::sharp_crease_angle_deg;

@@ -154,9 +154,11 @@ struct Borders {
   std::vector<BorderCurve> curves;
   std::vector<int> corners;
 };
-//! The curves are smoothed on `workers` threads.
+//! The curves are smoothed on `workers` threads. pinned (ascending, may be null): vertices
+//! that are corners too where they lie on a border (Segmentation::pinned_corners).
 [[nodiscard]] Borders extract_borders(const TriMesh& mesh, const std::vector<int>& face_patch,
-                                      const BorderSmoothingOptions& options, unsigned workers = 1);
+                                      const BorderSmoothingOptions& options, unsigned workers = 1,
+                                      const std::vector<int>* pinned = nullptr);
 
 //! A PatchSplitter's state (face graph, normals, mean edge, last result); defined in
 //! segment.cpp.
@@ -217,12 +219,18 @@ using SplitterPtr = std::unique_ptr<Splitter, SplitterDeleter>;
 //! max_lost_corners >= 0 (the pipeline's fin-strip merge; docs/segment.md "Fin strips: a
 //! corner guard, session 19"): a listed patch joins a neighbour only if at most that many of
 //! its vertices where 3+ sides meet (patches, the input's boundary counting as one side) are
-//! left with fewer than 3 by the join; -1 = no guard.
+//! left with fewer than 3 by the join; -1 = no guard. pin_below_deg > 0 (with the guard): a
+//! corner left with two sides does not count against the guard, and is kept as a corner
+//! (Segmentation::pinned_corners: the fin's tip pinned, docs/segment.md "Fin strips: pinned
+//! tips, session 20") where the border turns there: the angle at it between the border
+//! vertices two edges away on both sides below pin_below_deg (180 = every such corner);
+//! only corners left inside the union count (pinned corners of earlier joins count as
+//! corners).
 [[nodiscard]] Segmentation merge_into_neighbours(Splitter& splitter, const Segmentation& segmentation,
                                                  const std::vector<int>& which, bool with_borders = true,
                                                  bool hairlines = false, bool steep = false,
                                                  std::vector<std::uint8_t>* exempt = nullptr,
-                                                 int max_lost_corners = -1);
+                                                 int max_lost_corners = -1, double pin_below_deg = 0.0);
 
 //! The pipeline's widening of narrow slope-bounded patches (docs/segment.md "Widening narrow
 //! patches, session 18"): each listed patch p, in the order given, takes rings of faces from

@@ -16,6 +16,7 @@
 #include <numbers>
 #include <set>
 #include <string>
+#include <tuple>
 
 #include "fixtures/shapes.h"
 #include "fixtures/volumes.h"
@@ -1255,10 +1256,15 @@ TEST(Pipeline, FinStripCornerGuardRefusesAJoinThatTakesCornersAway) {
   options.narrow_patch_merge = 0.0;
   options.fin_strip_width = 1.0;
   EXPECT_EQ(options.fin_strip_max_lost_corners, 1);
-  for (const auto& [guard, n_merged] : std::vector<std::pair<int, std::size_t>>{{-1, 2}, {2, 2}, {1, 1}, {0, 0}}) {
+  EXPECT_EQ(options.fin_strip_pin_angle_deg, 0.0);  // opt-in
+  // The guard alone (no pins), then at 0 with pins (session 20): the strips' corners left with
+  // two sides no longer count, so both join as without the guard.
+  for (const auto& [guard, pin, n_merged] : std::vector<std::tuple<int, double, std::size_t>>{
+           {-1, 0.0, 2}, {2, 0.0, 2}, {1, 0.0, 1}, {0, 0.0, 0}, {0, 180.0, 2}}) {
     options.fin_strip_max_lost_corners = guard;
+    options.fin_strip_pin_angle_deg = pin;
     const RemeshResult r = remesh(mesh, options);
-    EXPECT_EQ(r.report.n_narrow_merged, n_merged) << "guard " << guard;
+    EXPECT_EQ(r.report.n_narrow_merged, n_merged) << "guard " << guard << " pin " << pin;
     EXPECT_TRUE(r.report.ok()) << errors_of(r.report);
     const TopologyReport& t = r.report.output.topology;
     EXPECT_TRUE(t.is_closed && t.is_manifold && t.is_consistently_oriented);
@@ -1266,6 +1272,11 @@ TEST(Pipeline, FinStripCornerGuardRefusesAJoinThatTakesCornersAway) {
   }
   options.fin_strip_max_lost_corners = -2;
   EXPECT_THROW((void)remesh(mesh, options), InvalidInput);
+  options.fin_strip_max_lost_corners = 0;
+  for (const double bad : {-1.0, 181.0, std::nan("")}) {
+    options.fin_strip_pin_angle_deg = bad;
+    EXPECT_THROW((void)remesh(mesh, options), InvalidInput);
+  }
 }
 
 // A 12 x 12 grid of side 1 (turned) with a steep step across it: the plane rises by 0.02 at

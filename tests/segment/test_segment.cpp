@@ -1015,6 +1015,66 @@ TEST(WidenPatches, NoRingAcrossASteepBendOrACrease) {
   EXPECT_EQ(n_widened, 1u);
 }
 
+// Session 20 (docs/segment.md "Fin strips: pinned tips, session 20"): a 4 x 4 grid of side 1,
+// patch 0 = x < 1/2, patch 1 = x > 1/2 but the cell [1/2, 3/4] x [1/2, 3/4], a strip (patch 2)
+// whose vertices (1/2, 1/2) and (1/2, 3/4) are corners (3 sides). Joined into patch 1 (its
+// longest border), both are left with two sides: the corner guard at 0 refuses the join; with
+// pinned tips it is made, both vertices stay corners (the border x = 1/2 ends there: three
+// curves instead of one) and later edits keep them; at guard 1 without pins the curve is one.
+TEST(MergeIntoNeighbours, PinnedTipsStayCorners) {
+  const TriMesh mesh = to_trimesh(test::grid_patch(4, 4));
+  Segmentation seg;
+  seg.patches.resize(3);
+  for (const auto f : mesh.faces()) {
+    const auto c = mesh.calc_face_centroid(f);
+    const int p = c[0] < 0.5 ? 0 : (c[0] < 0.75 && c[1] > 0.5 && c[1] < 0.75 ? 2 : 1);
+    seg.face_patch.push_back(p);
+    seg.patches[static_cast<std::size_t>(p)].faces.push_back(f.idx());
+  }
+  ASSERT_EQ(seg.patches[2].faces.size(), 2u);
+  seg = segment_detail::with_borders(mesh, SegmentOptions{}, seg);
+  const auto vertex_at = [&](double x, double y) {
+    for (const auto v : mesh.vertices())
+      if (std::abs(mesh.point(v)[0] - x) < 1e-9 && std::abs(mesh.point(v)[1] - y) < 1e-9) return v.idx();
+    return -1;
+  };
+  const std::vector<int> tips{vertex_at(0.5, 0.5), vertex_at(0.5, 0.75)};
+  for (const int v : tips) EXPECT_TRUE(std::binary_search(seg.corners.begin(), seg.corners.end(), v));
+  // Curves along x = 1/2 (between patches 0 and the other side), counted.
+  const auto n_middle_curves = [&](const Segmentation& s) {
+    return std::count_if(s.curves.begin(), s.curves.end(), [&](const BorderCurve& c) {
+      return c.patch_right >= 0 && std::all_of(c.vertices.begin(), c.vertices.end(), [&](int v) {
+               return std::abs(mesh.point(mesh.vertex_handle(static_cast<unsigned>(v)))[0] - 0.5) < 1e-9;
+             });
+    });
+  };
+  auto splitter = segment_detail::make_splitter(mesh, SegmentOptions{});
+  // The guard at 0 without pins: refused.
+  const Segmentation refused = segment_detail::merge_into_neighbours(*splitter, seg, {2}, true, false, false, nullptr, 0);
+  EXPECT_EQ(refused.patches.size(), 3u);
+  // At 1 without pins: refused too (two corners lost); no guard: joined, one curve along x = 1/2.
+  EXPECT_EQ(segment_detail::merge_into_neighbours(*splitter, seg, {2}, true, false, false, nullptr, 1).patches.size(), 3u);
+  const Segmentation plain = segment_detail::merge_into_neighbours(*splitter, seg, {2}, true, false, false, nullptr, -1);
+  ASSERT_EQ(plain.patches.size(), 2u);
+  EXPECT_TRUE(plain.pinned_corners.empty());
+  for (const int v : tips) EXPECT_FALSE(std::binary_search(plain.corners.begin(), plain.corners.end(), v));
+  EXPECT_EQ(n_middle_curves(plain), 1);
+  // Pinned: joined, both tips corners, the border cut at both.
+  const Segmentation pinned = segment_detail::merge_into_neighbours(*splitter, seg, {2}, true, false, false, nullptr, 0, 180.0);
+  ASSERT_EQ(pinned.patches.size(), 2u);
+  EXPECT_EQ(pinned.face_patch, plain.face_patch);
+  EXPECT_EQ(pinned.pinned_corners, (std::vector<int>{std::min(tips[0], tips[1]), std::max(tips[0], tips[1])}));
+  for (const int v : tips) EXPECT_TRUE(std::binary_search(pinned.corners.begin(), pinned.corners.end(), v));
+  EXPECT_EQ(n_middle_curves(pinned), 3);
+  segment_test::expect_contracts(mesh, pinned, SegmentOptions{}, 0.0);
+  // Without borders, then with them (the pipeline's order), and through a split: kept.
+  const Segmentation later = segment_detail::with_borders(
+      mesh, SegmentOptions{},
+      segment_detail::merge_into_neighbours(*splitter, seg, {2}, false, false, false, nullptr, 0, 180.0));
+  EXPECT_EQ(later.corners, pinned.corners);
+  EXPECT_EQ(segment_detail::split(*splitter, later, {1}).pinned_corners, pinned.pinned_corners);
+}
+
 // A 4 x 4 grid of side 1 folded by `fold_deg` along x = 0.75; patches: 1 = the two faces of
 // the cell [0.25, 0.5] x [0.25, 0.5], 2 = those of [0.5, 0.75] x [0.25, 0.5] (its right edge on
 // the fold), 3 = one face of the cell [0.25, 0.5] x [0.75, 1] (only patch 0 around it), 0 = the rest.
