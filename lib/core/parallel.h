@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <condition_variable>
 #include <cstddef>
 #include <exception>
@@ -26,6 +27,10 @@ namespace nurbsfront::parallel {
 //! finished; the last call reports n); returning false stops the loop.
 using Monitor = std::function<bool(std::size_t done)>;
 
+//! How often the calling thread of a monitored for_chunks looks at the progress of its
+//! workers (it is woken early only when they end or a task throws).
+inline constexpr std::chrono::milliseconds kMonitorPeriod{10};
+
 //! Runs task(begin, end, worker) over [0, n) in chunks of `chunk` indices (the last one may
 //! be shorter) on up to `threads` threads, which pull chunks in order from a shared counter.
 //! Each index is in exactly one call, but which worker runs it (worker < threads) and how
@@ -34,8 +39,10 @@ using Monitor = std::function<bool(std::size_t done)>;
 //!
 //! Without a monitor the calling thread is worker 0 and threads - 1 others are started (on
 //! one thread the task gets the whole range in one call). With a monitor, `threads`
-//! workers are started and the calling thread calls monitor(done) whenever chunks were
-//! finished; when it returns false the remaining chunks are skipped and false is returned.
+//! workers are started and the calling thread calls monitor(done) when chunks were
+//! finished, looking every kMonitorPeriod (a worker never wakes it per chunk: on loops of
+//! thousands of small chunks that hand-off cost more than the chunks); when it returns
+//! false the remaining chunks are skipped and false is returned.
 //!
 //! A thread that cannot start (std::system_error) leaves its share to the threads already
 //! running, the calling thread at least (it then works even with a monitor, calling it
@@ -56,8 +63,8 @@ bool for_chunks_started_by(const Start& start, std::size_t n, unsigned threads, 
   std::atomic<bool> stop{false};
   std::mutex mutex;
   std::condition_variable changed;
-  std::size_t done = 0;  // indices finished (under mutex)
-  unsigned running = 0;  // started workers not yet finished (under mutex)
+  std::atomic<std::size_t> done{0};  // indices finished
+  unsigned running = 0;              // started workers not yet finished (under mutex)
   std::exception_ptr error;
   auto fail = [&](std::exception_ptr e) {
     {
@@ -77,12 +84,7 @@ bool for_chunks_started_by(const Start& start, std::size_t n, unsigned threads, 
         if (c >= n_chunks) return;
         const std::size_t begin = c * chunk, end = std::min(n, begin + chunk);
         task(begin, end, worker);
-        std::size_t now = 0;
-        {
-          const std::lock_guard lock(mutex);
-          now = done += end - begin;
-        }
-        changed.notify_all();
+        const std::size_t now = done.fetch_add(end - begin) + (end - begin);
         if (!report(now)) {
           stop = true;
           return;
@@ -144,9 +146,14 @@ bool for_chunks_started_by(const Start& start, std::size_t n, unsigned threads, 
     std::unique_lock lock(mutex);
     std::size_t reported = 0;
     for (;;) {
-      changed.wait(lock, [&] { return done > reported || running == 0 || stop.load(); });
-      if (stop.load() || done == reported) break;  // a task failed, or the workers ended
-      reported = done;
+      changed.wait_for(lock, kMonitorPeriod, [&] { return running == 0 || stop.load(); });
+      if (stop.load()) break;  // a task failed
+      const std::size_t now = done.load();
+      if (now == reported) {
+        if (running == 0) break;  // the workers ended
+        continue;
+      }
+      reported = now;
       lock.unlock();
       bool go_on = false;
       try {

@@ -146,6 +146,29 @@ TEST(Parallel, MonitorSeesProgressAndMayStop) {
   }
 }
 
+// The workers do not wake the monitoring thread per chunk: 20 000 chunks of about a
+// microsecond give at most one monitor call per kMonitorPeriod (and a last one with n).
+// Woken per chunk (main 5f97e4a), it was called hundreds of times in such a loop.
+TEST(Parallel, MonitorLooksEveryPeriodNotEveryChunk) {
+  constexpr std::size_t n = 20000;
+  std::vector<double> out(n, 0.0);
+  std::size_t n_calls = 0;
+  const auto t0 = std::chrono::steady_clock::now();
+  const bool finished = parallel::for_chunks(
+      n, 2, 1, [&](std::size_t begin, std::size_t end, unsigned) {
+        for (std::size_t i = begin; i < end; ++i) out[i] = value_of(i);
+      },
+      [&](std::size_t) {
+        ++n_calls;
+        return true;
+      });
+  const auto elapsed = std::chrono::steady_clock::now() - t0;
+  EXPECT_TRUE(finished);
+  for (std::size_t i = 0; i < n; ++i) ASSERT_EQ(out[i], value_of(i));
+  EXPECT_GE(n_calls, 1U);
+  EXPECT_LE(n_calls, 2 + static_cast<std::size_t>(elapsed / parallel::kMonitorPeriod)) << n_calls;
+}
+
 TEST(Parallel, FailedThreadStartLeavesTheWorkToTheRunningThreads) {
   for (const int n_starts : {0, 1}) {  // threads that start before the failure
     for (const bool with_monitor : {false, true}) {

@@ -495,27 +495,34 @@ TEST(Segment, FoldSplitsDoNotDependOnTheThreadCount) {
 // parallel check that found it (split_folds' prebisection); the splits are those of one
 // thread. Three 345-degree ramps side by side (each one patch, each holding a cliff: no
 // crossing, so no trouble to carve) and a folded 2.5-turn ramp (crossings: carved).
+// At resolution 1 only the first precheck (every patch) goes to the Team's workers: each
+// split's parts hold under 1 000 faces besides the largest (split_folds'
+// kMinPrecheckHandOffFaces) and are checked on the calling thread; at resolution 2 (4x the
+// faces) the 23 parts of the folded ramp's first split go to the workers too.
 TEST(Segment, PrebisectedFoldSplitsAreTheSameOnAnyThreadCount) {
-  TriangleSoup soup = ramp(2.5, 48, 4);
-  for (int k = 1; k <= 3; ++k) {
-    const TriangleSoup other = ramp(345.0 / 360.0, 40 + 4 * k, 4, 0.3);
-    const auto offset = static_cast<std::uint32_t>(soup.points.size());
-    for (const auto& p : other.points) soup.points.push_back(p + Eigen::Vector3d(6.0 * k, 0.0, 0.0));
-    for (const auto& t : other.triangles) soup.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
-  }
-  const TriMesh mesh = to_trimesh(soup);
-  SegmentOptions options;
-  options.threads = 1;
-  const Segmentation one = segment(mesh, options);
-  // Each ramp is split: the folded one at least twice, each cliff ramp at least once.
-  EXPECT_GE(one.n_fold_splits, 5u);
-  for (const int threads : {2, 4}) {
-    options.threads = threads;
-    const Segmentation many = run(mesh, options, 0.0);
-    EXPECT_EQ(one.n_fold_splits, many.n_fold_splits) << threads;
-    EXPECT_EQ(one.face_patch, many.face_patch) << threads;
-    ASSERT_EQ(one.patches.size(), many.patches.size()) << threads;
-    for (std::size_t p = 0; p < one.patches.size(); ++p) EXPECT_EQ(one.patches[p].axis, many.patches[p].axis) << threads;
+  for (const int res : {1, 2}) {
+    TriangleSoup soup = ramp(2.5, 48 * res, 4 * res);
+    for (int k = 1; k <= 3; ++k) {
+      const TriangleSoup other = ramp(345.0 / 360.0, (40 + 4 * k) * res, 4 * res, 0.3);
+      const auto offset = static_cast<std::uint32_t>(soup.points.size());
+      for (const auto& p : other.points) soup.points.push_back(p + Eigen::Vector3d(6.0 * k, 0.0, 0.0));
+      for (const auto& t : other.triangles) soup.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
+    }
+    const TriMesh mesh = to_trimesh(soup);
+    SegmentOptions options;
+    options.threads = 1;
+    const Segmentation one = segment(mesh, options);
+    // Each ramp is split: the folded one at least twice, each cliff ramp at least once.
+    EXPECT_GE(one.n_fold_splits, 5u) << res;
+    for (const int threads : {2, 4}) {
+      options.threads = threads;
+      const Segmentation many = run(mesh, options, 0.0);
+      EXPECT_EQ(one.n_fold_splits, many.n_fold_splits) << res << " " << threads;
+      EXPECT_EQ(one.face_patch, many.face_patch) << res << " " << threads;
+      ASSERT_EQ(one.patches.size(), many.patches.size()) << res << " " << threads;
+      for (std::size_t p = 0; p < one.patches.size(); ++p)
+        EXPECT_EQ(one.patches[p].axis, many.patches[p].axis) << res << " " << threads;
+    }
   }
 }
 
