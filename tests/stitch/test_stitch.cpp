@@ -978,6 +978,76 @@ TEST(Stitch, AngleRepairCollapsesAShortEdgeAwayFromFeatures) {
   }
 }
 
+// Triangles of r's mesh with an angle above 90 deg.
+std::size_t obtuse_triangles(const StitchResult& r) {
+  std::size_t n = 0;
+  for (auto f : r.mesh.faces()) {
+    std::array<Eigen::Vector3d, 3> p;
+    int k = 0;
+    for (auto v : r.mesh.fv_range(f)) p[static_cast<std::size_t>(k++)] = to_eigen(r.mesh.point(v));
+    bool obtuse = false;
+    for (int i = 0; i < 3; ++i) obtuse = obtuse || (p[(i + 1) % 3] - p[i]).dot(p[(i + 2) % 3] - p[i]) < 0.0;
+    n += obtuse ? 1 : 0;
+  }
+  return n;
+}
+
+// Issue 5 (StitchOptions::obtuse_collapse): a node planted at the centre of a triangle of an
+// icosphere, on the sphere, makes three triangles with ~120-deg angles there and smallest
+// angles near 30 deg (none below the bound: the small-angle repair leaves them). No move of
+// a node with three triangles removes an angle of at least 120 deg; its collapse into a
+// corner gives the old triangle back. Without the option the three obtuse triangles stay;
+// with it the planted node is gone, no triangle is obtuse, every other node where it was.
+TEST(Stitch, ObtuseCollapseRemovesAPlantedNodeOfThreeTriangles) {
+  TriangleSoup soup = test::icosphere(3);
+  const SurfaceMesh plain = cube_map_surface(soup);
+  // A triangle whose nodes are all inner nodes of one patch.
+  std::size_t t = 0;
+  while (t < plain.triangles.size() &&
+         !std::all_of(plain.triangles[t].begin(), plain.triangles[t].end(), [&](int g) { return plain.node_kind[g] == NodeKind::Inner; })) {
+    ++t;
+  }
+  ASSERT_LT(t, plain.triangles.size());
+  const auto tri = soup.triangles[t];
+  const auto m = static_cast<std::uint32_t>(soup.points.size());
+  soup.points.push_back(((soup.points[tri[0]] + soup.points[tri[1]] + soup.points[tri[2]]) / 3.0).normalized());
+  soup.triangles[t] = {tri[0], tri[1], m};
+  soup.triangles.push_back({tri[1], tri[2], m});
+  soup.triangles.push_back({tri[2], tri[0], m});
+  const SurfaceMesh surface = cube_map_surface(soup);
+  ASSERT_EQ(surface.node_kind[m], NodeKind::Inner);
+  StitchOptions options = without_optimisation();
+  options.collapse_below_angle_deg = 0.0;
+  options.obtuse_split_rounds = 0;
+  options.n_threads = 1;
+  options.obtuse_collapse = false;
+  const StitchResult off = stitch(surface, to_trimesh(soup), options);
+  ASSERT_TRUE(off.report.ok()) << joined(off.report.errors);
+  EXPECT_EQ(obtuse_triangles(off), 3u);
+  EXPECT_EQ(off.report.n_angle_collapses, 0u);
+  EXPECT_GE(off.report.min_angle_away_from_features_deg, kAwayFromFeaturesAngleBoundDeg);
+  options.obtuse_collapse = true;
+  const StitchResult r = stitch(surface, to_trimesh(soup), options);
+  ASSERT_TRUE(r.report.ok()) << joined(r.report.errors);
+  EXPECT_EQ(obtuse_triangles(r), 0u);
+  EXPECT_EQ(r.report.n_angle_collapses, 1u);
+  EXPECT_EQ(r.report.n_angle_repairs_undone, 0u);
+  EXPECT_EQ(r.mesh.n_vertices(), soup.points.size() - 1);
+  EXPECT_EQ(r.mesh.n_faces(), soup.triangles.size() - 2);
+  EXPECT_GE(r.report.min_angle_away_from_features_deg, off.report.min_angle_away_from_features_deg);
+  const TopologyReport& topology = r.report.output.topology;
+  EXPECT_TRUE(topology.is_closed);
+  EXPECT_TRUE(topology.is_manifold);
+  EXPECT_TRUE(topology.is_consistently_oriented);
+  EXPECT_EQ(topology.euler_characteristic, 2);
+  EXPECT_EQ(topology.n_self_intersecting_pairs.value_or(1), 0u);
+  for (auto u : r.mesh.vertices()) {
+    const auto node = static_cast<std::size_t>(r.vertex_node[static_cast<std::size_t>(u.idx())]);
+    EXPECT_NE(node, m);
+    EXPECT_EQ(to_eigen(r.mesh.point(u)), surface.nodes[node]);
+  }
+}
+
 // A cap (an inner node pushed next to the middle of its far edge): its small angles go by a
 // flip, a collapse or a move, the mesh stays valid.
 TEST(Stitch, AngleRepairRemovesACapAwayFromFeatures) {
