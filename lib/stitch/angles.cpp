@@ -41,16 +41,32 @@ constexpr int kCheckRounds = 4;
 // (the survivor does not move: the surface changes only by the removed node's cone), a
 // moved node within as much of its old triangles.
 constexpr double kMaxCollapseOffsetEdges = 0.5;
+// The obtuse collapses' angle floor above angle_floor_deg away from features (deg), as the
+// obtuse repair's and splits' (Optimiser::kObtuseAngleMarginDeg).
+constexpr double kObtuseCollapseMarginDeg = 2.5;
+// The obtuse collapses' removed node stays within this many input mean edges of the new
+// triangles (kMaxCollapseOffsetEdges for the others): at 0.5 the rotor's Hausdorff distance
+// grew 24% and headsq@500's 4% (docs/stitch.md "Obtuse collapses, session 20").
+constexpr double kObtuseCollapseOffsetEdges = 0.15;
 
 // What a set of triangles has: the sine of its smallest angle, how many are below the bound
 // and how many are obtuse. A change is better when the smallest angle rises, no more
 // triangles are below the bound and no more are obtuse, and (collapse) fewer are below.
+// The obtuse collapses (AngleRepair::obtuse_sweep) also use the smallest alpha and the
+// smallest angles of the triangles without and with a feature node apart.
 struct Shape {
   double min_sine = 1.0;
   int n_small = 0;
   int n_obtuse = 0;
-  void add(const Vec& a, const Vec& b, const Vec& c, double sin_bound) {
+  double min_alpha = 1.0;
+  double min_sine_away = 1.0;     // of the triangles with no feature node
+  double min_sine_feature = 1.0;  // of the others
+  void add(const Vec& a, const Vec& b, const Vec& c, double sin_bound, bool away = true) {
     const double s = smallest_angle_sine(a, b, c);
+    double& side = away ? min_sine_away : min_sine_feature;
+    side = std::min(side, s);
+    const double sum_sq = (b - a).squaredNorm() + (c - b).squaredNorm() + (a - c).squaredNorm();
+    min_alpha = std::min(min_alpha, sum_sq > 0.0 ? 2.0 * std::numbers::sqrt3 * (b - a).cross(c - a).norm() / sum_sq : 0.0);
     min_sine = std::min(min_sine, s);
     n_small += s < sin_bound ? 1 : 0;
     n_obtuse += triangle_is_obtuse(a, b, c) ? 1 : 0;
@@ -405,20 +421,33 @@ class AngleRepair {
   // normal by more than acos(min_normal_dot), and the removed node stays within
   // kMaxCollapseOffsetEdges input mean edges of the new triangles.
   double collapse_gain(TriMesh::HalfedgeHandle h, bool require_better = true) const {
+    Shape before, after;
+    if (!collapse_shapes(h, before, after)) return -1.0;
+    if (require_better && (!is_better(before, after) || after.n_small >= before.n_small)) return -1.0;
+    return after.min_sine;
+  }
+
+  // The triangles around from(h) before and after collapsing it into to(h) (collapse_gain):
+  // false when the collapse is not allowed. max_offset: the bound on the removed node's
+  // distance to the new triangles (max_offset_ when negative).
+  bool collapse_shapes(TriMesh::HalfedgeHandle h, Shape& before, Shape& after, double max_offset = -1.0) const {
     const auto vb = mesh_.from_vertex_handle(h), va = mesh_.to_vertex_handle(h);
-    if (is_feature(vb) || is_frozen(vb) || is_frozen(va) || mesh_.is_boundary(vb) || mesh_.is_boundary(va)) return -1.0;
-    if (rank_of(vb) > rank_of(va)) return -1.0;
-    if (!rim_.allows(node(vb), point(mesh_, va))) return -1.0;  // the removed node goes to the survivor
-    if (!mesh_.is_collapse_ok(h) || leaves_duplicate_face(mesh_, h)) return -1.0;
+    if (is_feature(vb) || is_frozen(vb) || is_frozen(va) || mesh_.is_boundary(vb) || mesh_.is_boundary(va)) return false;
+    if (rank_of(vb) > rank_of(va)) return false;
+    if (!rim_.allows(node(vb), point(mesh_, va))) return false;  // the removed node goes to the survivor
+    if (!mesh_.is_collapse_ok(h) || leaves_duplicate_face(mesh_, h)) return false;
     const TriMesh::FaceHandle f0 = mesh_.face_handle(h), f1 = mesh_.opposite_face_handle(h);
     const Vec pb = point(mesh_, vb), pa = point(mesh_, va);
-    Shape before, after;
     double offset = std::numeric_limits<double>::infinity();
     for (auto g : mesh_.vf_range(vb)) {
       std::array<Vec, 3> x;
       int k = 0;
-      for (auto u : mesh_.fv_range(g)) x[static_cast<std::size_t>(k++)] = point(mesh_, u);
-      before.add(x[0], x[1], x[2], sin_bound_);
+      bool away = true;
+      for (auto u : mesh_.fv_range(g)) {
+        x[static_cast<std::size_t>(k++)] = point(mesh_, u);
+        away = away && !is_feature(u);
+      }
+      before.add(x[0], x[1], x[2], sin_bound_, away);
       if (g == f0 || g == f1) continue;
       const Vec n_old = (x[1] - x[0]).cross(x[2] - x[0]);
       for (auto& y : x) {
@@ -426,14 +455,76 @@ class AngleRepair {
       }
       const Vec n_new = (x[1] - x[0]).cross(x[2] - x[0]);
       const double l_old = n_old.norm(), l_new = n_new.norm();
-      if (l_new <= min_double_area_ || (l_old > 0.0 && n_new.dot(n_old) <= options_.min_normal_dot * l_old * l_new)) return -1.0;
-      after.add(x[0], x[1], x[2], sin_bound_);
+      if (l_new <= min_double_area_ || (l_old > 0.0 && n_new.dot(n_old) <= options_.min_normal_dot * l_old * l_new)) return false;
+      after.add(x[0], x[1], x[2], sin_bound_, away);
       offset = std::min(offset, (quality_detail::closest_point_on_triangle(pb, x[0], x[1], x[2]) - pb).norm());
     }
-    if (!(offset <= max_offset_) || (require_better && (!is_better(before, after) || after.n_small >= before.n_small))) return -1.0;
-    return after.min_sine;
+    return offset <= (max_offset >= 0.0 ? max_offset : max_offset_);
   }
 
+ public:
+  // Obtuse collapses (StitchOptions::obtuse_collapse; docs/stitch.md "Obtuse collapses,
+  // session 20"): each triangle with an angle above 90 deg, in face order, gets one of its
+  // corners that is no feature node collapsed into a neighbour (which stays): the collapse
+  // that leaves the fewest obtuse triangles around the removed node (then the largest
+  // smallest angle), when that is fewer than before, none more is below the bound, the
+  // smallest angle of the triangles with no feature node stays at least min(old,
+  // angle_floor_deg + kObtuseCollapseMarginDeg), that of the others at least min(old, that,
+  // obtuse_split_feature_angle_deg) (the obtuse splits' floors), the smallest alpha at least
+  // min(old, alpha_floor), with collapse_gain's other tests (rank, link condition, normals),
+  // the removed node within kObtuseCollapseOffsetEdges input mean edges of the new triangles.
+  // Serial. Counted in n_collapses_. Returns the collapses made.
+  std::size_t obtuse_sweep() {
+    const double sin_floor = std::sin(std::min(options_.angle_floor_deg + kObtuseCollapseMarginDeg, 60.0) * std::numbers::pi / 180.0);
+    const double sin_feature_floor = std::min(sin_floor, std::sin(options_.obtuse_split_feature_angle_deg * std::numbers::pi / 180.0));
+    const double max_offset = max_offset_ * (kObtuseCollapseOffsetEdges / kMaxCollapseOffsetEdges);
+    std::size_t n_made = 0;
+    const std::size_t n_faces = mesh_.n_faces();
+    for (std::size_t fi = 0; fi < n_faces; ++fi) {
+      const TriMesh::FaceHandle f(static_cast<int>(fi));
+      if (mesh_.status(f).deleted()) continue;
+      TriMesh::VertexHandle v;
+      std::array<TriMesh::VertexHandle, 3> corners;
+      int k = 0;
+      for (auto h : mesh_.fh_range(f)) {
+        const auto vc = mesh_.to_vertex_handle(mesh_.next_halfedge_handle(h));
+        corners[static_cast<std::size_t>(k++)] = vc;
+        const Vec a = point(mesh_, mesh_.from_vertex_handle(h)), b = point(mesh_, mesh_.to_vertex_handle(h)), c = point(mesh_, vc);
+        if ((a - c).dot(b - c) < 0.0) v = vc;
+      }
+      if (!v.is_valid()) continue;
+      Step best_step;
+      bool found = false;
+      int best_obtuse = 0;  // the change in the count of obtuse triangles
+      double best_sine = -1.0;
+      for (const auto u : corners) {
+        if (!u.is_valid() || is_feature(u)) continue;
+        for (auto h : mesh_.voh_range(u)) {
+          Shape before, after;
+          if (!collapse_shapes(h, before, after, max_offset)) continue;
+          if (after.n_obtuse >= before.n_obtuse || after.n_small > before.n_small) continue;
+          if (after.min_sine_away < std::min(before.min_sine_away, sin_floor) ||
+              after.min_sine_feature < std::min(before.min_sine_feature, sin_feature_floor) ||
+              after.min_alpha < std::min(before.min_alpha, options_.alpha_floor)) {
+            continue;
+          }
+          if (found && (after.n_obtuse - before.n_obtuse > best_obtuse ||
+                        (after.n_obtuse - before.n_obtuse == best_obtuse && !(after.min_sine > best_sine)))) {
+            continue;
+          }
+          found = true;
+          best_obtuse = after.n_obtuse - before.n_obtuse;
+          best_sine = after.min_sine;
+          best_step = {Step::Kind::Collapse, u, mesh_.to_vertex_handle(h), Vec::Zero()};
+        }
+      }
+      if (!found || !apply(best_step)) continue;
+      ++n_made;
+    }
+    return n_made;
+  }
+
+ private:
   // Moving v (no feature node, not on the boundary) to the best of a few places on the
   // fitted surfaces of its triangles' patches (the mean of its projections onto them, as the
   // optimisation's smoothing does): halfway and all the way to the centroid of its
@@ -750,7 +841,7 @@ AngleRepairResult repair_small_angles(const SurfaceMesh& surface, const StitchOp
     AngleRepair repair(surface, options, is_feature, frozen, result);
     if (check == 0) {
       first_bad = repair.small_faces();
-      if (first_bad.empty()) return out;
+      if (first_bad.empty() && !options.obtuse_collapse) return out;
     }
     if (!before && options.check_self_intersections) {
       before.emplace();
@@ -761,6 +852,7 @@ AngleRepairResult repair_small_angles(const SurfaceMesh& surface, const StitchOp
     for (int round = 0; round < options.angle_repair_rounds; ++round) {
       if (repair.sweep(round == 0 ? first_bad : repair.small_faces()) == 0) break;
     }
+    if (options.obtuse_collapse) (void)repair.obtuse_sweep();
     repair.collect_garbage();
     if (repair.n_flips_ + repair.n_collapses_ + repair.n_moves_ == 0) return out;
     std::vector<std::array<std::uint32_t, 2>> pairs;

@@ -243,16 +243,18 @@ TEST(Stitch, ObtuseRepairLeavesFewerObtuseTriangles) {
     const TriangleSoup soup = jittered_sphere(3, jitter);
     const SurfaceMesh surface = cube_map_surface(soup);
     const TriMesh input = to_trimesh(soup);
-    // Without the obtuse splits on both sides: they add vertices (a different count
-    // after the repair), the repair none.
+    // Without the obtuse splits and collapses on both sides: they add and remove vertices (a
+    // different count after the repair), the repair none.
     StitchOptions plain;
     plain.obtuse_repair_rounds = 0;
     plain.obtuse_split_rounds = 0;
+    plain.obtuse_collapse = false;
     const StitchResult before = stitch(surface, input, plain);
     ASSERT_TRUE(before.report.ok()) << joined(before.report.errors);
     ASSERT_GT(before.report.output.quality.obtuse_fraction, 0.0);  // something to repair
     StitchOptions repair;
     repair.obtuse_split_rounds = 0;
+    repair.obtuse_collapse = false;
     const StitchResult r = stitch(surface, input, repair);
     EXPECT_TRUE(r.report.ok()) << joined(r.report.errors);
     EXPECT_EQ(r.report.output.topology.euler_characteristic, 2);
