@@ -49,6 +49,8 @@ void RemeshOptions::validate() const {
   if (fin_strip_max_lost_corners < -1) throw InvalidInput("remesh: fin_strip_max_lost_corners must be >= -1");
   if (!(fin_strip_pin_angle_deg >= 0.0 && fin_strip_pin_angle_deg <= 180.0))
     throw InvalidInput("remesh: fin_strip_pin_angle_deg must be in [0, 180]");
+  if (fin_strip_pin_angle_deg > 0.0 && fin_strip_max_lost_corners < 0)
+    throw InvalidInput("remesh: fin_strip_pin_angle_deg needs the corner guard (fin_strip_max_lost_corners >= 0)");
   if (!(std::isfinite(narrow_cad_patch_width) && narrow_cad_patch_width >= 0.0))
     throw InvalidInput("remesh: narrow_cad_patch_width must be finite and >= 0");
   if (!(std::isfinite(narrow_widen_width) && narrow_widen_width >= 0.0))

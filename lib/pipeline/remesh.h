@@ -58,9 +58,9 @@ struct RemeshOptions {
   //! its vertices where 3+ sides meet (patches, or the input's boundary as one) are left with
   //! two: a fin's tip is pinned by its corners, and without them the output cut headsq@1150's
   //! tips off by up to 1.14 mean edges (docs/segment.md "Fin strips: a corner guard, session
-  //! 19"). -1 = no guard; >= -1. Default 1 (0 with pinned tips, below).
+  //! 19"). -1 = no guard; >= -1. Default 1 (pinned tips, below, were measured with 0).
   int fin_strip_max_lost_corners = 1;
-  //! With the guard, > 0: a strip's corner that its join leaves with two sides does not count
+  //! With the guard (fin_strip_max_lost_corners >= 0, else refused), > 0: a strip's corner that its join leaves with two sides does not count
   //! against fin_strip_max_lost_corners (only those left inside the union do), and stays a
   //! corner (a curve end, so a node on the input: the fin's tip pinned) where the border
   //! turns there: the angle at it between the border vertices two input edges away on both

@@ -1536,6 +1536,13 @@ void check_edit(const segment_detail::Splitter& s, const Segmentation& segmentat
           segmentation.face_patch[static_cast<std::size_t>(f)] != p)
         throw InvalidInput(what + ": patch " + std::to_string(p) + " lists face " + std::to_string(f) +
                            ", which is not labelled with it");
+  // Pinned corners are vertex indices of the mesh, ascending (the edits binary-search them).
+  const std::vector<int>& pins = segmentation.pinned_corners;
+  for (std::size_t i = 0; i < pins.size(); ++i) {
+    if (pins[i] < 0 || static_cast<std::size_t>(pins[i]) >= s.mesh.n_vertices())
+      throw InvalidInput(what + ": pinned corner " + std::to_string(pins[i]) + " is no vertex of the mesh");
+    if (i > 0 && pins[i] <= pins[i - 1]) throw InvalidInput(what + ": the pinned corners are not ascending");
+  }
 }
 
 Grouping splitter_grouping(const segment_detail::Splitter& s) {

@@ -429,8 +429,12 @@ class AngleRepair {
 
   // The triangles around from(h) before and after collapsing it into to(h) (collapse_gain):
   // false when the collapse is not allowed. max_offset: the bound on the removed node's
-  // distance to the new triangles (max_offset_ when negative).
-  bool collapse_shapes(TriMesh::HalfedgeHandle h, Shape& before, Shape& after, double max_offset = -1.0) const {
+  // distance to the new triangles (max_offset_ when negative). survivor_feature: a triangle
+  // after the collapse counts as beside a feature when the survivor to(h) is a feature node
+  // (the obtuse collapses); the small-angle repair (false) counts it as before the collapse,
+  // which keeps its outputs as they were (to revisit with a corpus run: session 20's review).
+  bool collapse_shapes(TriMesh::HalfedgeHandle h, Shape& before, Shape& after, double max_offset = -1.0,
+                       bool survivor_feature = false) const {
     const auto vb = mesh_.from_vertex_handle(h), va = mesh_.to_vertex_handle(h);
     if (is_feature(vb) || is_frozen(vb) || is_frozen(va) || mesh_.is_boundary(vb) || mesh_.is_boundary(va)) return false;
     if (rank_of(vb) > rank_of(va)) return false;
@@ -456,7 +460,7 @@ class AngleRepair {
       const Vec n_new = (x[1] - x[0]).cross(x[2] - x[0]);
       const double l_old = n_old.norm(), l_new = n_new.norm();
       if (l_new <= min_double_area_ || (l_old > 0.0 && n_new.dot(n_old) <= options_.min_normal_dot * l_old * l_new)) return false;
-      after.add(x[0], x[1], x[2], sin_bound_, away);
+      after.add(x[0], x[1], x[2], sin_bound_, away && !(survivor_feature && is_feature(va)));
       offset = std::min(offset, (quality_detail::closest_point_on_triangle(pb, x[0], x[1], x[2]) - pb).norm());
     }
     return offset <= (max_offset >= 0.0 ? max_offset : max_offset_);
@@ -501,7 +505,7 @@ class AngleRepair {
         if (!u.is_valid() || is_feature(u)) continue;
         for (auto h : mesh_.voh_range(u)) {
           Shape before, after;
-          if (!collapse_shapes(h, before, after, max_offset)) continue;
+          if (!collapse_shapes(h, before, after, max_offset, true)) continue;
           if (after.n_obtuse >= before.n_obtuse || after.n_small > before.n_small) continue;
           if (after.min_sine_away < std::min(before.min_sine_away, sin_floor) ||
               after.min_sine_feature < std::min(before.min_sine_feature, sin_feature_floor) ||

@@ -205,8 +205,9 @@ struct StitchOptions {
   //! The fidelity moves only where a fit misses its input: only the input faces around an
   //! input vertex that its patch's fit misses by more than this many input mean edges (along
   //! the patch's axis; SurfaceMesh::input_face_patch) are measured against the output, and
-  //! only the output vertices of the patches holding such faces; nothing else is measured nor
-  //! moved. Finite, >= 0; 0 = everywhere (also when the SurfaceMesh has no input_face_patch).
+  //! only the output vertices of the patches holding such faces (a corner of the output face
+  //! nearest a measured input sample can still move, outside them: not measured afterwards).
+  //! Finite, >= 0; 0 = everywhere (also when the SurfaceMesh has no input_face_patch).
   //! Default 0 (tool `--fidelity-gate G`; docs/stitch.md "Fidelity moves, session 20").
   double fidelity_gate_edges = 0.0;
   //! Run the exact self-intersection checks: the check of the result (the most expensive

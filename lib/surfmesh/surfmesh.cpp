@@ -34,9 +34,11 @@ constexpr double kDefaultChordRelative = 0.05;
 // per chunk). The calling thread is worker 0 and reports the progress (fraction f0 .. f1)
 // after each of its own indices and once at the end; returning false from the callback
 // stops the workers and throws Cancelled. A task's exception is rethrown here after the
-// workers joined. (A for_chunks monitor instead would be woken by the workers after every
-// index: on the liver's 2 028 patches about 6 000 wake-ups of the calling thread, each
-// taking a core from a worker; docs/benchmarks/pipeline.md, session 20.)
+// workers joined; a cancel is seen after worker 0's current patch. (A for_chunks monitor was
+// woken by the workers after every index before session 20: on the liver's 2 028 patches
+// about 6 000 wake-ups of the calling thread, each taking a core from a worker. It now looks
+// every kMonitorPeriod, but then the calling thread only watches; here it works as worker 0.
+// docs/benchmarks/pipeline.md, session 20.)
 template <class Task>
 void run_parallel(std::size_t n, unsigned threads, const ProgressCallback& progress, double f0, double f1, const Task& task) {
   constexpr std::string_view kStage = "surfmesh: patches";

@@ -1277,6 +1277,9 @@ TEST(Pipeline, FinStripCornerGuardRefusesAJoinThatTakesCornersAway) {
     options.fin_strip_pin_angle_deg = bad;
     EXPECT_THROW((void)remesh(mesh, options), InvalidInput);
   }
+  options.fin_strip_pin_angle_deg = 120.0;  // pins need the guard
+  options.fin_strip_max_lost_corners = -1;
+  EXPECT_THROW((void)remesh(mesh, options), InvalidInput);
 }
 
 // A 12 x 12 grid of side 1 (turned) with a steep step across it: the plane rises by 0.02 at

@@ -270,6 +270,43 @@ TEST(Stitch, ObtuseRepairLeavesFewerObtuseTriangles) {
   EXPECT_THROW((void)stitch(cube_map_surface(test::icosphere(1)), bad), InvalidInput);
 }
 
+// Issue 5 (obtuse triangles): the obtuse collapses (StitchOptions::obtuse_collapse, opt-in;
+// docs/stitch.md "Obtuse collapses, session 20") leave fewer obtuse triangles than the same
+// stitch without them, with no new triangle below the floors and every node still on the
+// sphere; the same mesh at 1 and 2 threads.
+TEST(Stitch, ObtuseCollapsesLeaveFewerObtuseTriangles) {
+  const TriangleSoup soup = jittered_sphere(3, 0.35);
+  const SurfaceMesh surface = cube_map_surface(soup);
+  const TriMesh input = to_trimesh(soup);
+  StitchOptions off;
+  ASSERT_FALSE(off.obtuse_collapse);  // the default
+  const StitchResult before = stitch(surface, input, off);
+  ASSERT_TRUE(before.report.ok()) << joined(before.report.errors);
+  ASSERT_GT(before.report.output.quality.obtuse_fraction, 0.0);  // something to collapse
+  StitchOptions on;
+  on.obtuse_collapse = true;
+  const StitchResult r = stitch(surface, input, on);
+  EXPECT_TRUE(r.report.ok()) << joined(r.report.errors);
+  EXPECT_GT(r.report.n_angle_collapses, before.report.n_angle_collapses);
+  EXPECT_LT(r.mesh.n_vertices(), before.mesh.n_vertices());
+  EXPECT_EQ(r.report.output.topology.euler_characteristic, 2);
+  EXPECT_TRUE(r.report.output.topology.is_manifold);
+  const auto obtuse_count = [](const StitchResult& s) {
+    return s.report.output.quality.obtuse_fraction * static_cast<double>(s.mesh.n_faces());
+  };
+  EXPECT_LT(obtuse_count(r), obtuse_count(before) - 0.5);
+  EXPECT_GE(r.report.min_angle_away_from_features_deg,
+            std::min(before.report.min_angle_away_from_features_deg, kAwayFromFeaturesAngleBoundDeg));
+  EXPECT_GE(r.report.output.quality.alpha_min, std::min(before.report.output.quality.alpha_min, on.alpha_floor));
+  for (auto v : r.mesh.vertices()) EXPECT_NEAR(to_eigen(r.mesh.point(v)).norm(), 1.0, 0.02);
+  on.n_threads = 1;
+  const StitchResult one = stitch(surface, input, on);
+  on.n_threads = 2;
+  const StitchResult two = stitch(surface, input, on);
+  ASSERT_EQ(one.mesh.n_vertices(), two.mesh.n_vertices());
+  for (auto v : one.mesh.vertices()) ASSERT_EQ(one.mesh.point(v), two.mesh.point(v)) << v.idx();
+}
+
 // Two triangles on a crease (patches 0 and 1 in different planes), both obtuse at their
 // far corners: their shared longest edge A-B is a feature edge (both ends feature corners,
 // the others on the input's boundary), so neither a flip nor a move can touch them. The

@@ -362,8 +362,9 @@ void add_remesh_command(CLI::App& app) {
   cmd->add_option("--fin-strip-pin-angle", args->base.fin_strip_pin_angle_deg,
                   "With the corner guard, > 0: a strip's corner that its join leaves with two sides does not count "
                   "against the guard, and stays a corner (the fin's tip pinned on the input) where the border's angle "
-                  "there is below this (deg; 180 = always; 0 = off, default; opt-in with --fin-strip-max-lost-corners 0 and 120: fewer obtuse triangles on headsq; docs/segment.md \"Fin strips: pinned "
-                  "tips, session 20\")")
+                  "there is below this (deg; 180 = always; 0 = off, default; opt-in with --fin-strip-max-lost-corners 0 "
+                  "and 120: fewer obtuse triangles on headsq; docs/segment.md \"Fin strips: pinned tips, session "
+                  "20\")")
       ->check(CLI::Range(0.0, 180.0));
   cmd->add_option("--narrow-widen", args->base.narrow_widen_width,
                   "On inputs not taken for marching cubes, patches narrower than this many target edges take faces "
