@@ -794,6 +794,23 @@ void expect_same_mesh(const StitchResult& r, const StitchResult& r1, unsigned n)
   }
 }
 
+// Stitches with `options` at 1 thread, then at 2 and 4: the same counts of obtuse splits,
+// flips and smoothing moves and the same mesh bit for bit. Returns the 1-thread result.
+StitchResult expect_same_at_1_2_4_threads(const SurfaceMesh& surface, const TriMesh& input, StitchOptions options) {
+  options.n_threads = 1;
+  StitchResult r1 = stitch(surface, input, options);
+  EXPECT_TRUE(r1.report.ok()) << joined(r1.report.errors);
+  for (const unsigned n : {2U, 4U}) {
+    options.n_threads = n;
+    const StitchResult r = stitch(surface, input, options);
+    EXPECT_EQ(r.report.n_obtuse_splits, r1.report.n_obtuse_splits) << n;
+    EXPECT_EQ(r.report.n_flips, r1.report.n_flips) << n;
+    EXPECT_EQ(r.report.n_smoothing_moves, r1.report.n_smoothing_moves) << n;
+    expect_same_mesh(r, r1, n);
+  }
+  return r1;
+}
+
 TEST(Stitch, SameResultForAnyThreadCount) {
   const TriangleSoup soup = jittered_sphere(3, 0.6);
   const SurfaceMesh surface = cube_map_surface(soup);
@@ -832,18 +849,8 @@ TEST(StitchSlow, ObtuseSplitsSameForAnyThreadCount) {
   options.angle_repair_rounds = 0;
   options.collapse_below_angle_deg = 0.0;
   options.volume_compensation = 0.0;
-  options.n_threads = 1;
-  const StitchResult r1 = stitch(surface, input, options);
-  EXPECT_TRUE(r1.report.ok()) << joined(r1.report.errors);
-  ASSERT_GT(r1.report.n_obtuse_splits, 20U);
-  for (const unsigned n : {2U, 4U}) {
-    options.n_threads = n;
-    const StitchResult r = stitch(surface, input, options);
-    EXPECT_EQ(r.report.n_obtuse_splits, r1.report.n_obtuse_splits) << n;
-    EXPECT_EQ(r.report.n_flips, r1.report.n_flips) << n;
-    EXPECT_EQ(r.report.n_smoothing_moves, r1.report.n_smoothing_moves) << n;
-    expect_same_mesh(r, r1, n);
-  }
+  const StitchResult r1 = expect_same_at_1_2_4_threads(surface, input, options);
+  EXPECT_GT(r1.report.n_obtuse_splits, 20U);
 }
 
 // The obtuse repair's moves are Gauss-Seidel in vertex order; with 2+ threads every
@@ -863,17 +870,8 @@ TEST(Stitch, PlannedObtuseMovesGiveTheSerialSweep) {
   options.angle_repair_rounds = 0;
   options.collapse_below_angle_deg = 0.0;
   options.volume_compensation = 0.0;
-  options.n_threads = 1;
-  const StitchResult r1 = stitch(surface, input, options);
-  EXPECT_TRUE(r1.report.ok()) << joined(r1.report.errors);
-  ASSERT_GT(r1.report.n_smoothing_moves, 200U);
-  for (const unsigned n : {2U, 4U}) {
-    options.n_threads = n;
-    const StitchResult r = stitch(surface, input, options);
-    EXPECT_EQ(r.report.n_smoothing_moves, r1.report.n_smoothing_moves) << n;
-    EXPECT_EQ(r.report.n_flips, r1.report.n_flips) << n;
-    expect_same_mesh(r, r1, n);
-  }
+  const StitchResult r1 = expect_same_at_1_2_4_threads(surface, input, options);
+  EXPECT_GT(r1.report.n_smoothing_moves, 200U);
 }
 
 // The obtuse splits go face by face; with 2+ threads every face obtuse at the sweep's start
@@ -890,18 +888,8 @@ TEST(Stitch, PlannedObtuseSplitsGiveTheSerialSweep) {
   options.angle_repair_rounds = 0;
   options.collapse_below_angle_deg = 0.0;
   options.volume_compensation = 0.0;
-  options.n_threads = 1;
-  const StitchResult r1 = stitch(surface, input, options);
-  EXPECT_TRUE(r1.report.ok()) << joined(r1.report.errors);
-  ASSERT_GT(r1.report.n_obtuse_splits, 20U);
-  for (const unsigned n : {2U, 4U}) {
-    options.n_threads = n;
-    const StitchResult r = stitch(surface, input, options);
-    EXPECT_EQ(r.report.n_obtuse_splits, r1.report.n_obtuse_splits) << n;
-    EXPECT_EQ(r.report.n_flips, r1.report.n_flips) << n;
-    EXPECT_EQ(r.report.n_smoothing_moves, r1.report.n_smoothing_moves) << n;
-    expect_same_mesh(r, r1, n);
-  }
+  const StitchResult r1 = expect_same_at_1_2_4_threads(surface, input, options);
+  EXPECT_GT(r1.report.n_obtuse_splits, 20U);
 }
 
 // The smoothing sweep is Gauss-Seidel in vertex order; with 2+ threads it runs on a schedule
