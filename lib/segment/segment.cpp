@@ -24,6 +24,8 @@ namespace nurbsfront {
 namespace {
 // Faces per task of the parallel per-face loops.
 constexpr std::size_t kFaceChunk = 8192;
+// Patches per task of the per-patch loops (cones, axes, face-list sorts).
+constexpr std::size_t kPatchChunk = 16;
 }  // namespace
 
 void SegmentOptions::validate() const {
@@ -617,7 +619,9 @@ std::vector<std::pair<int, int>> dissolve(const Grouping& grouping, int p, Patch
 // or be dissolved into several neighbours. Never across a crease.
 // With `scratch` set (after the fold splits), only small patches are merged, without
 // dissolving, and a merge is kept only if the merged patch passes the projection check.
-void merge_patches(const Grouping& grouping, std::size_t min_faces, Patches& patches, Scratch* scratch) {
+// The first cones (each a function of its patch alone) are computed on `workers` threads.
+void merge_patches(const Grouping& grouping, std::size_t min_faces, Patches& patches, Scratch* scratch,
+                   unsigned workers) {
   const FaceGraph& graph = grouping.graph;
   const auto n_patches = static_cast<int>(patches.faces.size());
   std::vector<int> order(n_patches);
@@ -647,7 +651,10 @@ void merge_patches(const Grouping& grouping, std::size_t min_faces, Patches& pat
   };
   std::vector<OpenMesh::HalfedgeHandle> merged_border;
   std::vector<PatchCones> cones(n_patches);
-  for (int p = 0; p < n_patches; ++p) cones[p] = patch_cones(grouping, patches.faces[p], patches.axes[p]);
+  segment_detail::parallel_chunks(static_cast<std::size_t>(n_patches), workers, kPatchChunk,
+                                  [&](std::size_t begin, std::size_t end, unsigned) {
+    for (std::size_t p = begin; p < end; ++p) cones[p] = patch_cones(grouping, patches.faces[p], patches.axes[p]);
+  });
   const double max_smooth = grouping.max_slope - tolerance::kAngleMarginRad;
   const double max_raw = std::acos(kSegmentMinRawNormalDot) - tolerance::kAngleMarginRad;
   // A patch's attempt depends only on its own faces and cones and on its neighbours (which
@@ -820,14 +827,18 @@ void clean_borders(const Grouping& grouping, Patches& patches) {
   for (int f = 0; f < graph.n_faces(); ++f) patches.faces[patches.face_patch[f]].push_back(f);
 }
 
-// Drops empty patches and numbers the rest by their smallest face id; sorts face lists.
-void renumber(Patches& patches) {
+// Drops empty patches and numbers the rest by their smallest face id; sorts face lists
+// (each on its own: on `workers` threads).
+void renumber(Patches& patches, unsigned workers) {
+  segment_detail::parallel_chunks(patches.faces.size(), workers, kPatchChunk, [&](std::size_t begin, std::size_t end, unsigned) {
+    for (std::size_t p = begin; p < end; ++p) {
+      auto& faces = patches.faces[p];
+      if (!std::is_sorted(faces.begin(), faces.end())) std::sort(faces.begin(), faces.end());
+    }
+  });
   std::vector<int> order;
   for (int p = 0; p < static_cast<int>(patches.faces.size()); ++p) {
-    auto& faces = patches.faces[p];
-    if (faces.empty()) continue;
-    if (!std::is_sorted(faces.begin(), faces.end())) std::sort(faces.begin(), faces.end());
-    order.push_back(p);
+    if (!patches.faces[p].empty()) order.push_back(p);
   }
   std::sort(order.begin(), order.end(), [&](int a, int b) { return patches.faces[a][0] < patches.faces[b][0]; });
   Patches result;
@@ -841,16 +852,19 @@ void renumber(Patches& patches) {
   patches = std::move(result);
 }
 
-// The axis becomes the area-weighted mean raw normal where every face fits it.
-void refine_axes(const Grouping& grouping, Patches& patches) {
-  for (std::size_t p = 0; p < patches.faces.size(); ++p) {
-    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-    for (int f : patches.faces[p]) sum += grouping.normals.area[f] * grouping.normals.raw[f];
-    if (!(sum.norm() > 0.0)) continue;
-    const Eigen::Vector3d mean = sum.normalized();
-    if (std::all_of(patches.faces[p].begin(), patches.faces[p].end(), [&](int f) { return grouping.fits(f, mean); }))
-      patches.axes[p] = mean;
-  }
+// The axis becomes the area-weighted mean raw normal where every face fits it (each patch
+// on its own: on `workers` threads).
+void refine_axes(const Grouping& grouping, Patches& patches, unsigned workers) {
+  segment_detail::parallel_chunks(patches.faces.size(), workers, kPatchChunk, [&](std::size_t begin, std::size_t end, unsigned) {
+    for (std::size_t p = begin; p < end; ++p) {
+      Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+      for (int f : patches.faces[p]) sum += grouping.normals.area[f] * grouping.normals.raw[f];
+      if (!(sum.norm() > 0.0)) continue;
+      const Eigen::Vector3d mean = sum.normalized();
+      if (std::all_of(patches.faces[p].begin(), patches.faces[p].end(), [&](int f) { return grouping.fits(f, mean); }))
+        patches.axes[p] = mean;
+    }
+  });
 }
 
 // Splits `faces` (one patch) into the connected components of the carved faces and of
@@ -1576,7 +1590,7 @@ Segmentation finish_edit(const segment_detail::Splitter& s, Patches& patches,
   std::sort(island_faces.begin(), island_faces.end());
   island_faces.erase(std::unique(island_faces.begin(), island_faces.end()), island_faces.end());
   result.island_faces = std::move(island_faces);
-  renumber(patches);
+  renumber(patches, segment_detail::worker_count(s.options.threads));
   finish_segmentation(s.mesh, s.counts, patches, s.options, result, with_borders);
   return result;
 }
@@ -1605,21 +1619,22 @@ Segmentation segment_detail::segment(const TriMesh& mesh, const SegmentOptions& 
                           std::cos(kGrowthConeFraction * max_slope)};
   Patches patches = grow_regions(grouping);
   report_progress(options.progress, kStage, 0.5);
-  merge_patches(grouping, options.min_patch_faces, patches, nullptr);
+  const unsigned workers = segment_detail::worker_count(options.threads);
+  merge_patches(grouping, options.min_patch_faces, patches, nullptr, workers);
   clean_borders(grouping, patches);
-  renumber(patches);
-  refine_axes(grouping, patches);
+  renumber(patches, workers);
+  refine_axes(grouping, patches, workers);
   auto own_scratch = std::make_unique<Scratch>(mesh);
   Scratch& scratch = *own_scratch;
   std::vector<std::unique_ptr<Scratch>> worker_scratch;
   result.n_fold_splits = split_folds(grouping, mean_edge, scratch, patches, all_patches(patches),
                                      segment_detail::worker_count(options.threads), worker_scratch);
-  if (result.n_fold_splits > 0) merge_patches(grouping, options.min_patch_faces, patches, &scratch);
+  if (result.n_fold_splits > 0) merge_patches(grouping, options.min_patch_faces, patches, &scratch, workers);
   result.n_islands_absorbed =
       absorb_tiny_islands(grouping, kSegmentTinyIslandPerimeterEdges * mean_edge, patches, scratch,
                           result.island_faces);
   std::sort(result.island_faces.begin(), result.island_faces.end());
-  renumber(patches);
+  renumber(patches, workers);
   report_progress(options.progress, kStage, 0.7);
 
   const FaceCounts counts = face_counts(graph, normals);
@@ -1714,7 +1729,7 @@ Segmentation segment_detail::split(Splitter& s, const Segmentation& segmentation
     std::erase_if(work, [&](int p) { return p < n_patches && !std::binary_search(sorted.begin(), sorted.end(), p); });
   result.n_fold_splits += split_folds(grouping, s.mean_edge, scratch, patches, std::move(work),
                                       segment_detail::worker_count(s.options.threads), s.worker_scratch);
-  renumber(patches);
+  renumber(patches, segment_detail::worker_count(s.options.threads));
   finish_segmentation(s.mesh, s.counts, patches, s.options, result, with_borders);
   s.last_face_patch = result.face_patch;
   s.last_axes.clear();

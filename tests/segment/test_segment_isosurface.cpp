@@ -101,6 +101,31 @@ TEST(SegmentIsosurface, SmoothedBordersStayWithinTheirBoundOfTheInput) {
   EXPECT_THROW((void)segment(mesh, options), InvalidInput);
 }
 
+// The per-patch loops of segment() on the run's threads (session 21: the merges' first
+// cones, the axes' refinement and the face lists' sorts, 16 patches a task): the same
+// patches, axes and counts at 1, 2 and 4 threads, on an input with more than 32 patches
+// (several tasks) whose fold splits run the second merge (after the splits).
+TEST(SegmentIsosurface, PerPatchLoopsAreTheSameOnAnyThreadCount) {
+  const TriMesh mesh = scene_mesh("dram", 64, SampleMode::Occupancy);
+  SegmentOptions options;
+  options.threads = 1;
+  const Segmentation one = segment(mesh, options);
+  ASSERT_GT(one.patches.size(), 32u);
+  EXPECT_GT(one.n_fold_splits, 0u);
+  for (const int threads : {2, 4}) {
+    options.threads = threads;
+    const Segmentation many = segment(mesh, options);
+    EXPECT_EQ(one.face_patch, many.face_patch) << threads;
+    EXPECT_EQ(one.n_fold_splits, many.n_fold_splits) << threads;
+    EXPECT_EQ(one.n_islands_absorbed, many.n_islands_absorbed) << threads;
+    ASSERT_EQ(one.patches.size(), many.patches.size()) << threads;
+    for (std::size_t p = 0; p < one.patches.size(); ++p) {
+      EXPECT_EQ(one.patches[p].axis, many.patches[p].axis) << threads << " patch " << p;
+      EXPECT_EQ(one.patches[p].faces, many.patches[p].faces) << threads << " patch " << p;
+    }
+  }
+}
+
 // SegmentOptions::threads: the per-face loops (more than one chunk of faces here), the
 // projection and cliff checks and the curve smoothing run on several workers; the result
 // is the same for any thread count, the splitter's rounds too.
