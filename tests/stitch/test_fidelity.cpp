@@ -432,6 +432,38 @@ TEST(StitchFidelitySlow, GateMeasuresOnlyWhereTheFitsMiss) {
   EXPECT_THROW((void)stitch(surface, input, options), InvalidInput);
 }
 
+TEST(StitchFidelitySlow, GatedMovesHoldTheBrainWithinTwiceTheDecimatersDistance) {
+  // (Slow: the brain's stitch twice.) Issue 6 on the brain: the quadric decimater at the same
+  // vertex count is 0.421 voxel (0.29 mean edges) from the input, the plain stitch 1.03
+  // (0.71 mean edges: its fits smooth folds narrower than their lattice). The moves at 0.4
+  // mean edges, gated at 0.5 (measured only where a fit misses its input by more than that;
+  // docs/stitch.md "Fidelity moves, session 21"), bring the two-sided distance under twice the
+  // decimater's (0.58 mean edges) with no more obtuse triangles, the smallest angle away from
+  // features at min(before, 25 deg) and the topology kept.
+  const Brain brain;
+  const auto& [input, surface, plain_options, plain] = brain;
+  ASSERT_TRUE(plain.report.ok());
+  StitchOptions options = plain_options;
+  options.fidelity_distance_edges = 0.4;
+  options.fidelity_gate_edges = 0.5;
+  const StitchResult gated = stitch(surface, input, options);
+  ASSERT_TRUE(gated.report.ok());
+  EXPECT_GT(gated.report.n_fidelity_moves, 10u);
+  const TriangleSoup reference = to_soup(input);
+  DistanceOptions sampling;
+  sampling.sample_spacing_relative = 0.01;
+  const double edge = surface.input_mean_edge;
+  const double twice_decimater = 2.0 * 0.421 / 1.453;  // mean edges (brain: 1.453 voxels)
+  EXPECT_GT(mesh_distance(to_soup(plain.mesh), reference, sampling).hausdorff / edge, twice_decimater);
+  EXPECT_LT(mesh_distance(to_soup(gated.mesh), reference, sampling).hausdorff / edge, twice_decimater);
+  EXPECT_LE(obtuse_triangles(gated.mesh), obtuse_triangles(plain.mesh));
+  EXPECT_GE(gated.report.min_angle_away_from_features_deg,
+            std::min(plain.report.min_angle_away_from_features_deg, kAwayFromFeaturesAngleBoundDeg) - 1e-9);
+  EXPECT_EQ(gated.report.output_components.size(), plain.report.output_components.size());
+  EXPECT_EQ(gated.report.output_components[0].euler_characteristic, plain.report.output_components[0].euler_characteristic);
+  EXPECT_TRUE(gated.report.output_components[0].is_closed);
+}
+
 double alpha_of(const TriMesh& mesh, TriMesh::FaceHandle f) {
   std::vector<Eigen::Vector3d> p;
   for (const auto v : mesh.fv_range(f)) p.push_back(to_eigen(mesh.point(v)));
