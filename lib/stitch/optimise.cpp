@@ -51,13 +51,16 @@ double alpha_with_area(const Vec& a, const Vec& b, const Vec& c, double twice_ar
 // sine is not computed and 1 is returned in its place (see Optimiser::alpha_sine_skip_).
 std::array<double, 2> alpha_and_min_angle_sine(const Vec& a, const Vec& b, const Vec& c, double twice_area,
                                                double skip_sine_above = std::numeric_limits<double>::infinity()) {
-  std::array<double, 3> l2{(b - a).squaredNorm(), (c - b).squaredNorm(), (a - c).squaredNorm()};
-  const double sum_sq = l2[0] + l2[1] + l2[2];
+  const double x = (b - a).squaredNorm(), y = (c - b).squaredNorm(), z = (a - c).squaredNorm();
+  const double sum_sq = x + y + z;
   const double area = 0.5 * twice_area;
   const double alpha = sum_sq > 0.0 ? 4.0 * std::numbers::sqrt3 * area / sum_sq : 0.0;
   if (alpha > skip_sine_above) return {alpha, 1.0};
-  std::sort(l2.begin(), l2.end());
-  const double product = std::sqrt(l2[1] * l2[2]);
+  // The middle and the largest of the three squared edges (what sorting them gives, without
+  // the sort: the same values, so the same sine bit for bit; smallest_angle_sine alike).
+  const double largest = std::max(std::max(x, y), z);
+  const double middle = std::max(std::min(x, y), std::min(std::max(x, y), z));
+  const double product = std::sqrt(middle * largest);
   return {alpha, product > 0.0 ? twice_area / product : 0.0};
 }
 
@@ -363,8 +366,13 @@ class Optimiser {
     const Vec w = normal.cross(u);
     const double sine_floor = std::min(old_sine, sin_obtuse_floor_);
     const double reach = kObtuseSearchReach * shortest;
-    // (obtuse triangles, -cosine of the largest angle) of q, or nothing when q is not allowed.
-    auto score = [&](const Vec& q) -> std::optional<std::pair<std::size_t, double>> {
+    // (obtuse triangles, -cosine of the largest angle) of q, or nothing when q is not allowed
+    // or, with `below`, when its score would not be below *below. Both parts only grow
+    // triangle by triangle, so once the score so far is not below *below the place is given
+    // up before the rest of the ring and its sines are computed: the caller took a place only
+    // when its score was below the best so far, so the same places are taken.
+    using Score = std::pair<std::size_t, double>;
+    auto score = [&](const Vec& q, const Score* below) -> std::optional<Score> {
       std::size_t n_obtuse = 0;
       double worst = 1.0;
       if ((q - p).squaredNorm() > reach * reach) return std::nullopt;
@@ -372,15 +380,16 @@ class Optimiser {
         const Vec n = area_vector(q, r.b, r.c);
         const double l = n.norm();
         if (l <= min_double_area_ || !(n.dot(r.n_old) > 0.0)) return std::nullopt;
-        if (alpha_and_min_angle_sine(q, r.b, r.c, l)[1] < sine_floor) return std::nullopt;
         n_obtuse += triangle_is_obtuse(q, r.b, r.c) ? 1 : 0;
         worst = std::min(worst, largest_angle_cosine(q, r.b, r.c));
+        if (below != nullptr && !(Score(n_obtuse, -worst) < *below)) return std::nullopt;
+        if (alpha_and_min_angle_sine(q, r.b, r.c, l)[1] < sine_floor) return std::nullopt;
       }
-      return std::pair<std::size_t, double>(n_obtuse, -worst);
+      return Score(n_obtuse, -worst);
     };
-    const auto start = score(p);
+    const auto start = score(p, nullptr);
     if (!start) return p;
-    std::pair<std::size_t, double> best = *start;
+    Score best = *start;
     Vec at = p;
     double step = 0.25 * shortest;
     constexpr std::array<std::array<double, 2>, 8> kDirections{
@@ -390,11 +399,12 @@ class Optimiser {
     constexpr int kMaxMoves = 64;
     int halvings = 0, moves = 0;
     while (halvings < options_.obtuse_search_steps && moves < kMaxMoves) {
-      std::optional<std::pair<std::size_t, double>> best_here;
+      std::optional<Score> best_here;
       Vec best_q = at;
       for (const auto& [du, dw] : kDirections) {
         const Vec q = at + (step * du) * u + (step * dw) * w;
-        const auto s = score(q);
+        // best_here, when set, is below best.
+        const auto s = score(q, best_here ? &*best_here : &best);
         if (s && *s < best && (!best_here || *s < *best_here)) {
           best_here = s;
           best_q = q;
@@ -942,7 +952,7 @@ class Optimiser {
       // Not far off the edge: a fit far off there (a border of a patch fitted badly).
       if (!m.allFinite() || (m - m0).norm() > kSplitMaxOffset * (b - a).norm()) continue;
       for (const bool with_flips : {false, true}) {
-        const int n = evaluate_split(h, plan.one_sided, m, plan.on_segment, with_flips, false, scratch.flips);
+        const int n = evaluate_split(h, plan.one_sided, m, plan.on_segment, with_flips, false, scratch.flips, plan.best);
         if (n >= 0 && (plan.best < 0 || n < plan.best)) {
           plan.best = n;
           plan.m = m;
@@ -1031,7 +1041,7 @@ class Optimiser {
   void take_relaxed_place(TriMesh::HalfedgeHandle h, bool one_sided, const Vec& m, SplitScratch& scratch, int& best,
                           Vec& best_m) const {
     for (const bool with_flips : {false, true}) {
-      const int n = evaluate_split(h, one_sided, m, false, with_flips, true, scratch.flips);
+      const int n = evaluate_split(h, one_sided, m, false, with_flips, true, scratch.flips, best);
       if (n >= 0 && (best < 0 || n < best)) {
         best = n;
         best_m = m;
@@ -1123,9 +1133,13 @@ class Optimiser {
   // angle_floor_deg): issue 5's bound away from features. The others, when the split takes
   // the obtuse angle off a node that nothing moves (c), need only min(old, the floor,
   // obtuse_split_feature_angle_deg) (sin_split_feature_floor_).
+  // below >= 0 (a caller that takes only a count below it): -1 as soon as the count reaches
+  // it, before the other new triangles' tests; the count returned otherwise, so the caller
+  // takes the same candidates.
   int evaluate_split(TriMesh::HalfedgeHandle h, bool one_sided, const Vec& m, bool m_is_feature, bool with_flips, bool relaxed,
-                     std::vector<std::array<TriMesh::VertexHandle, 2>>& flips) const {
+                     std::vector<std::array<TriMesh::VertexHandle, 2>>& flips, int below = -1) const {
     flips.clear();
+    if (below == 0) return -1;  // no count is below 0 (flips: none; the caller reads them only when it takes the split)
     const double sin_floor = relaxed ? sin_obtuse_floor_ : sin_angle_floor_;
     auto away = [&](std::initializer_list<TriMesh::VertexHandle> vs) {
       for (const auto v : vs) {
@@ -1213,6 +1227,8 @@ class Optimiser {
     const double sin_feature_floor = off_fixed ? std::min(sin_floor, sin_split_feature_floor_) : sin_floor;
     for (std::size_t k = 0; k < n_tris; ++k) {
       const auto& [p, parent, is_away, h1, h2] = tris[k];
+      const bool obtuse = triangle_is_obtuse(p[0], p[1], p[2]);
+      if (below >= 0 && new_obtuse + int(obtuse) >= below) return -1;
       const Vec n = area_vector(p[0], p[1], p[2]);
       const double l = n.norm();
       if (l <= min_double_area_) return -1;
@@ -1221,7 +1237,7 @@ class Optimiser {
       if (alpha < std::min(old_alpha, options_.alpha_floor)) return -1;
       if (sine < std::min(old_sine, is_away ? sin_floor : sin_feature_floor) * (1.0 - tolerance::kSplitSineRelative)) return -1;
       if (is_away && sine < std::min(old_sine_away, sin_floor) * (1.0 - tolerance::kSplitSineRelative)) return -1;
-      new_obtuse += int(triangle_is_obtuse(p[0], p[1], p[2]));
+      new_obtuse += int(obtuse);
       new_fixed += int((!movable(h1) && (p[2] - p[1]).dot(p[0] - p[1]) < 0.0) || (!movable(h2) && (p[0] - p[2]).dot(p[1] - p[2]) < 0.0));
     }
     if (relaxed && new_obtuse == old_obtuse && new_fixed < old_fixed) return new_obtuse;

@@ -3,6 +3,7 @@
 // Gauss-Seidel sweeps in vertex order on several threads with the serial sweep's result
 // (stitch internal: the smoothing sweeps and the volume compensation's moves).
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cstddef>
 #include <cstdint>
@@ -49,13 +50,27 @@ inline SweepSchedule sweep_schedule(const TriMesh& mesh, std::vector<std::uint8_
     s.serial.push_back(static_cast<int>(i));
     position[i] = s.serial.size();
   }
-  // Groups: union-find over the edges between group vertices.
+  // One pass over the edges (by index, their two halfedges' vertices; deleted edges
+  // skipped as mesh.edges() does): groups by union-find over the edges between group
+  // vertices (a class's root is its smallest vertex, whatever the order of the unions), and
+  // the edges from a serial vertex to a group vertex kept for the groups' `ready` below.
   DisjointSets sets(n);
-  for (auto e : mesh.edges()) {
-    const auto h = mesh.halfedge_handle(e, 0);
+  std::vector<std::array<int, 2>> serial_to_group;  // (serial vertex, group vertex)
+  const std::size_t n_edges = mesh.n_edges();
+  const bool has_status = mesh.has_edge_status();
+  for (std::size_t e = 0; e < n_edges; ++e) {
+    const TriMesh::EdgeHandle edge(static_cast<int>(e));
+    if (has_status && mesh.status(edge).deleted()) continue;
+    const auto h = mesh.halfedge_handle(edge, 0);
     const int a = mesh.from_vertex_handle(h).idx(), b = mesh.to_vertex_handle(h).idx();
-    if (role[static_cast<std::size_t>(a)] != 2 || role[static_cast<std::size_t>(b)] != 2) continue;
-    sets.unite(static_cast<std::uint32_t>(a), static_cast<std::uint32_t>(b));
+    const std::uint8_t ra = role[static_cast<std::size_t>(a)], rb = role[static_cast<std::size_t>(b)];
+    if (ra == 2 && rb == 2) {
+      sets.unite(static_cast<std::uint32_t>(a), static_cast<std::uint32_t>(b));
+    } else if (ra == 1 && rb == 2) {
+      serial_to_group.push_back({a, b});
+    } else if (ra == 2 && rb == 1) {
+      serial_to_group.push_back({b, a});
+    }
   }
   // Group ids in order of their first vertex; then the vertices bucketed by group.
   std::vector<int> group(n, -1);
@@ -77,13 +92,9 @@ inline SweepSchedule sweep_schedule(const TriMesh& mesh, std::vector<std::uint8_
   for (std::size_t i = 0; i < n; ++i) {
     if (role[i] == 2) s.group_vertices[fill[static_cast<std::size_t>(group[i])]++] = static_cast<int>(i);
   }
-  for (auto e : mesh.edges()) {
-    const auto h = mesh.halfedge_handle(e, 0);
-    auto a = static_cast<std::size_t>(mesh.from_vertex_handle(h).idx()), b = static_cast<std::size_t>(mesh.to_vertex_handle(h).idx());
-    if (role[a] == 2) std::swap(a, b);
-    if (role[a] != 1 || role[b] != 2) continue;
-    std::size_t& ready = s.group_ready[static_cast<std::size_t>(group[b])];
-    ready = std::max(ready, position[a]);
+  for (const auto& [a, b] : serial_to_group) {
+    std::size_t& ready = s.group_ready[static_cast<std::size_t>(group[static_cast<std::size_t>(b)])];
+    ready = std::max(ready, position[static_cast<std::size_t>(a)]);
   }
   s.order.resize(n_groups);
   std::iota(s.order.begin(), s.order.end(), std::size_t{0});

@@ -10,13 +10,16 @@
 #include <cstddef>
 #include <cstdint>
 #include <numbers>
+#include <numeric>
 #include <utility>
 #include <vector>
 
 #include "fixtures/shapes.h"
+#include "nurbsfront/core/disjoint_sets.h"
 #include "nurbsfront/core/soup.h"
 #include "nurbsfront/quality/report.h"
 #include "nurbsfront/stitch/stitch_internal.h"
+#include "nurbsfront/stitch/sweep_schedule.h"
 
 namespace nurbsfront {
 namespace {
@@ -84,6 +87,90 @@ TriMesh torus_with_collapses(int k) {
     mesh.collapse(h);
   }
   return mesh;
+}
+
+// stitch_detail::sweep_schedule as it was written before session 21: the edges by the
+// mesh's edge iterator (deleted ones skipped), once for the groups and once for `ready`.
+stitch_detail::SweepSchedule reference_schedule(const TriMesh& mesh, std::vector<std::uint8_t> role) {
+  const std::size_t n = mesh.n_vertices();
+  for (std::size_t i = n; i-- > 0;) {
+    if (role[i] != 1) continue;
+    for (auto u : mesh.vv_range(TriMesh::VertexHandle(static_cast<int>(i)))) {
+      const auto j = static_cast<std::size_t>(u.idx());
+      if (j < i && role[j] == 2) role[j] = 1;
+    }
+  }
+  stitch_detail::SweepSchedule s;
+  std::vector<std::size_t> position(n, 0);
+  for (std::size_t i = 0; i < n; ++i) {
+    if (role[i] != 1) continue;
+    s.serial.push_back(static_cast<int>(i));
+    position[i] = s.serial.size();
+  }
+  DisjointSets sets(n);
+  for (auto e : mesh.edges()) {
+    const auto h = mesh.halfedge_handle(e, 0);
+    const int a = mesh.from_vertex_handle(h).idx(), b = mesh.to_vertex_handle(h).idx();
+    if (role[static_cast<std::size_t>(a)] != 2 || role[static_cast<std::size_t>(b)] != 2) continue;
+    sets.unite(static_cast<std::uint32_t>(a), static_cast<std::uint32_t>(b));
+  }
+  std::vector<int> group(n, -1);
+  std::size_t n_groups = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (role[i] != 2) continue;
+    const auto r = static_cast<std::size_t>(sets.find(static_cast<std::uint32_t>(i)));
+    if (group[r] < 0) group[r] = static_cast<int>(n_groups++);
+    group[i] = group[r];
+  }
+  s.group_begin.assign(n_groups + 1, 0);
+  s.group_ready.assign(n_groups, 0);
+  for (std::size_t i = 0; i < n; ++i) {
+    if (role[i] == 2) ++s.group_begin[static_cast<std::size_t>(group[i]) + 1];
+  }
+  for (std::size_t g = 0; g < n_groups; ++g) s.group_begin[g + 1] += s.group_begin[g];
+  s.group_vertices.resize(s.group_begin[n_groups]);
+  std::vector<std::size_t> fill(s.group_begin.begin(), s.group_begin.end() - 1);
+  for (std::size_t i = 0; i < n; ++i) {
+    if (role[i] == 2) s.group_vertices[fill[static_cast<std::size_t>(group[i])]++] = static_cast<int>(i);
+  }
+  for (auto e : mesh.edges()) {
+    const auto h = mesh.halfedge_handle(e, 0);
+    auto a = static_cast<std::size_t>(mesh.from_vertex_handle(h).idx()), b = static_cast<std::size_t>(mesh.to_vertex_handle(h).idx());
+    if (role[a] == 2) std::swap(a, b);
+    if (role[a] != 1 || role[b] != 2) continue;
+    std::size_t& ready = s.group_ready[static_cast<std::size_t>(group[b])];
+    ready = std::max(ready, position[a]);
+  }
+  s.order.resize(n_groups);
+  std::iota(s.order.begin(), s.order.end(), std::size_t{0});
+  std::stable_sort(s.order.begin(), s.order.end(),
+                   [&s](std::size_t x, std::size_t y) { return s.group_ready[x] < s.group_ready[y]; });
+  return s;
+}
+
+TEST(SweepSchedule, SameAsTheEdgeIteratorSchedule) {
+  // A torus with every 7th collapsible edge collapsed (deleted edges to skip) and a whole
+  // one; roles: bands of serial vertices (role 1) across the torus cut the inner vertices
+  // (role 2) into groups, every 11th vertex not tried (role 0).
+  for (const int k : {7, 1000000}) {
+    const TriMesh mesh = torus_with_collapses(k);
+    std::vector<std::uint8_t> role(mesh.n_vertices(), 2);
+    for (std::size_t v = 0; v < role.size(); ++v) {
+      if (v % 11 == 5) role[v] = 0;
+      const Vec p = stitch_detail::point(mesh, TriMesh::VertexHandle(static_cast<int>(v)));
+      if (std::abs(p.x()) < 0.15 || std::abs(p.y()) < 0.15) role[v] = 1;
+    }
+    const stitch_detail::SweepSchedule expected = reference_schedule(mesh, role);
+    const stitch_detail::SweepSchedule s = stitch_detail::sweep_schedule(mesh, role);
+    ASSERT_GE(expected.group_ready.size(), 3U) << k;
+    ASSERT_GT(*std::max_element(expected.group_ready.begin(), expected.group_ready.end()), 0U) << k;
+    ASSERT_GT(expected.serial.size(), 20U) << k;
+    EXPECT_EQ(s.serial, expected.serial) << k;
+    EXPECT_EQ(s.group_vertices, expected.group_vertices) << k;
+    EXPECT_EQ(s.group_begin, expected.group_begin) << k;
+    EXPECT_EQ(s.group_ready, expected.group_ready) << k;
+    EXPECT_EQ(s.order, expected.order) << k;
+  }
 }
 
 TEST(SmallAwayFaces, SerialListAtEveryThreadCount) {
