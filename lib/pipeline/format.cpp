@@ -80,7 +80,7 @@ std::string to_json(const RemeshReport& r) {
   stitch.count("settled_collapses", s.n_settled_collapses);
   stitch.count("angle_flips", s.n_angle_flips).count("angle_collapses", s.n_angle_collapses).count("angle_moves", s.n_angle_moves);
   stitch.count("angle_two_steps", s.n_angle_two_steps).count("angle_searches", s.n_angle_searches);
-  stitch.count("angle_repairs_undone", s.n_angle_repairs_undone);
+  stitch.count("angle_repairs_undone", s.n_angle_repairs_undone).count("obtuse_collapses", s.n_obtuse_collapses);
   stitch.count("fidelity_moves", s.n_fidelity_moves).count("fidelity_moves_undone", s.n_fidelity_moves_undone).count("fidelity_splits", s.n_fidelity_splits);
   stitch.count("triangles_away_from_features", s.n_away_from_features);
   stitch.num("min_angle_away_from_features_deg", s.min_angle_away_from_features_deg);

@@ -717,11 +717,12 @@ StitchResult stitch_impl(const SurfaceMesh& surface, const TriMesh* input, const
     const stitch_detail::AngleRepairResult angles = stitch_detail::repair_small_angles(surface, options, feature, result);
     report.n_angle_flips = angles.n_flips;
     report.n_angle_collapses = angles.n_collapses;
+    report.n_obtuse_collapses = angles.n_obtuse_collapses;
     report.n_angle_moves = angles.n_moves + angles.n_pushes;
     report.n_angle_two_steps = angles.n_two_steps;
     report.n_angle_searches = angles.n_searches;
     report.n_angle_repairs_undone = angles.n_undone;
-    if (angles.n_flips + angles.n_collapses + angles.n_moves > 0) soup.reset();
+    if (angles.n_flips + angles.n_collapses + angles.n_obtuse_collapses + angles.n_moves > 0) soup.reset();
   }
   // Not on a label image's marching-cubes staircase (0/1 cells, occupancy scenes): its
   // truth is the smooth surface the fits follow, not the staircase (docs/stitch.md,

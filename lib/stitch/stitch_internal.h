@@ -195,6 +195,7 @@ Eigen::Vector3d push_away(const TriMesh& mesh, TriMesh::VertexHandle v, TriMesh:
 //! What repair_small_angles() did.
 struct AngleRepairResult {
   std::size_t n_flips = 0, n_collapses = 0, n_moves = 0;
+  std::size_t n_obtuse_collapses = 0;  //!< collapses of the obtuse sweep (not in n_collapses)
   //! Nodes moved away from another sheet their changes crossed (not counted above).
   std::size_t n_pushes = 0;
   std::size_t n_two_steps = 0;  //!< pairs of changes (each also counted above)
@@ -323,6 +324,12 @@ std::size_t compensate_volume(const SurfaceMesh& surface, const TriMesh* input, 
                               const std::vector<int>& face_patch, const std::vector<int>& vertex_node,
                               const std::vector<std::uint8_t>& is_feature, const VolumeCompensation& how,
                               bool* skipped = nullptr);
+
+//! Enclosed volume of mesh (the sum of a . (b x c) / 6 over its faces, deleted ones skipped):
+//! the terms on n_threads threads, summed in face order (the same double at every count).
+double enclosed_volume_of(const TriMesh& mesh, unsigned n_threads);
+//! No vertex of mesh is on its boundary.
+bool is_closed(const TriMesh& mesh);
 
 //! alpha of every face (not deleted), in face order; the faces on n_threads threads
 //! (select_in_order, `chunk` faces a task): the same list at every count.

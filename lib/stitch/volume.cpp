@@ -18,9 +18,6 @@
 
 namespace nurbsfront::stitch_detail {
 
-namespace {
-
-// Enclosed volume (sum of a . (b x c) / 6 over the faces), and whether the mesh is closed.
 // The faces' terms on n_threads threads, summed in face order on this one (the same double
 // at every thread count; DRAM 256's three calls were 0.12 G instructions on one thread).
 double enclosed_volume_of(const TriMesh& mesh, unsigned n_threads) {
@@ -44,8 +41,6 @@ double enclosed_volume_of(const TriMesh& mesh, unsigned n_threads) {
 bool is_closed(const TriMesh& mesh) {
   return std::none_of(mesh.vertices().begin(), mesh.vertices().end(), [&](auto v) { return mesh.is_boundary(v); });
 }
-
-}  // namespace
 
 std::size_t compensate_volume(const SurfaceMesh& surface, const TriMesh* input, TriMesh& mesh,
                               const std::vector<int>& face_patch, const std::vector<int>& vertex_node,

@@ -522,7 +522,8 @@ TEST(PipelineSlow, CornerClusterCrossingsCollapsed) {
   // Every node of the surface mesh is an output vertex, unused, or merged by a collapse;
   // the obtuse splits add vertices.
   const StitchReport& s = rep.stitch;
-  EXPECT_EQ(r.mesh.n_vertices() + s.n_unused_nodes + s.n_collapses + s.n_settled_collapses + s.n_angle_collapses,
+  EXPECT_EQ(r.mesh.n_vertices() + s.n_unused_nodes + s.n_collapses + s.n_settled_collapses + s.n_angle_collapses +
+                s.n_obtuse_collapses,
             s.n_input_nodes + s.n_obtuse_splits);
 }
 
@@ -763,12 +764,16 @@ std::size_t count_obtuse(const TriMesh& mesh) {
 // sizing it was written for (gradation 1.5). Session 15: refusing the compensation's moves
 // that make an obtuse triangle more obtuse gives 38 at 1.25 but costs cheese the 0.5% volume
 // bound; not landed (docs/stitch.md "The volume compensation on level sets, session 15").
+// Session 21: without the obtuse collapses (on by default since), which come after the
+// compensation and its repair sweep and take a different share on each mesh (13 obtuse
+// triangles with the compensation, 12 without, with them): the test is of the sweep.
 TEST(PipelineSlow, VolumeCompensationAddsNoObtuseTriangles) {
   const TriMesh mesh = prepare_mesh(read_soup(test::test_data("meshes/rotor.off"))).mesh;
   const double volume_in = enclosed_volume(to_soup(mesh));
   RemeshOptions options = fast_options();
   options.compute_distances = false;
   options.surfmesh.sizing.feature_gradation = 1.5;
+  options.stitch.obtuse_collapse = false;
   const RemeshResult with = remesh(mesh, options);
   ASSERT_TRUE(with.report.ok()) << errors_of(with.report);
   EXPECT_GT(with.report.stitch.n_volume_compensation_moves, 0u);

@@ -270,25 +270,27 @@ TEST(Stitch, ObtuseRepairLeavesFewerObtuseTriangles) {
   EXPECT_THROW((void)stitch(cube_map_surface(test::icosphere(1)), bad), InvalidInput);
 }
 
-// Issue 5 (obtuse triangles): the obtuse collapses (StitchOptions::obtuse_collapse, opt-in;
-// docs/stitch.md "Obtuse collapses, session 20") leave fewer obtuse triangles than the same
-// stitch without them, with no new triangle below the floors and every node still on the
-// sphere; the same mesh at 1 and 2 threads.
+// Issue 5 (obtuse triangles): the obtuse collapses (StitchOptions::obtuse_collapse, the
+// default since session 21; docs/stitch.md "Obtuse collapses, session 20") leave fewer obtuse
+// triangles than the same stitch without them, with no new triangle below the floors and
+// every node still on the sphere; the same mesh at 1 and 2 threads.
 TEST(Stitch, ObtuseCollapsesLeaveFewerObtuseTriangles) {
   const TriangleSoup soup = jittered_sphere(3, 0.35);
   const SurfaceMesh surface = cube_map_surface(soup);
   const TriMesh input = to_trimesh(soup);
   StitchOptions off;
-  ASSERT_FALSE(off.obtuse_collapse);  // the default
+  off.obtuse_collapse = false;
   const StitchResult before = stitch(surface, input, off);
   ASSERT_TRUE(before.report.ok()) << joined(before.report.errors);
   ASSERT_GT(before.report.output.quality.obtuse_fraction, 0.0);  // something to collapse
+  EXPECT_EQ(before.report.n_obtuse_collapses, 0u);
   StitchOptions on;
-  on.obtuse_collapse = true;
+  ASSERT_TRUE(on.obtuse_collapse);  // the default
   const StitchResult r = stitch(surface, input, on);
   EXPECT_TRUE(r.report.ok()) << joined(r.report.errors);
-  EXPECT_GT(r.report.n_angle_collapses, before.report.n_angle_collapses);
-  EXPECT_LT(r.mesh.n_vertices(), before.mesh.n_vertices());
+  EXPECT_GE(r.report.n_obtuse_collapses, 1u);
+  EXPECT_EQ(r.mesh.n_vertices() + r.report.n_angle_collapses + r.report.n_obtuse_collapses,
+            before.mesh.n_vertices() + before.report.n_angle_collapses);
   EXPECT_EQ(r.report.output.topology.euler_characteristic, 2);
   EXPECT_TRUE(r.report.output.topology.is_manifold);
   const auto obtuse_count = [](const StitchResult& s) {
@@ -1026,7 +1028,8 @@ TEST(Stitch, AngleRepairCollapsesAShortEdgeAwayFromFeatures) {
   EXPECT_EQ(t.n_self_intersecting_pairs.value_or(1), 0u);
   EXPECT_EQ(r.face_patch.size(), r.mesh.n_faces());
   EXPECT_EQ(r.vertex_node.size(), r.mesh.n_vertices());
-  EXPECT_EQ(r.mesh.n_vertices() + r.report.n_unused_nodes + r.report.n_angle_collapses, surface.nodes.size());
+  EXPECT_EQ(r.mesh.n_vertices() + r.report.n_unused_nodes + r.report.n_angle_collapses + r.report.n_obtuse_collapses,
+            surface.nodes.size());
   for (auto u : r.mesh.vertices()) {
     const auto node = static_cast<std::size_t>(r.vertex_node[static_cast<std::size_t>(u.idx())]);
     EXPECT_EQ(to_eigen(r.mesh.point(u)), surface.nodes[node]);
@@ -1642,7 +1645,8 @@ TEST(Stitch, AngleRepairMakesAPairOfChangesWhereNoSingleOneHelps) {
   EXPECT_EQ(topology.n_self_intersecting_pairs.value_or(1), 0u);
   EXPECT_EQ(r.face_patch.size(), r.mesh.n_faces());
   EXPECT_EQ(r.vertex_node.size(), r.mesh.n_vertices());
-  EXPECT_EQ(r.mesh.n_vertices() + r.report.n_unused_nodes + r.report.n_angle_collapses, surface.nodes.size());
+  EXPECT_EQ(r.mesh.n_vertices() + r.report.n_unused_nodes + r.report.n_angle_collapses + r.report.n_obtuse_collapses,
+            surface.nodes.size());
   // Every node stays on the sphere (moves go onto the patches' fits, collapses keep the survivor).
   for (auto u : r.mesh.vertices()) EXPECT_NEAR(to_eigen(r.mesh.point(u)).norm(), 1.0, 0.02);
 }

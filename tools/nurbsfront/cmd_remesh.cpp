@@ -52,7 +52,7 @@ struct RemeshArgs {
   bool no_self_intersection_check = false;
   bool no_obtuse_split_grid = false;
   bool no_flip_feature_chords = false;
-  bool obtuse_collapse = false;
+  bool no_obtuse_collapse = false;
   bool no_distances = false;
   // The options the flags without a field above set directly (their defaults are
   // RemeshOptions' own); run_remesh starts from it.
@@ -106,7 +106,7 @@ void run_remesh(RemeshArgs& args) {
   if (args.no_self_intersection_check) options.stitch.check_self_intersections = false;
   if (args.no_obtuse_split_grid) options.stitch.obtuse_split_grid = false;
   if (args.no_flip_feature_chords) options.stitch.flip_feature_chords = false;
-  if (args.obtuse_collapse) options.stitch.obtuse_collapse = true;
+  if (args.no_obtuse_collapse) options.stitch.obtuse_collapse = false;
   if (args.no_distances) options.compute_distances = false;
   if (args.threads) options.set_threads(*args.threads);
   if (!args.cell_grid.empty()) {
@@ -245,9 +245,9 @@ void add_expert_options(CLI::App& cmd, RemeshArgs& args) {
                "Edges inside a patch between two nodes of one crease (no neighbours along it) stay locked as "
                "before session 19 (docs/stitch.md \"Chords between the nodes of a crease, session 19\")")
       ->group("Finer settings");
-  cmd.add_flag("--obtuse-collapse", args.obtuse_collapse,
-               "After the small-angle repair, a corner of an obtuse triangle that is no feature node is collapsed "
-               "into a neighbour where that leaves fewer obtuse triangles (opt-in: not volume-compensated; "
+  cmd.add_flag("--no-obtuse-collapse", args.no_obtuse_collapse,
+               "No obtuse collapses after the small-angle repair (by default a corner of an obtuse triangle that is "
+               "no feature node is collapsed into a neighbour where that leaves fewer obtuse triangles; "
                "docs/stitch.md \"Obtuse collapses, session 20\")")
       ->group("Finer settings");
   cmd.add_flag("--no-obtuse-split-grid", args.no_obtuse_split_grid,
