@@ -320,10 +320,11 @@ TEST(StitchFeatureChords, AChordBetweenTwoNodesOfACreaseFlips) {
 }
 
 // StitchOptions::feature_corner_slides (docs/stitch.md "Feature corners sliding, session 21"):
-// a flat top (z = 0) over a straight crease A (x axis: corner a0, a1, corner c, a3, corner a4)
-// with a wall (patch 2) hanging from A; the top is cut at c by a smooth one-piece curve S to the
-// corner d on the top's boundary, 10 deg off the normal to A, so that patch 0's wedge at c is
-// 100 deg, closed by the one triangle (a1, c, d), patch 1's 80 deg. Every node is a corner or on
+// a flat top (z = 0) over a crease A (along the x axis, bent at c: corner a0, a1, corner c, a3
+// 0.2 off the axis, corner a4) with a wall (patch 2) hanging from A; the top is cut at c by a
+// smooth one-piece curve S to the corner d on the top's boundary, 10 deg off the normal to A, so
+// that patch 0's wedge at c is 100 deg, closed by the one triangle (a1, c, d), patch 1's 69 deg
+// (a slide of 0.3 towards a3 leaves both acute). Every node is a corner or on
 // a feature curve; c and d end two feature curves each (a0 and a4 three). Without the corner
 // slides the obtuse triangle stays (no flip helps, a1 only slides along c -> a1); with them a
 // corner slides along its feature curves: no obtuse triangle is left, every moved corner lies on
@@ -346,12 +347,12 @@ TJunction make_t_junction() {
   s.a0 = add(0.0, 0.0, 0.0);
   s.a1 = add(1.0, 0.0, 0.0);
   s.c = add(2.0, 0.0, 0.0);
-  s.a3 = add(3.0, 0.0, 0.0);
+  s.a3 = add(3.0, 0.2, 0.0);  // A bends at c: patch 1's wedge 70 deg, so a slide can make both acute
   s.a4 = add(4.0, 0.0, 0.0);
   const double slant = std::tan(10.0 * std::numbers::pi / 180.0);
   s.d = add(2.0 + slant, 1.0, 0.0);
   s.t0 = add(0.3, 1.0, 0.0);
-  s.t1 = add(3.8, 1.0, 0.0);
+  s.t1 = add(3.4, 1.0, 0.0);
   for (const double x : {-0.1, 0.5, 1.5, 2.5, 3.5, 4.1}) s.wall.push_back(add(x, 0.0, -0.87));
   std::vector<int> face_patch;
   auto tri = [&](int p, int u, int v, int w) {
