@@ -104,6 +104,11 @@ class Optimiser {
     std::vector<std::array<TriMesh::VertexHandle, 2>> flips, best_flips;
   };
 
+  // Per feature corner node that may slide (StitchOptions::feature_corner_slides): the ends of
+  // the feature curves at it, each as {curve, place of the corner's neighbour along it, place
+  // of the node beyond (-1: the neighbour ends the curve)}; empty for other nodes.
+  using CornerEnds = std::vector<std::vector<std::array<int, 3>>>;
+
  public:
   Optimiser(const SurfaceMesh& surface, const StitchOptions& options, StitchResult& result,
             const std::vector<std::uint8_t>& is_feature)
@@ -549,7 +554,9 @@ class Optimiser {
   // move along it: on the polyline of the curve's nodes where the front put them
   // (SurfaceMesh::nodes), its place is P + x (Q - P), P its own node, Q the next node along the
   // curve (x > 0) or the previous one (x < 0), |x| <= kSlideMaxShare, so two neighbours never
-  // meet or pass. Each node of a feature curve (not a corner) with an obtuse triangle, in index
+  // meet or pass (a feature corner with StitchOptions::feature_corner_slides: on the pieces to
+  // its neighbours along the feature curves ending at it, corner_slide_frame()). Each node of
+  // a feature curve with an obtuse triangle, in index
   // order, tries the shares kSlideStep apart and takes the one that leaves the fewest obtuse
   // triangles around it, then the smallest largest angle, when that removes an obtuse triangle
   // (or raises the cosine of the ring's largest angle by StitchOptions::
@@ -574,10 +581,11 @@ class Optimiser {
         if (surface_.node_kind[node] == NodeKind::Border) place[node] = static_cast<int>(k);
       }
     }
+    const CornerEnds corner_ends = options_.feature_corner_slides ? feature_corner_ends() : CornerEnds{};
     std::vector<std::uint8_t> candidate = obtuse_face_vertices();
     auto tried = [&candidate](std::size_t i) { return candidate[i] != 0; };
     auto decide = [&](TriMesh::VertexHandle v, SweepScratch& scratch, Vec& to) {
-      return slide_move(v, vertex_node, place, vertex_of, scratch.ring, to);
+      return slide_move(v, vertex_node, place, vertex_of, corner_ends, scratch.ring, to);
     };
     return ring_move_sweep(candidate, tried, decide);
   }
@@ -585,13 +593,18 @@ class Optimiser {
   // One vertex of slide_sweep(): whether v slides, and where (to). place, vertex_of: per
   // node, its place on its feature curve's node list (-1: none) and its vertex.
   bool slide_move(TriMesh::VertexHandle v, const std::vector<int>& vertex_node, const std::vector<int>& place,
-                  const std::vector<int>& vertex_of, std::vector<RingTriangle>& ring, Vec& to) const {
+                  const std::vector<int>& vertex_of, const CornerEnds& corner_ends, std::vector<RingTriangle>& ring,
+                  Vec& to) const {
     const int node = vertex_node[static_cast<std::size_t>(v.idx())];
     if (node < 0 || static_cast<std::size_t>(node) >= surface_.nodes.size()) return false;  // a split's node
     const NodeInfo& info = nodes_[static_cast<std::size_t>(v.idx())];
-    if (info.curve < 0 || place[static_cast<std::size_t>(node)] < 0) return false;
     SlideFrame frame;
-    if (!slide_frame(v, info.curve, place[static_cast<std::size_t>(node)], vertex_of, frame)) return false;
+    if (info.is_corner) {
+      if (!corner_slide_frame(v, node, vertex_of, corner_ends, frame)) return false;
+    } else {
+      if (info.curve < 0 || place[static_cast<std::size_t>(node)] < 0) return false;
+      if (!slide_frame(v, info.curve, place[static_cast<std::size_t>(node)], vertex_of, frame)) return false;
+    }
     const Vec p = point(mesh_, v);
     ring.clear();
     std::size_t old_obtuse = 0;
@@ -609,7 +622,7 @@ class Optimiser {
     std::size_t best_obtuse = old_obtuse;
     double best_worst = old_worst + options_.feature_slide_cosine_gain;  // infinity: no slide by the angle alone
     Vec best = p;
-    for (int step = -kSlideSteps; step <= kSlideSteps; ++step) {
+    for (int step = -kSlideSteps; step <= (frame.one_sided ? 0 : kSlideSteps); ++step) {
       const double x = step * kSlideStep;
       if (x == frame.x) continue;
       const Vec q = slide_point(frame.at, frame.before, frame.after, x);
@@ -636,7 +649,70 @@ class Optimiser {
   struct SlideFrame {
     Vec at, before, after, prev_point, next_point;
     double x = 0.0, x_before = 0.0, x_after = 0.0;
+    // A feature corner ending one feature curve: it slides back along it only (x <= 0; no
+    // `after`).
+    bool one_sided = false;
   };
+
+  // The feature curve ends of every corner where one or two feature curve ends meet, none of
+  // whose vertices is bounded (a fin rim node: StitchOptions::fin_rim_max_move).
+  CornerEnds feature_corner_ends() const {
+    CornerEnds ends(surface_.nodes.size());
+    for (std::size_t c = 0; c < surface_.curve_nodes.size(); ++c) {
+      if (surface_.curve_is_feature[c] == 0) continue;
+      const std::vector<int>& list = surface_.curve_nodes[c];
+      const int n = static_cast<int>(list.size());
+      if (n < 2 || surface_.node_kind[static_cast<std::size_t>(list.front())] != NodeKind::Corner) continue;
+      const int curve = static_cast<int>(c);
+      ends[static_cast<std::size_t>(list.front())].push_back({curve, 1, n > 2 ? 2 : -1});
+      ends[static_cast<std::size_t>(list.back())].push_back({curve, n - 2, n > 2 ? n - 3 : -1});
+    }
+    for (auto& e : ends) {
+      if (e.size() > 2) e.clear();
+    }
+    return ends;
+  }
+
+  // The frame of feature corner v (node `node`) for slide_sweep: its place is on the pieces of
+  // the front's polyline to its neighbours along the feature curves ending at it (two: either
+  // way; one: back along it only). False as slide_frame(), and for a corner with more than two
+  // feature curve ends, on a fin rim, or whose neighbour is not on its own piece.
+  bool corner_slide_frame(TriMesh::VertexHandle v, int node, const std::vector<int>& vertex_of,
+                          const CornerEnds& corner_ends, SlideFrame& frame) const {
+    if (static_cast<std::size_t>(node) >= corner_ends.size()) return false;
+    const std::vector<std::array<int, 3>>& ends = corner_ends[static_cast<std::size_t>(node)];
+    if (ends.empty() || std::isfinite(nodes_[static_cast<std::size_t>(v.idx())].max_move)) return false;
+    frame.at = surface_.nodes[static_cast<std::size_t>(node)];
+    frame.one_sided = ends.size() == 1;
+    // The neighbour along end e: its front point, where it is now, and its share on its own
+    // pieces (towards the corner: positive), or false.
+    auto neighbour = [&](const std::array<int, 3>& e, Vec& front, Vec& now, double& share) {
+      const std::vector<int>& list = surface_.curve_nodes[static_cast<std::size_t>(e[0])];
+      const int w = list[static_cast<std::size_t>(e[1])];
+      const int vw = vertex_of[static_cast<std::size_t>(w)];
+      if (vw < 0 || vw == v.idx() || !mesh_.find_halfedge(v, TriMesh::VertexHandle(vw)).is_valid()) return false;
+      front = surface_.nodes[static_cast<std::size_t>(w)];
+      now = point(mesh_, TriMesh::VertexHandle(vw));
+      if (e[2] < 0) {  // the neighbour is a corner: it must be where the front put it
+        share = 0.0;
+        return now == front;
+      }
+      share = slide_share(now, front, surface_.nodes[static_cast<std::size_t>(list[static_cast<std::size_t>(e[2])])], frame.at);
+      return std::isfinite(share);
+    };
+    if (!neighbour(ends[0], frame.before, frame.prev_point, frame.x_before)) return false;
+    if (frame.one_sided) {
+      frame.after = frame.at;
+      frame.next_point = frame.at;
+      frame.x_after = 0.0;
+    } else if (!neighbour(ends[1], frame.after, frame.next_point, frame.x_after)) {
+      return false;
+    } else {
+      frame.x_after = -frame.x_after;  // slide_frame's sign: positive away from the node
+    }
+    frame.x = slide_share(point(mesh_, v), frame.at, frame.before, frame.after);
+    return std::isfinite(frame.x) && (!frame.one_sided || frame.x <= 0.0);
+  }
 
   // Where x (a share of the piece to the next node, negative: to the previous one) puts the
   // point of the node with front point `at` and neighbours' front points `before`, `after`.
@@ -707,6 +783,7 @@ class Optimiser {
     const double before_piece = kSlideMaxSag * (frame.at - frame.before).norm();
     if (x > 0.0 && !within(frame.prev_point, q, frame.at, before_piece)) return false;
     if (frame.x_before < 0.0 && !within(frame.prev_point, q, frame.before, before_piece)) return false;
+    if (frame.one_sided) return true;
     const double after_piece = kSlideMaxSag * (frame.after - frame.at).norm();
     if (x < 0.0 && !within(q, frame.next_point, frame.at, after_piece)) return false;
     if (frame.x_after > 0.0 && !within(q, frame.next_point, frame.after, after_piece)) return false;

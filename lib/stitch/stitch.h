@@ -101,7 +101,7 @@ struct StitchOptions {
   //! 0.957 -> 0.972% (9 obtuse triangles either way, fewer splits), both under 1%.
   int obtuse_search_steps = 5;
   //! Rounds of feature slides after the obtuse repair (>= 0; 0 switches them off): a node of
-  //! a feature curve (crease or input boundary; not a corner) that has an obtuse triangle
+  //! a feature curve (crease or input boundary; a corner only with feature_corner_slides) that has an obtuse triangle
   //! slides along its curve, on the polyline of the curve's nodes as the front placed them
   //! (SurfaceMesh::nodes along SurfaceMesh::curve_nodes), at most 0.4 of a piece either way
   //! from its own node, to the place that leaves the fewest obtuse triangles around it (then
@@ -113,6 +113,15 @@ struct StitchOptions {
   //! "Feature nodes sliding along their curves"). They belong to the obtuse repair: none run
   //! when obtuse_repair_rounds is 0. Default 2 (elephant 1.095 -> 0.912% obtuse; 0 = off).
   int feature_slide_rounds = 2;
+  //! Feature slides (feature_slide_rounds) move feature corners too: a corner where exactly
+  //! two feature curve ends meet (a crease running through a junction with smooth borders)
+  //! slides along them as a node of a crease does, one where exactly one ends (a crease
+  //! ending at smooth borders) back along it only; never a corner with three or more, nor a
+  //! fin rim node. Same steps, tests and bounds as the other slides (counted in
+  //! StitchReport::n_feature_slides). Default true (headsq@500 1.864 -> 1.812% obtuse,
+  //! @1150 4.008 -> 3.907%, no Hausdorff change; docs/stitch.md "Feature corners sliding,
+  //! session 21"); false: every feature corner stays where the front put it.
+  bool feature_corner_slides = true;
   //! A feature slide that removes no obtuse triangle is also taken when it raises the cosine
   //! of the largest angle of the node's triangles by at least this (> 0; infinity: never).
   //! Default infinity: at 0.01 elephant, couplingdown and rotor lose more obtuse triangles

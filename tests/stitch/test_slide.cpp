@@ -7,7 +7,9 @@
 #include <algorithm>
 #include <array>
 #include <cstddef>
+#include <initializer_list>
 #include <limits>
+#include <numbers>
 #include <set>
 #include <string>
 #include <vector>
@@ -315,6 +317,119 @@ TEST(StitchFeatureChords, AChordBetweenTwoNodesOfACreaseFlips) {
   for (int i = 0; i < 3; ++i) EXPECT_TRUE(r.mesh.find_halfedge(vertex(s.k[i]), vertex(s.k[i + 1])).is_valid()) << i;
   EXPECT_FALSE(r.mesh.find_halfedge(vertex(s.k[0]), vertex(s.k[2])).is_valid());
   EXPECT_TRUE(r.mesh.find_halfedge(vertex(s.k[1]), vertex(s.c)).is_valid());
+}
+
+// StitchOptions::feature_corner_slides (docs/stitch.md "Feature corners sliding, session 21"):
+// a flat top (z = 0) over a crease A (along the x axis, bent at c: corner a0, a1, corner c, a3
+// 0.2 off the axis, corner a4) with a wall (patch 2) hanging from A; the top is cut at c by a
+// smooth one-piece curve S to the corner d on the top's boundary, 10 deg off the normal to A, so
+// that patch 0's wedge at c is 100 deg, closed by the one triangle (a1, c, d), patch 1's 69 deg
+// (a slide of 0.3 towards a3 leaves both acute). Every node is a corner or on
+// a feature curve; c and d end two feature curves each (a0 and a4 three). Without the corner
+// slides the obtuse triangle stays (no flip helps, a1 only slides along c -> a1); with them a
+// corner slides along its feature curves: no obtuse triangle is left, every moved corner lies on
+// the polyline of its feature curves within 0.4 of a piece of its node, a0 and a4 stay, the
+// surface keeps its topology, the same result for any thread count.
+struct TJunction {
+  TriangleSoup soup;
+  SurfaceMesh surface;
+  int a0 = -1, a1 = -1, c = -1, a3 = -1, a4 = -1, d = -1, t0 = -1, t1 = -1;
+  std::vector<int> wall;
+};
+
+TJunction make_t_junction() {
+  TJunction s;
+  const Eigen::Matrix3d turn = Eigen::AngleAxisd(0.5, Eigen::Vector3d(2.0, -1.0, 3.0).normalized()).toRotationMatrix();
+  auto add = [&](double x, double y, double z) {
+    s.soup.points.push_back(turn * Eigen::Vector3d(x, y, z));
+    return static_cast<int>(s.soup.points.size()) - 1;
+  };
+  s.a0 = add(0.0, 0.0, 0.0);
+  s.a1 = add(1.0, 0.0, 0.0);
+  s.c = add(2.0, 0.0, 0.0);
+  s.a3 = add(3.0, 0.2, 0.0);  // A bends at c: patch 1's wedge 70 deg, so a slide can make both acute
+  s.a4 = add(4.0, 0.0, 0.0);
+  const double slant = std::tan(10.0 * std::numbers::pi / 180.0);
+  s.d = add(2.0 + slant, 1.0, 0.0);
+  s.t0 = add(0.3, 1.0, 0.0);
+  s.t1 = add(3.4, 1.0, 0.0);
+  for (const double x : {-0.1, 0.5, 1.5, 2.5, 3.5, 4.1}) s.wall.push_back(add(x, 0.0, -0.87));
+  std::vector<int> face_patch;
+  auto tri = [&](int p, int u, int v, int w) {
+    const Eigen::Vector3d up = turn * (p == 2 ? Eigen::Vector3d(0.0, -1.0, 0.0) : Eigen::Vector3d(0.0, 0.0, 1.0));
+    add_facing_triangle(s.soup, face_patch, p, u, v, w, up);
+  };
+  tri(0, s.a0, s.a1, s.t0);
+  tri(0, s.a1, s.d, s.t0);
+  tri(0, s.a1, s.c, s.d);  // obtuse at c: 100 deg
+  tri(1, s.c, s.a3, s.d);
+  tri(1, s.a3, s.t1, s.d);
+  tri(1, s.a3, s.a4, s.t1);
+  const std::array<int, 5> top{s.a0, s.a1, s.c, s.a3, s.a4};
+  for (int j = 0; j < 5; ++j) tri(2, top[static_cast<std::size_t>(j)], s.wall[static_cast<std::size_t>(j)], s.wall[static_cast<std::size_t>(j) + 1]);
+  for (int j = 0; j < 4; ++j) tri(2, top[static_cast<std::size_t>(j)], top[static_cast<std::size_t>(j) + 1], s.wall[static_cast<std::size_t>(j) + 1]);
+  SurfaceMesh& m = s.surface;
+  // Curves: 0, 1 the crease A's halves, 2 the smooth S, 3 the wall's bottom (the input's
+  // boundary), 4 and 5 the top's boundary.
+  m.curve_is_feature = {1, 1, 0, 1, 1, 1};
+  m.curve_nodes = {{s.a0, s.a1, s.c}, {s.c, s.a3, s.a4}, {s.c, s.d}, {s.a0}, {s.a4, s.t1, s.d}, {s.d, s.t0, s.a0}};
+  m.curve_nodes[3].insert(m.curve_nodes[3].end(), s.wall.begin(), s.wall.end());
+  m.curve_nodes[3].push_back(s.a4);
+  finish_surface(m, s.soup, face_patch, {s.a0, s.c, s.a4, s.d}, 3);
+  return s;
+}
+
+TEST(StitchSlide, FeatureCornersSlideAlongTheirCurves) {
+  const TJunction s = make_t_junction();
+  const TriMesh input = to_trimesh(s.soup);
+  StitchOptions o;
+  o.obtuse_split_rounds = 0;  // the slides alone (a split of a1-d would take the angle apart)
+  o.n_threads = 1;
+  o.feature_corner_slides = false;
+  const StitchResult fixed = stitch(s.surface, input, o);
+  ASSERT_TRUE(fixed.report.ok());
+  EXPECT_EQ(obtuse_faces(fixed), 1u);  // (a1, c, d): every corner stays
+  o.feature_corner_slides = true;
+  const StitchResult r = stitch(s.surface, input, o);
+  ASSERT_TRUE(r.report.ok());
+  EXPECT_GT(r.report.n_feature_slides, fixed.report.n_feature_slides);
+  EXPECT_EQ(obtuse_faces(r), 0u);
+  EXPECT_TRUE(r.report.output.topology.is_manifold);
+  EXPECT_EQ(r.report.output.topology.euler_characteristic, 1);
+  EXPECT_EQ(r.report.output.topology.n_boundary_loops, 1u);
+  ASSERT_EQ(r.mesh.n_vertices(), s.soup.points.size());
+  // The feature curves through each corner that may slide, as one polyline.
+  auto polyline = [&](std::initializer_list<int> nodes) {
+    std::vector<Eigen::Vector3d> out;
+    for (const int g : nodes) out.push_back(s.soup.points[static_cast<std::size_t>(g)]);
+    return out;
+  };
+  std::size_t n_moved = 0;
+  for (auto v : r.mesh.vertices()) {
+    const int node = r.vertex_node[static_cast<std::size_t>(v.idx())];
+    const Eigen::Vector3d p = to_eigen(r.mesh.point(v));
+    const Eigen::Vector3d at = s.soup.points[static_cast<std::size_t>(node)];
+    if (node == s.a0 || node == s.a4) {
+      EXPECT_EQ(p, at) << "corner " << node;  // three feature curve ends: fixed
+      continue;
+    }
+    if (node != s.c && node != s.d) continue;
+    if (p == at) continue;
+    ++n_moved;
+    const std::vector<Eigen::Vector3d> line =
+        node == s.c ? polyline({s.a1, s.c, s.a3}) : polyline({s.t1, s.d, s.t0});
+    EXPECT_LT(distance_to_polyline(p, line), 1e-12) << "corner " << node;
+    const double piece = node == s.c ? 1.0
+                                     : std::max((s.soup.points[static_cast<std::size_t>(s.t1)] - at).norm(),
+                                                (s.soup.points[static_cast<std::size_t>(s.t0)] - at).norm());
+    EXPECT_LE((p - at).norm(), 0.4 * piece + 1e-12) << "corner " << node;
+  }
+  EXPECT_GT(n_moved, 0u);
+  // The same for any thread count.
+  o.n_threads = 3;
+  const StitchResult r3 = stitch(s.surface, input, o);
+  ASSERT_EQ(r3.mesh.n_vertices(), r.mesh.n_vertices());
+  for (auto v : r.mesh.vertices()) EXPECT_EQ(to_eigen(r3.mesh.point(v)), to_eigen(r.mesh.point(v)));
 }
 
 TEST(StitchSlide, NegativeRoundsAreRefused) {

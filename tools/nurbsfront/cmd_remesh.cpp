@@ -245,6 +245,11 @@ void add_expert_options(CLI::App& cmd, RemeshArgs& args) {
                "Edges inside a patch between two nodes of one crease (no neighbours along it) stay locked as "
                "before session 19 (docs/stitch.md \"Chords between the nodes of a crease, session 19\")")
       ->group("Finer settings");
+  cmd.add_option("--feature-corner-slides", o.stitch.feature_corner_slides,
+                 "Feature slides also move the corners where one or two feature curves end (0 or 1; "
+                 "docs/stitch.md \"Feature corners sliding, session 21\")")
+      ->capture_default_str()
+      ->group("Finer settings");
   cmd.add_flag("--no-obtuse-collapse", args.no_obtuse_collapse,
                "No obtuse collapses after the small-angle repair (by default a corner of an obtuse triangle that is "
                "no feature node is collapsed into a neighbour where that leaves fewer obtuse triangles; "
