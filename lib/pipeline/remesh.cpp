@@ -312,7 +312,10 @@ RemeshResult remesh(const TriMesh& input, const RemeshOptions& options) {
   // off the marching-cubes input by design: DRAM occupancy 128's Hausdorff to the input rose
   // from 0.89 to 1.05 voxel with them (StitchOptions::obtuse_split_grid).
   if (surfmesh_options.cell_grid.enabled) stitch_options.obtuse_split_grid = false;
-  SurfaceMesh surface = surfmesh_detail::mesh_surface(input, segmentation, surfmesh_options, mean_edge, shares);
+  // The segmentation's face_patch is copied into the surface only for the fidelity gate
+  // (its one reader; 4 bytes per input face).
+  const bool gate = stitch_options.fidelity_gate_edges > 0.0;
+  SurfaceMesh surface = surfmesh_detail::mesh_surface(input, segmentation, surfmesh_options, mean_edge, shares, gate);
   report.seconds_surfmesh = watch.seconds();
 
   watch.restart();
@@ -371,7 +374,7 @@ RemeshResult remesh(const TriMesh& input, const RemeshOptions& options) {
                                        : segment_detail::bisect_patches(*splitter, segmentation, which);
       if (merged.patches.size() == segmentation.patches.size()) continue;
       watch.restart();
-      SurfaceMesh merged_surface = surfmesh_detail::mesh_surface(input, merged, surfmesh_options, mean_edge, shares);
+      SurfaceMesh merged_surface = surfmesh_detail::mesh_surface(input, merged, surfmesh_options, mean_edge, shares, gate);
       report.seconds_surfmesh += watch.seconds();
       watch.restart();
       StitchResult merged_stitched = run_stitch(merged_surface);

@@ -261,7 +261,7 @@ SurfaceMesh mesh_surface(const TriMesh& input, const Segmentation& segmentation,
 
 SurfaceMesh surfmesh_detail::mesh_surface(const TriMesh& input, const Segmentation& segmentation,
                                           const SurfMeshOptions& options, const double mean_edge,
-                                          const LatticeShares* shares) {
+                                          const LatticeShares* shares, const bool keep_face_patch) {
   options.validate();
   validate_segmentation(input, segmentation);
   SurfaceMesh out;
@@ -272,7 +272,7 @@ SurfaceMesh surfmesh_detail::mesh_surface(const TriMesh& input, const Segmentati
   const double h = uniform_size(options.sizing, mean_edge);
   out.input_mean_edge = mean_edge;
   out.target_size = h;
-  out.input_face_patch = segmentation.face_patch;
+  if (keep_face_patch) out.input_face_patch = segmentation.face_patch;
   SizeAt size_at = [h](const Eigen::Vector3d&) { return h; };
   SizeAt front_size;  // empty: the front meshes with the uniform h
   if (options.sizing.callback) {

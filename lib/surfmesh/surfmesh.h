@@ -413,7 +413,8 @@ struct SurfaceMesh {
   std::vector<std::vector<int>> curve_nodes;
   std::vector<PatchMeshReport> patches; //!< one per patch
   //! Patch of every input face (the segmentation's face_patch; empty in a hand-made
-  //! SurfaceMesh): the stitch's fidelity gate (StitchOptions::fidelity_gate_edges) reads it.
+  //! SurfaceMesh, and in remesh()'s without a fidelity gate): the stitch's fidelity gate
+  //! (StitchOptions::fidelity_gate_edges), its one reader.
   std::vector<int> input_face_patch;
   double target_size = 0.0;             //!< the resolved uniform target edge length
   double input_mean_edge = 0.0;         //!< mean edge length of the input

@@ -433,10 +433,11 @@ using nurbsfront::polygon_contains;
 //! shares, when given, are lattice_edge_shares(input) computed by the caller (not again).
 //! split_unfitted_patches() with with_borders false returns a result without curves and
 //! corners wherever it split (segment_detail::with_borders() adds them), and the given
-//! segmentation as it is where it did not.
+//! segmentation as it is where it did not. mesh_surface() with keep_face_patch false leaves
+//! SurfaceMesh::input_face_patch empty (a caller whose stitch has no fidelity gate: no copy).
 [[nodiscard]] SurfaceMesh mesh_surface(const TriMesh& input, const Segmentation& segmentation,
                                        const SurfMeshOptions& options, double mean_edge,
-                                       const LatticeShares* shares = nullptr);
+                                       const LatticeShares* shares = nullptr, bool keep_face_patch = true);
 [[nodiscard]] Segmentation split_unfitted_patches(const TriMesh& input, const Segmentation& segmentation,
                                                   const SurfMeshOptions& options,
                                                   const SegmentOptions& segment_options, std::size_t* n_split,

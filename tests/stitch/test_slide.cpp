@@ -18,9 +18,8 @@
 
 #include "nurbsfront/core/error.h"
 #include "nurbsfront/core/soup.h"
-#include "nurbsfront/nurbs/frame.h"
-#include "nurbsfront/nurbs/mba.h"
 #include "nurbsfront/stitch/stitch.h"
+#include "patch_fits.h"
 
 namespace nurbsfront {
 namespace {
@@ -56,25 +55,7 @@ void finish_surface(SurfaceMesh& m, const TriangleSoup& soup, const std::vector<
     m.node_owner[static_cast<std::size_t>(node)] = -1;
   }
   m.n_border_nodes = m.nodes.size();
-  for (int p = 0; p < n_patches; ++p) {
-    std::vector<Eigen::Vector3d> points, centroids, normals;
-    std::set<std::uint32_t> vertices;
-    for (std::size_t t = 0; t < soup.triangles.size(); ++t) {
-      if (face_patch[t] != p) continue;
-      const auto& tr = soup.triangles[t];
-      const auto& q = soup.points;
-      normals.push_back((q[tr[1]] - q[tr[0]]).cross(q[tr[2]] - q[tr[0]]).normalized());
-      centroids.push_back((q[tr[0]] + q[tr[1]] + q[tr[2]]) / 3.0);
-      for (auto v : tr) vertices.insert(v);
-    }
-    for (auto v : vertices) points.push_back(soup.points[v]);
-    PatchSurface fitted;
-    fitted.frame = patch_frame(centroids, normals);
-    FitOptions fit;
-    fit.max_levels = 3;
-    fitted.field = fit_height_field(fitted.frame.to_local(points), fit).field;
-    m.surfaces.push_back(fitted);
-  }
+  m.surfaces = test::fit_patches(soup, face_patch, n_patches, 3);
   m.patches.resize(static_cast<std::size_t>(n_patches));
   m.target_size = 1.0;
   m.input_mean_edge = 1.0;

@@ -20,6 +20,7 @@
 #include <Eigen/Geometry>
 
 #include "fixtures/shapes.h"
+#include "patch_fits.h"
 #include "nurbsfront/core/error.h"
 #include "nurbsfront/core/soup.h"
 #include "nurbsfront/nurbs/frame.h"
@@ -98,26 +99,7 @@ SurfaceMesh make_surface(const TriangleSoup& soup, const std::vector<int>& face_
       s.node_owner[i] = patches[i].empty() ? 0 : *patches[i].begin();
     }
   }
-  for (int p = 0; p < n_patches; ++p) {
-    std::vector<Eigen::Vector3d> points, centroids, normals;
-    std::set<std::uint32_t> vertices;
-    for (std::size_t t = 0; t < soup.triangles.size(); ++t) {
-      if (face_patch[t] != p) continue;
-      const auto& tri = soup.triangles[t];
-      normals.push_back(face_normal(soup, t));
-      centroids.push_back((soup.points[tri[0]] + soup.points[tri[1]] + soup.points[tri[2]]) / 3.0);
-      for (auto v : tri) vertices.insert(v);
-    }
-    PatchSurface surface;
-    if (!vertices.empty()) {
-      for (auto v : vertices) points.push_back(soup.points[v]);
-      surface.frame = patch_frame(centroids, normals);
-      FitOptions fit;
-      fit.max_levels = 5;
-      surface.field = fit_height_field(surface.frame.to_local(points), fit).field;
-    }
-    s.surfaces.push_back(surface);
-  }
+  s.surfaces = test::fit_patches(soup, face_patch, n_patches, 5);
   return s;
 }
 

@@ -12,6 +12,7 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "cli_util.h"
@@ -31,6 +32,14 @@ namespace {
 // --vertices: remesh_to_vertex_count's tolerance and runs (its defaults).
 constexpr double kVertexCountTolerance = 0.005;
 constexpr int kVertexCountRuns = 4;
+
+// CLI11 (2.1) reads "-1" into a std::size_t as its largest value (strtoull): the options
+// held in a std::size_t refuse a minus sign.
+const CLI::Validator kNoMinusSign(
+    [](const std::string& text) {
+      return text.find('-') == std::string::npos ? std::string{} : "a count cannot be negative, got " + text;
+    },
+    "");
 
 struct RemeshArgs {
   std::vector<std::string> files;  // IN OUT, or OUT with --scene
@@ -181,7 +190,8 @@ void run_remesh(RemeshArgs& args) {
 void add_expert_options(CLI::App& cmd, RemeshArgs& args) {
   RemeshOptions& o = args.base;
   auto add = [&cmd](const std::string& name, auto& field, const std::string& help) {
-    cmd.add_option(name, field, help)->capture_default_str()->group("Finer settings");
+    CLI::Option* option = cmd.add_option(name, field, help)->capture_default_str()->group("Finer settings");
+    if constexpr (std::is_same_v<std::remove_reference_t<decltype(field)>, std::size_t>) option->check(kNoMinusSign);
   };
   // segment
   add("--normal-smoothing-rings", o.segment.normal_smoothing_rings,
@@ -300,6 +310,7 @@ void add_remesh_command(CLI::App& app) {
                   "Output vertex count to aim at: the uniform size (from --size, --relative-size or the default) is "
                   "scaled by (vertices / N)^(1/p) (p = 2, then measured) and the remesh rerun, at most 4 runs, until within 0.5% "
                   "(remesh_to_vertex_count; docs/pipeline.md)")
+      ->check(kNoMinusSign)
       ->check(CLI::Range(std::size_t{4}, std::numeric_limits<std::size_t>::max()));
   cmd->add_flag("--adaptive", args->base.surfmesh.sizing.adaptive, "Curvature-adaptive sizing (chord error)");
   cmd->add_option("--detail-fit", args->detail_fit,
