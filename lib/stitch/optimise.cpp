@@ -757,8 +757,8 @@ class Optimiser {
     frame.x = slide_share(point(mesh_, v), frame.at, frame.before, frame.after);
     frame.prev_point = point(mesh_, hp);
     frame.next_point = point(mesh_, hn);
-    // A neighbour that is a corner (an open curve's end) never moves: share 0 when it is at
-    // its front point.
+    // A neighbour that is a corner (an open curve's end): share 0 when it is at its front
+    // point; a corner that slid (StitchOptions::feature_corner_slides) gives NaN, no slide.
     frame.x_before = slide_share(frame.prev_point, frame.before, front(kp - 1), frame.at);
     frame.x_after = slide_share(frame.next_point, frame.after, frame.at, front(kn + 1));
     if (!closed && kp == 0) frame.x_before = frame.prev_point == frame.before ? 0.0 : std::numeric_limits<double>::quiet_NaN();
